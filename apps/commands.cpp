@@ -1,0 +1,100 @@
+#include "commands.hpp"
+
+#include "config/build_mixer.hpp"
+#include "config/load_config.hpp"
+#include "node/lcm_node.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <iomanip>
+#include <iostream>
+#include <optional>
+
+namespace motormix::app {
+
+namespace {
+
+std::optional<config::Config> load(const CommonOptions& common) {
+  try {
+    return config::load_config_file(common.config_path, common.overrides);
+  } catch (const config::ConfigError& e) {
+    std::cerr << "motormix: " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
+bool check_range(const char* name, double value, double lo, double hi) {
+  if (std::isfinite(value) && value >= lo && value <= hi) return true;
+  std::cerr << "motormix mix: --" << name << " " << value << " is outside " << lo << ".." << hi
+            << "\n";
+  return false;
+}
+
+std::vector<int> motors_in(MotorMask mask, int motors) {
+  std::vector<int> out;
+  for (int i = 0; i < motors; ++i) {
+    if ((mask >> i) & 1U) out.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace
+
+int run(const RunCommand& cmd) {
+  const auto config = load(cmd.common);
+  if (!config) return kExitUsage;
+  if (cmd.check_only) {
+    std::cout << "config " << cmd.common.config_path << " is valid: " << config->motors()
+              << " motors, strategy " << config::to_string(config->strategy) << "\n";
+    return kExitOk;
+  }
+  node::RunOptions options;
+  options.lcm_url = cmd.lcm_url;
+  if (options.lcm_url.empty()) {
+    if (const char* env = std::getenv("LCM_DEFAULT_URL")) options.lcm_url = env;
+  }
+  options.max_cycles = cmd.max_cycles;
+  return node::run_node(*config, options, std::cerr);
+}
+
+int mix(const MixCommand& cmd) {
+  const auto config = load(cmd.common);
+  if (!config) return kExitUsage;
+  const double throttle_low = config->thrust_range == ThrustRange::kUnipolar ? 0.0 : -1.0;
+  if (!check_range("throttle", cmd.throttle, throttle_low, 1.0) ||
+      !check_range("roll", cmd.roll, -1.0, 1.0) || !check_range("pitch", cmd.pitch, -1.0, 1.0) ||
+      !check_range("yaw", cmd.yaw, -1.0, 1.0)) {
+    return kExitUsage;
+  }
+  const Mixer mixer = config::build_mixer(*config);
+  AxisVector demand;
+  demand << cmd.roll, cmd.pitch, cmd.yaw, cmd.throttle;
+  MixerOutput out;
+  mixer.mix(demand, out);
+  const int n = mixer.motors();
+
+  if (cmd.json) {
+    nlohmann::json j;
+    j["motors"] = config->motor_names;
+    j["strategy"] = config::to_string(config->strategy);
+    j["command"] = std::vector<double>(out.command.data(), out.command.data() + n);
+    j["pwm"] = std::vector<double>(out.output.data(), out.output.data() + n);
+    j["saturated_motors"] = {{"upper", motors_in(out.allocation.saturated_upper, n)},
+                             {"lower", motors_in(out.allocation.saturated_lower, n)}};
+    nlohmann::json unallocated;
+    for (int a = 0; a < kNumAxes; ++a) unallocated[kAxisNames[a]] = out.allocation.unallocated[a];
+    j["unallocated"] = unallocated;
+    std::cout << j.dump() << "\n";
+    return kExitOk;
+  }
+  std::cout << std::left << std::setw(8) << "motor" << std::setw(12) << "command" << "pwm\n";
+  for (int i = 0; i < n; ++i) {
+    std::cout << std::setw(8) << config->motor_names[static_cast<std::size_t>(i)] << std::setw(12)
+              << out.command[i] << out.output[i] << "\n";
+  }
+  return kExitOk;
+}
+
+}  // namespace motormix::app

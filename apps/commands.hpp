@@ -1,0 +1,37 @@
+#pragma once
+// The subcommands of the motormix binary. Each returns the process exit code:
+// 0 ok, 1 runtime error, 2 usage or configuration error.
+
+#include <string>
+#include <vector>
+
+namespace motormix::app {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitRuntime = 1;
+inline constexpr int kExitUsage = 2;
+
+struct CommonOptions {
+  std::string config_path;
+  std::vector<std::string> overrides;  // --set key.path=value
+};
+
+struct RunCommand {
+  CommonOptions common;
+  std::string lcm_url;
+  bool check_only = false;
+  long long max_cycles = 0;
+};
+int run(const RunCommand& cmd);
+
+struct MixCommand {
+  CommonOptions common;
+  double throttle = 0.0;
+  double roll = 0.0;
+  double pitch = 0.0;
+  double yaw = 0.0;
+  bool json = false;
+};
+int mix(const MixCommand& cmd);
+
+}  // namespace motormix::app

@@ -1,0 +1,58 @@
+// motormix: one binary, one subcommand per job. Wiring only.
+
+#include "commands.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  using namespace motormix::app;
+  CLI::App app{"motormix: attitude/thrust commands in, one command per motor out, over LCM"};
+  app.set_version_flag("--version", "motormix 0.1.0");
+  app.require_subcommand(1);
+
+  const auto add_common = [](CLI::App* sub, CommonOptions& common) {
+    sub->add_option("--config", common.config_path, "YAML configuration file")
+        ->required()
+        ->check(CLI::ExistingFile);
+    sub->add_option("--set", common.overrides, "override a config value: key.path=value");
+  };
+
+  RunCommand run_cmd;
+  CLI::App* run_app = app.add_subcommand("run", "run the mixer process on the LCM bus");
+  add_common(run_app, run_cmd.common);
+  run_app->add_option("--lcm-url", run_cmd.lcm_url,
+                      "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  run_app->add_flag("--check", run_cmd.check_only,
+                    "validate the configuration and exit without touching the bus");
+  run_app->add_option("--max-cycles", run_cmd.max_cycles,
+                      "stop by itself after this many loop cycles (0: until a signal)")
+      ->check(CLI::NonNegativeNumber);
+
+  MixCommand mix_cmd;
+  CLI::App* mix_app =
+      app.add_subcommand("mix", "evaluate the configured mixer once, as if armed with fresh inputs");
+  add_common(mix_app, mix_cmd.common);
+  mix_app->add_option("--throttle", mix_cmd.throttle, "collective thrust 0..1 (ground: -1..1)");
+  mix_app->add_option("--roll", mix_cmd.roll, "roll demand -1..1");
+  mix_app->add_option("--pitch", mix_cmd.pitch, "pitch demand -1..1");
+  mix_app->add_option("--yaw", mix_cmd.yaw, "yaw demand -1..1");
+  mix_app->add_flag("--json", mix_cmd.json, "print one JSON object");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kExitUsage;
+  }
+  if (run_app->parsed()) return run(run_cmd);
+  if (mix_app->parsed()) return mix(mix_cmd);
+  return kExitUsage;
+}

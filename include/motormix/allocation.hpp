@@ -1,0 +1,54 @@
+#pragma once
+// The allocation step: one small interface, one class per strategy. Each call
+// returns what it could not deliver, so an upstream controller can stop its
+// integrators winding up against saturated motors.
+
+#include <motormix/axes.hpp>
+#include <motormix/mixing_matrix.hpp>
+#include <motormix/motor_vector.hpp>
+
+#include <cstdint>
+#include <string_view>
+
+namespace motormix {
+
+struct AllocationResult {
+  MotorMask saturated_upper = 0;  // bit i: motor i at its upper limit
+  MotorMask saturated_lower = 0;  // bit i: motor i at its lower limit
+  std::uint8_t axis_limited = 0;  // bit(Axis): demand on that axis not fully delivered
+  AxisVector unallocated = AxisVector::Zero();  // target minus produced, per axis
+};
+
+// Limits every strategy keeps motor commands within.
+struct CommandRange {
+  double lower = 0.0;
+  double upper = 1.0;
+};
+
+class Allocator {
+ public:
+  virtual ~Allocator() = default;
+  Allocator() = default;
+  Allocator(const Allocator&) = delete;
+  Allocator& operator=(const Allocator&) = delete;
+
+  virtual std::string_view name() const = 0;
+  virtual int motors() const = 0;
+
+  // demand: finite, roll/pitch/yaw in -1..1 and thrust in its range (the Mixer
+  // guarantees both). Resizes `commands` to motors() (no allocation: fixed
+  // capacity) and fills it within the command range. Never throws.
+  virtual AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const = 0;
+};
+
+// Fills saturation flags and the unallocated demand by comparing `target` with
+// what `commands` produce through `effectiveness`. Shared by all strategies so
+// they report alike.
+AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
+                                     const AxisVector& target, const MotorVector& commands,
+                                     CommandRange range);
+
+// Demand differences below this count as delivered (normalized units).
+inline constexpr double kDeliveredTolerance = 1e-6;
+
+}  // namespace motormix

@@ -1,0 +1,37 @@
+#pragma once
+// Strategy `legacy_budget`: the team quad mixer exactly as first specified.
+//
+// Per motor, each axis contributes coefficient * demand; negative roll, pitch
+// and yaw contributions are dropped (a motor cannot push backwards, and the
+// opposite motors get the positive share). Contributions are scaled by fixed
+// budgets (throttle 60 %, roll+pitch 25 %, yaw 15 % by default) so their sum
+// never exceeds full power. When the scaled roll and pitch contributions of a
+// motor together exceed the roll+pitch budget, each is set to half of it: that
+// is the original rule, kept bit for bit, even though it can shrink the larger
+// of the two.
+
+#include <motormix/allocation.hpp>
+
+namespace motormix {
+
+struct LegacyBudgets {
+  double throttle = 0.60;
+  double roll_pitch = 0.25;
+  double yaw = 0.15;
+};
+
+class LegacyBudgetAllocator final : public Allocator {
+ public:
+  LegacyBudgetAllocator(const MixingMatrix& mixing, LegacyBudgets budgets);
+
+  std::string_view name() const override { return "legacy_budget"; }
+  int motors() const override { return static_cast<int>(mixing_.rows()); }
+  AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
+
+ private:
+  MixingMatrix mixing_;
+  EffectivenessMatrix effectiveness_;
+  LegacyBudgets budgets_;
+};
+
+}  // namespace motormix

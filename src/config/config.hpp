@@ -1,0 +1,63 @@
+#pragma once
+// A validated, immutable description of one motormix process: which vehicle,
+// which strategy, which output ranges, which channels and rates. Built once
+// at start-up by load_config(); nothing downstream re-validates it.
+
+#include <motormix/legacy_budget_allocator.hpp>
+#include <motormix/mixer.hpp>
+#include <motormix/mixing_matrix.hpp>
+#include <motormix/output_stage.hpp>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace motormix::config {
+
+// Thrown at set-up only, never inside a control cycle. The message names the
+// key path, the offending value and what is allowed.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class Strategy { kLegacyBudget };
+enum class YawSource { kSetpoint, kPid };
+
+struct Channels {
+  std::string setpoint = "SETPOINT";
+  std::string pid = "PID";
+  std::string motor_pwm = "MOTOR_PWM";
+  std::string status = "MIXER_STATUS";
+};
+
+struct Inputs {
+  YawSource yaw_source = YawSource::kSetpoint;
+  double setpoint_timeout_s = 0.100;  // older setpoints are stale
+  double pid_timeout_s = 0.100;       // older pid messages are stale
+};
+
+struct Config {
+  std::string name;                      // vehicle name, for logs and status
+  std::string geometry_description;      // where the mixing table came from
+  MixingMatrix mixing;                   // rows: motors; columns: roll, pitch, yaw, thrust
+  std::vector<std::string> motor_names;  // one per motor
+  ThrustRange thrust_range = ThrustRange::kUnipolar;
+
+  Strategy strategy = Strategy::kLegacyBudget;
+  LegacyBudgets legacy_budgets;
+
+  std::vector<OutputChannel> outputs;  // one per motor
+
+  Inputs inputs;
+  Channels channels;
+  double loop_rate_hz = 400.0;
+  double status_rate_hz = 10.0;
+
+  int motors() const { return static_cast<int>(mixing.rows()); }
+};
+
+const char* to_string(Strategy strategy);
+const char* to_string(YawSource source);
+
+}  // namespace motormix::config

@@ -1,0 +1,49 @@
+#pragma once
+// Strict reading of a YAML mapping: every key read is remembered, finish()
+// rejects the rest, and every error names the full key path, the value found
+// and what is allowed.
+
+#include "config/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace motormix::config {
+
+class MapReader {
+ public:
+  // `node` must be a mapping (or null, read as empty); `path` is its key path
+  // ("" for the document root).
+  MapReader(const YAML::Node& node, std::string path);
+
+  bool has(const std::string& key) const;
+  std::string path_of(const std::string& key) const;
+
+  double number(const std::string& key, double fallback, double lo, double hi);
+  double required_number(const std::string& key, double lo, double hi);
+  std::string text(const std::string& key, const std::string& fallback);
+  std::string choice(const std::string& key, const std::string& fallback,
+                     const std::vector<std::string>& allowed);
+  MapReader map(const std::string& key);  // an absent key reads as an empty map
+  YAML::Node raw(const std::string& key);  // marks the key as read
+
+  // Throws ConfigError naming the first key that was never read.
+  void finish() const;
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  std::set<std::string> read_;
+};
+
+// Error helpers shared by the loader.
+[[noreturn]] void fail(const std::string& path, const std::string& found,
+                       const std::string& allowed);
+std::string describe(const YAML::Node& node);  // the value as written, for messages
+double to_number(const YAML::Node& node, const std::string& path, double lo, double hi);
+
+}  // namespace motormix::config

@@ -1,0 +1,152 @@
+#include "node/control_loop.hpp"
+
+#include <cmath>
+#include <utility>
+
+namespace motormix::node {
+
+namespace {
+
+std::int64_t seconds_to_us(double s) { return static_cast<std::int64_t>(std::llround(s * 1e6)); }
+
+bool fresh(std::int64_t received_us, std::int64_t now_us, std::int64_t timeout_us) {
+  // received_us is kNever (most negative) until the first message: compare
+  // without subtracting to stay clear of overflow.
+  return received_us != std::numeric_limits<std::int64_t>::min() &&
+         now_us - received_us <= timeout_us;
+}
+
+}  // namespace
+
+const char* to_string(LoopState state) {
+  switch (state) {
+    case LoopState::kDisarmed:
+      return "disarmed";
+    case LoopState::kArmed:
+      return "armed";
+    case LoopState::kFailsafe:
+      return "failsafe";
+  }
+  return "?";
+}
+
+const char* to_string(FailsafeReason reason) {
+  switch (reason) {
+    case FailsafeReason::kNone:
+      return "none";
+    case FailsafeReason::kSetpointStale:
+      return "setpoint stale";
+    case FailsafeReason::kPidStale:
+      return "pid stale";
+    case FailsafeReason::kInvalidInput:
+      return "invalid input";
+  }
+  return "?";
+}
+
+ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
+    : mixer_(std::move(mixer)),
+      thrust_range_(config.thrust_range),
+      yaw_source_(config.inputs.yaw_source),
+      setpoint_timeout_us_(seconds_to_us(config.inputs.setpoint_timeout_s)),
+      pid_timeout_us_(seconds_to_us(config.inputs.pid_timeout_s)) {
+  mixer_.disarm(result_.mix);
+}
+
+void ControlLoop::count(Rejection rejection) {
+  switch (rejection) {
+    case Rejection::kNone:
+      break;
+    case Rejection::kNonFinite:
+      ++counters_.rejected_nonfinite;
+      break;
+    case Rejection::kOutOfRange:
+      ++counters_.rejected_range;
+      break;
+    case Rejection::kOutOfOrder:
+      ++counters_.rejected_out_of_order;
+      break;
+  }
+}
+
+Rejection ControlLoop::on_setpoint(const SetpointSample& sample, std::int64_t now_us) {
+  const Rejection rejection = check_setpoint(sample, thrust_range_, last_setpoint_utime_);
+  count(rejection);
+  if (rejection != Rejection::kNone) return rejection;
+  ++counters_.setpoint_received;
+  setpoint_ = sample;
+  last_setpoint_utime_ = sample.utime;
+  setpoint_received_us_ = now_us;
+  if (!sample.armed) arm_permitted_ = true;
+  return rejection;
+}
+
+Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us) {
+  const Rejection rejection = check_pid(pid, last_pid_utime_);
+  count(rejection);
+  if (rejection != Rejection::kNone) return rejection;
+  ++counters_.pid_received;
+  pid_ = pid;
+  last_pid_utime_ = pid.utime;
+  pid_received_us_ = now_us;
+  return rejection;
+}
+
+void ControlLoop::enter_failsafe(FailsafeReason reason) {
+  result_.state = LoopState::kFailsafe;
+  result_.reason = reason;
+  arm_permitted_ = false;
+  ++counters_.failsafe_events;
+}
+
+const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
+  ++counters_.cycles;
+  const LoopState previous = result_.state;
+  const bool setpoint_fresh = fresh(setpoint_received_us_, now_us, setpoint_timeout_us_);
+  const bool pid_fresh = fresh(pid_received_us_, now_us, pid_timeout_us_);
+  result_.setpoint_stale = !setpoint_fresh;
+  result_.pid_stale = !pid_fresh;
+  result_.setpoint_utime = setpoint_received_us_ == kNever ? 0 : setpoint_.utime;
+  result_.pid_utime = pid_received_us_ == kNever ? 0 : pid_.utime;
+
+  switch (result_.state) {
+    case LoopState::kArmed:
+      if (!setpoint_fresh) {
+        enter_failsafe(FailsafeReason::kSetpointStale);
+      } else if (!pid_fresh) {
+        enter_failsafe(FailsafeReason::kPidStale);
+      } else if (!setpoint_.armed) {
+        result_.state = LoopState::kDisarmed;
+      }
+      break;
+    case LoopState::kFailsafe:
+      if (setpoint_fresh && !setpoint_.armed) {
+        result_.state = LoopState::kDisarmed;
+        result_.reason = FailsafeReason::kNone;
+      }
+      break;
+    case LoopState::kDisarmed:
+      if (setpoint_fresh && pid_fresh && setpoint_.armed && arm_permitted_) {
+        result_.state = LoopState::kArmed;
+      }
+      break;
+  }
+
+  if (result_.state == LoopState::kArmed) {
+    AxisVector demand;
+    const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
+    demand << pid_.roll, pid_.pitch, yaw, setpoint_.throttle;
+    if (mixer_.mix(demand, result_.mix) == MixStatus::kNonFiniteDemand) {
+      // Unreachable while message checks hold; kept so the promise does not
+      // depend on them.
+      enter_failsafe(FailsafeReason::kInvalidInput);
+    } else {
+      result_.last_armed_allocation = result_.mix.allocation;
+    }
+  }
+  if (result_.state != LoopState::kArmed) mixer_.disarm(result_.mix);
+  result_.state_changed = result_.state != previous;
+  return result_;
+}
+
+}  // namespace motormix::node

@@ -1,0 +1,23 @@
+#pragma once
+// Decoded, not yet validated input messages, free of LCM types so the control
+// loop can be driven from a bus, a log file or a test alike.
+
+#include <cstdint>
+
+namespace motormix::node {
+
+struct SetpointSample {
+  std::int64_t utime = 0;  // publisher's timestamp, microseconds
+  double throttle = 0.0;
+  double yaw = 0.0;
+  bool armed = false;
+};
+
+struct PidSample {
+  std::int64_t utime = 0;
+  double roll = 0.0;
+  double pitch = 0.0;
+  double yaw = 0.0;
+};
+
+}  // namespace motormix::node

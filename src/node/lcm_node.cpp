@@ -1,0 +1,278 @@
+#include "node/lcm_node.hpp"
+
+#include "config/build_mixer.hpp"
+#include "node/control_loop.hpp"
+
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <ostream>
+#include <vector>
+
+namespace motormix::node {
+
+namespace {
+
+// Per-subscription receive queue: deep enough for bursts from a log player
+// running faster than real time, small enough to bound memory.
+constexpr int kQueueCapacity = 1000;
+// Messages handled per wake-up before the timer gets its turn again, so a
+// flood on the inputs cannot starve the output.
+constexpr int kMaxMessagesPerDrain = 1000;
+
+std::int64_t monotonic_us() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+
+std::int64_t wall_us() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+
+// Owns a file descriptor.
+class Fd {
+ public:
+  explicit Fd(int fd) : fd_(fd) {}
+  ~Fd() {
+    if (fd_ >= 0) close(fd_);
+  }
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  int get() const { return fd_; }
+
+ private:
+  int fd_;
+};
+
+class Node {
+ public:
+  Node(const config::Config& config, lcm::LCM& lcm, std::ostream& log)
+      : config_(config), lcm_(lcm), log_(log), loop_(config, config::build_mixer(config)) {
+    const int n = config.motors();
+    pwm_msg_.num_motors = n;
+    pwm_msg_.command.assign(static_cast<std::size_t>(n), 0.0F);
+    pwm_msg_.pwm.assign(static_cast<std::size_t>(n), 0.0F);
+    pwm_buffer_.resize(static_cast<std::size_t>(pwm_msg_.getEncodedSize()));
+    status_msg_.num_motors = n;
+    status_buffer_.resize(static_cast<std::size_t>(status_msg_.getEncodedSize()));
+  }
+
+  void subscribe() {
+    lcm_.subscribe(config_.channels.setpoint, &Node::on_setpoint, this)
+        ->setQueueCapacity(kQueueCapacity);
+    lcm_.subscribe(config_.channels.pid, &Node::on_pid, this)->setQueueCapacity(kQueueCapacity);
+  }
+
+  void drain() {
+    for (int i = 0; i < kMaxMessagesPerDrain; ++i) {
+      if (lcm_.handleTimeout(0) <= 0) break;
+    }
+  }
+
+  void cycle(std::int64_t now_us) {
+    const CycleResult& r = loop_.cycle(now_us);
+    if (r.state_changed) {
+      log_ << "motormix: " << to_string(r.state);
+      if (r.state == LoopState::kFailsafe) log_ << " (" << to_string(r.reason) << ")";
+      log_ << std::endl;
+    }
+    publish_pwm(r);
+    if (now_us >= next_status_us_) {
+      publish_status(r);
+      next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
+    }
+  }
+
+  // Final word on shutdown: every output at its disarmed value.
+  void publish_disarmed() {
+    CycleResult r = loop_.last();
+    loop_.mixer().disarm(r.mix);
+    r.state = LoopState::kDisarmed;
+    publish_pwm(r);
+    publish_status(r);
+  }
+
+ private:
+  void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    try {
+      setpoint_t msg{};
+      if (msg.decode(rbuf->data, 0, rbuf->data_size) != static_cast<int>(rbuf->data_size)) {
+        loop_.on_undecodable();
+        return;
+      }
+      loop_.on_setpoint(SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0},
+                        monotonic_us());
+    } catch (...) {
+      loop_.on_undecodable();
+    }
+  }
+
+  void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    try {
+      pid_t msg{};
+      if (msg.decode(rbuf->data, 0, rbuf->data_size) != static_cast<int>(rbuf->data_size)) {
+        loop_.on_undecodable();
+        return;
+      }
+      loop_.on_pid(PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw}, monotonic_us());
+    } catch (...) {
+      loop_.on_undecodable();
+    }
+  }
+
+  void publish_pwm(const CycleResult& r) {
+    pwm_msg_.utime = wall_us();
+    for (int i = 0; i < pwm_msg_.num_motors; ++i) {
+      pwm_msg_.command[static_cast<std::size_t>(i)] = static_cast<float>(r.mix.command[i]);
+      pwm_msg_.pwm[static_cast<std::size_t>(i)] = static_cast<float>(r.mix.output[i]);
+    }
+    pwm_msg_.armed = r.mix.armed;
+    pwm_msg_.setpoint_utime = r.setpoint_utime;
+    pwm_msg_.pid_utime = r.pid_utime;
+    const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
+    if (len > 0) lcm_.publish(config_.channels.motor_pwm, pwm_buffer_.data(), static_cast<unsigned>(len));
+  }
+
+  void publish_status(const CycleResult& r) {
+    const Counters& c = loop_.counters();
+    mixer_status_t& s = status_msg_;
+    s.utime = wall_us();
+    s.state = static_cast<int8_t>(r.state);
+    s.failsafe_reason = static_cast<int8_t>(r.reason);
+    s.setpoint_stale = r.setpoint_stale;
+    s.pid_stale = r.pid_stale;
+    const AllocationResult& a = r.last_armed_allocation;
+    s.saturated_upper = static_cast<int32_t>(a.saturated_upper);
+    s.saturated_lower = static_cast<int32_t>(a.saturated_lower);
+    for (int i = 0; i < kNumAxes; ++i) {
+      s.axis_limited[i] = (a.axis_limited >> i) & 1U;
+      s.unallocated[i] = static_cast<float>(a.unallocated[i]);
+    }
+    s.cycles = c.cycles;
+    s.setpoint_received = c.setpoint_received;
+    s.pid_received = c.pid_received;
+    s.rejected_decode = c.rejected_decode;
+    s.rejected_nonfinite = c.rejected_nonfinite;
+    s.rejected_range = c.rejected_range;
+    s.rejected_stale_order = c.rejected_out_of_order;
+    s.failsafe_events = c.failsafe_events;
+    const int len = s.encode(status_buffer_.data(), 0, static_cast<int>(status_buffer_.size()));
+    if (len > 0) lcm_.publish(config_.channels.status, status_buffer_.data(), static_cast<unsigned>(len));
+  }
+
+  const config::Config& config_;
+  lcm::LCM& lcm_;
+  std::ostream& log_;
+  ControlLoop loop_;
+  motor_pwm_t pwm_msg_;
+  mixer_status_t status_msg_;
+  std::vector<uint8_t> pwm_buffer_;
+  std::vector<uint8_t> status_buffer_;
+  std::int64_t next_status_us_ = 0;
+};
+
+void log_summary(const config::Config& config, const std::string& url, std::ostream& log) {
+  log << "motormix: vehicle '" << config.name << "', " << config.motors() << " motors ("
+      << config.geometry_description << "), strategy " << to_string(config.strategy) << "\n"
+      << "motormix: inputs '" << config.channels.setpoint << "' (setpoint, timeout "
+      << config.inputs.setpoint_timeout_s * 1e3 << " ms), '" << config.channels.pid
+      << "' (pid, timeout " << config.inputs.pid_timeout_s * 1e3 << " ms), yaw from "
+      << to_string(config.inputs.yaw_source) << "\n"
+      << "motormix: outputs '" << config.channels.motor_pwm << "' at " << config.loop_rate_hz
+      << " Hz, status '" << config.channels.status << "' at " << config.status_rate_hz
+      << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'" << std::endl;
+}
+
+}  // namespace
+
+int run_node(const config::Config& config, const RunOptions& options, std::ostream& log) {
+  // Signals arrive through a descriptor so shutdown happens in the loop, not
+  // in an async handler.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
+  if (sigprocmask(SIG_BLOCK, &signals, nullptr) != 0) {
+    log << "motormix: cannot block signals: " << std::strerror(errno) << std::endl;
+    return 1;
+  }
+  Fd signal_fd(signalfd(-1, &signals, SFD_CLOEXEC));
+  Fd timer_fd(timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC));
+  if (signal_fd.get() < 0 || timer_fd.get() < 0) {
+    log << "motormix: cannot create signal or timer descriptor: " << std::strerror(errno)
+        << std::endl;
+    return 1;
+  }
+
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) {
+    log << "motormix: cannot open LCM" << (options.lcm_url.empty() ? "" : " at " + options.lcm_url)
+        << std::endl;
+    return 1;
+  }
+  log_summary(config, options.lcm_url, log);
+  Node node(config, lcm, log);
+  node.subscribe();
+
+  const auto period_ns = static_cast<long long>(std::llround(1e9 / config.loop_rate_hz));
+  itimerspec spec{};
+  spec.it_interval.tv_sec = static_cast<time_t>(period_ns / 1'000'000'000);
+  spec.it_interval.tv_nsec = static_cast<long>(period_ns % 1'000'000'000);
+  spec.it_value = spec.it_interval;
+  if (timerfd_settime(timer_fd.get(), 0, &spec, nullptr) != 0) {
+    log << "motormix: cannot start loop timer: " << std::strerror(errno) << std::endl;
+    return 1;
+  }
+
+  pollfd fds[3] = {{lcm.getFileno(), POLLIN, 0}, {timer_fd.get(), POLLIN, 0},
+                   {signal_fd.get(), POLLIN, 0}};
+  long long cycles = 0;
+  while (true) {
+    if (poll(fds, 3, -1) < 0) {
+      if (errno == EINTR) continue;
+      log << "motormix: poll failed: " << std::strerror(errno) << std::endl;
+      node.publish_disarmed();
+      return 1;
+    }
+    if (fds[2].revents & POLLIN) {
+      signalfd_siginfo info{};
+      [[maybe_unused]] const ssize_t got = read(signal_fd.get(), &info, sizeof info);
+      log << "motormix: signal " << info.ssi_signo << ", publishing disarmed outputs and exiting"
+          << std::endl;
+      node.publish_disarmed();
+      return 0;
+    }
+    if (fds[0].revents & POLLIN) node.drain();
+    if (fds[1].revents & POLLIN) {
+      std::uint64_t expirations = 0;
+      if (read(timer_fd.get(), &expirations, sizeof expirations) == sizeof expirations) {
+        node.drain();  // inputs that arrived together with the tick count for it
+        node.cycle(monotonic_us());
+        if (options.max_cycles > 0 && ++cycles >= options.max_cycles) {
+          node.publish_disarmed();
+          return 0;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace motormix::node

@@ -1,0 +1,25 @@
+#pragma once
+// The LCM side of `motormix run`: subscriptions, a fixed-rate monotonic timer,
+// signal handling and publishing. One thread: poll() over the LCM socket, a
+// timerfd and a signalfd. No exception leaves an LCM callback.
+
+#include "config/config.hpp"
+
+#include <atomic>
+#include <iosfwd>
+#include <string>
+
+namespace motormix::node {
+
+struct RunOptions {
+  std::string lcm_url;  // empty: LCM_DEFAULT_URL, then LCM's default
+  // Stop by itself after this many cycles (0: run until a signal). Lets tests
+  // and demos bound a run without relying on signals.
+  long long max_cycles = 0;
+};
+
+// Runs until SIGINT, SIGTERM or SIGHUP (then publishes one disarmed message
+// and returns 0) or a fatal set-up error (returns 1, message on `log`).
+int run_node(const config::Config& config, const RunOptions& options, std::ostream& log);
+
+}  // namespace motormix::node

@@ -1,0 +1,30 @@
+#pragma once
+// Acceptance rules for input messages. A message is either accepted whole or
+// rejected with one reason, which the control loop counts.
+
+#include "node/input_samples.hpp"
+
+#include <motormix/mixer.hpp>
+
+#include <cstdint>
+
+namespace motormix::node {
+
+enum class Rejection : std::uint8_t {
+  kNone = 0,
+  kNonFinite,   // a NaN or infinite field
+  kOutOfRange,  // a field outside its documented range
+  kOutOfOrder,  // utime went backwards on this channel
+};
+
+const char* to_string(Rejection rejection);
+
+// A utime this far behind the last accepted one is taken as a restarted
+// publisher (its clock reset), not a reordered message.
+inline constexpr std::int64_t kPublisherRestartUs = 1'000'000;
+
+Rejection check_setpoint(const SetpointSample& s, ThrustRange thrust_range,
+                         std::int64_t last_utime);
+Rejection check_pid(const PidSample& p, std::int64_t last_utime);
+
+}  // namespace motormix::node

@@ -1,0 +1,78 @@
+#pragma once
+// Records the mixer's outputs from the bus on a background thread and lets a
+// test wait, with a bounded timeout, for a condition on what has arrived.
+
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace motormix::test {
+
+class BusRecorder {
+ public:
+  BusRecorder(const std::string& pwm_channel, const std::string& status_channel) {
+    lcm_.subscribe(pwm_channel, &BusRecorder::on_pwm, this)->setQueueCapacity(100000);
+    lcm_.subscribe(status_channel, &BusRecorder::on_status, this)->setQueueCapacity(100000);
+    thread_ = std::thread([this] {
+      while (!stop_) lcm_.handleTimeout(20);
+    });
+  }
+  ~BusRecorder() {
+    stop_ = true;
+    thread_.join();
+  }
+  BusRecorder(const BusRecorder&) = delete;
+  BusRecorder& operator=(const BusRecorder&) = delete;
+
+  bool good() { return lcm_.good(); }
+
+  // Waits until `done(pwm, status)` holds; false on timeout.
+  bool wait_until(
+      const std::function<bool(const std::vector<motor_pwm_t>&, const std::vector<mixer_status_t>&)>&
+          done,
+      std::chrono::milliseconds timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return changed_.wait_for(lock, timeout, [&] { return done(pwm_, status_); });
+  }
+
+  std::vector<motor_pwm_t> pwm() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pwm_;
+  }
+  std::vector<mixer_status_t> status() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return status_;
+  }
+
+ private:
+  void on_pwm(const lcm::ReceiveBuffer*, const std::string&, const motor_pwm_t* msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pwm_.push_back(*msg);
+    changed_.notify_all();
+  }
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const mixer_status_t* msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    status_.push_back(*msg);
+    changed_.notify_all();
+  }
+
+  lcm::LCM lcm_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<motor_pwm_t> pwm_;
+  std::vector<mixer_status_t> status_;
+  std::thread thread_;
+};
+
+}  // namespace motormix::test

@@ -1,0 +1,26 @@
+#pragma once
+// Shared helpers for the tests: named tolerances and config loading.
+
+#include "config/build_mixer.hpp"
+#include "config/load_config.hpp"
+
+#include <string>
+
+namespace motormix::test {
+
+// Same arithmetic in the same order: results agree to the last bits.
+inline constexpr double kExact = 1e-12;
+// Float32 message fields against double references (PWM microseconds).
+inline constexpr double kFloatPwmUs = 1e-3;
+// Float32 normalized commands against double references.
+inline constexpr double kFloatCommand = 1e-6;
+
+inline std::string source_path(const std::string& relative) {
+  return std::string(MOTORMIX_SOURCE_DIR) + "/" + relative;
+}
+
+inline config::Config team_quad_config() {
+  return config::load_config_file(source_path("config/team_quad.yaml"));
+}
+
+}  // namespace motormix::test

@@ -1,0 +1,74 @@
+// `motormix mix` and `motormix run --check` as a user runs them.
+
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+
+namespace motormix::test {
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string out;
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(MOTORMIX_BINARY) + " " + args + " 2>/dev/null";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  Result r;
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), static_cast<int>(buf.size()), pipe)) r.out += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+const std::string kConfig = "--config " + source_path("config/team_quad.yaml");
+
+TEST(Cli, MixPrintsJson) {
+  const Result r = run("mix " + kConfig + " --throttle 0 --roll 0.5 --pitch 0 --yaw 0 --json");
+  ASSERT_EQ(r.exit_code, 0);
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["pwm"].size(), 4U);
+  EXPECT_NEAR(j["pwm"][0].get<double>(), 1246.75, kExact);
+  EXPECT_NEAR(j["pwm"][1].get<double>(), 1150.0, kExact);
+  EXPECT_NEAR(j["command"][2].get<double>(), 0.125, kExact);
+  EXPECT_EQ(j["motors"][3], "RR");
+  EXPECT_TRUE(j["unallocated"].contains("roll"));
+  EXPECT_EQ(j["saturated_motors"]["lower"], nlohmann::json::array({1, 3}));
+}
+
+TEST(Cli, BadArgumentsExitTwo) {
+  EXPECT_EQ(run("mix " + kConfig + " --throttle 2 --json").exit_code, 2);
+  EXPECT_EQ(run("mix " + kConfig + " --roll nan --json").exit_code, 2);
+  EXPECT_EQ(run("mix " + kConfig + " --roll abc").exit_code, 2);
+  EXPECT_EQ(run("mix --throttle 0.5").exit_code, 2);
+  EXPECT_EQ(run("mix --config /nonexistent.yaml").exit_code, 2);
+  EXPECT_EQ(run("frobnicate").exit_code, 2);
+  EXPECT_EQ(run("").exit_code, 2);
+}
+
+TEST(Cli, CheckValidatesWithoutTheBus) {
+  const Result ok = run("run " + kConfig + " --check");
+  EXPECT_EQ(ok.exit_code, 0);
+  EXPECT_NE(ok.out.find("valid"), std::string::npos);
+  EXPECT_EQ(run("run " + kConfig + " --check --set loop_rate_hz=3").exit_code, 2);
+}
+
+TEST(Cli, HelpAndVersion) {
+  EXPECT_EQ(run("--help").exit_code, 0);
+  EXPECT_EQ(run("mix --help").exit_code, 0);
+  const Result v = run("--version");
+  EXPECT_EQ(v.exit_code, 0);
+  EXPECT_NE(v.out.find("motormix"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace motormix::test
