@@ -89,7 +89,8 @@ int mix(const MixCommand& cmd) {
     std::cout << j.dump() << "\n";
     return kExitOk;
   }
-  std::cout << std::left << std::setw(8) << "motor" << std::setw(12) << "command" << "pwm\n";
+  std::cout << std::left << std::setw(8) << "motor" << std::setw(12) << "command"
+            << "pwm\n";
   for (int i = 0; i < n; ++i) {
     std::cout << std::setw(8) << config->motor_names[static_cast<std::size_t>(i)] << std::setw(12)
               << out.command[i] << out.output[i] << "\n";

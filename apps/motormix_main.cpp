@@ -26,13 +26,14 @@ int main(int argc, char** argv) {
                       "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   run_app->add_flag("--check", run_cmd.check_only,
                     "validate the configuration and exit without touching the bus");
-  run_app->add_option("--max-cycles", run_cmd.max_cycles,
-                      "stop by itself after this many loop cycles (0: until a signal)")
+  run_app
+      ->add_option("--max-cycles", run_cmd.max_cycles,
+                   "stop by itself after this many loop cycles (0: until a signal)")
       ->check(CLI::NonNegativeNumber);
 
   MixCommand mix_cmd;
-  CLI::App* mix_app =
-      app.add_subcommand("mix", "evaluate the configured mixer once, as if armed with fresh inputs");
+  CLI::App* mix_app = app.add_subcommand(
+      "mix", "evaluate the configured mixer once, as if armed with fresh inputs");
   add_common(mix_app, mix_cmd.common);
   mix_app->add_option("--throttle", mix_cmd.throttle, "collective thrust 0..1 (ground: -1..1)");
   mix_app->add_option("--roll", mix_cmd.roll, "roll demand -1..1");

@@ -55,12 +55,13 @@ void read_geometry(MapReader geometry, Config& config) {
   const bool has_preset = geometry.has("preset");
   const bool has_mixing = geometry.has("mixing");
   if (has_preset == has_mixing) {
-    fail(geometry.path_of("preset"), has_preset ? "both 'preset' and 'mixing'" : "neither",
-         "exactly one of 'preset' (" + [] {
-           std::string names;
-           for (const auto& n : preset_names()) names += (names.empty() ? "" : ", ") + n;
-           return names;
-         }() + ") or 'mixing' (a list of [roll, pitch, yaw, thrust] rows)");
+    fail(
+        geometry.path_of("preset"),
+        has_preset ? "both 'preset' and 'mixing'" : "neither", "exactly one of 'preset' (" + [] {
+          std::string names;
+          for (const auto& n : preset_names()) names += (names.empty() ? "" : ", ") + n;
+          return names;
+        }() + ") or 'mixing' (a list of [roll, pitch, yaw, thrust] rows)");
   }
   if (has_preset) {
     const std::string name = geometry.choice("preset", "", preset_names());
@@ -117,8 +118,8 @@ void read_mixer(MapReader mixer, Config& config) {
   config.legacy_budgets.throttle = budgets.number("throttle", 0.60, 0.0, 1.0);
   config.legacy_budgets.roll_pitch = budgets.number("roll_pitch", 0.25, 0.0, 1.0);
   config.legacy_budgets.yaw = budgets.number("yaw", 0.15, 0.0, 1.0);
-  const double sum = config.legacy_budgets.throttle + config.legacy_budgets.roll_pitch +
-                     config.legacy_budgets.yaw;
+  const double sum =
+      config.legacy_budgets.throttle + config.legacy_budgets.roll_pitch + config.legacy_budgets.yaw;
   if (sum > 1.0 + kBudgetSumTolerance) {
     std::ostringstream found;
     found << "throttle + roll_pitch + yaw = " << sum;
@@ -145,7 +146,8 @@ void read_output(MapReader output, Config& config) {
 void read_inputs(MapReader inputs, Config& config) {
   const std::string yaw = inputs.choice("yaw_source", "setpoint", {"setpoint", "pid"});
   config.inputs.yaw_source = yaw == "pid" ? YawSource::kPid : YawSource::kSetpoint;
-  config.inputs.setpoint_timeout_s = inputs.number("setpoint_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
+  config.inputs.setpoint_timeout_s =
+      inputs.number("setpoint_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
   config.inputs.pid_timeout_s = inputs.number("pid_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
   inputs.finish();
 }
@@ -190,9 +192,7 @@ const char* to_string(Strategy strategy) {
   return "?";
 }
 
-const char* to_string(YawSource source) {
-  return source == YawSource::kPid ? "pid" : "setpoint";
-}
+const char* to_string(YawSource source) { return source == YawSource::kPid ? "pid" : "setpoint"; }
 
 Config load_config_text(const std::string& yaml_text, const std::string& source_name,
                         const std::vector<std::string>& overrides) {

@@ -76,8 +76,8 @@ double MapReader::number(const std::string& key, double fallback, double lo, dou
 
 double MapReader::required_number(const std::string& key, double lo, double hi) {
   if (!has(key)) {
-    fail(path_of(key), "nothing", "a number from " + format_number(lo) + " to " +
-                                      format_number(hi) + " (required)");
+    fail(path_of(key), "nothing",
+         "a number from " + format_number(lo) + " to " + format_number(hi) + " (required)");
   }
   return to_number(raw(key), path_of(key), lo, hi);
 }

@@ -28,7 +28,7 @@ class MapReader {
   std::string text(const std::string& key, const std::string& fallback);
   std::string choice(const std::string& key, const std::string& fallback,
                      const std::vector<std::string>& allowed);
-  MapReader map(const std::string& key);  // an absent key reads as an empty map
+  MapReader map(const std::string& key);   // an absent key reads as an empty map
   YAML::Node raw(const std::string& key);  // marks the key as read
 
   // Throws ConfigError naming the first key that was never read.

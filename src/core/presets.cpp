@@ -14,8 +14,10 @@ Preset team_quad() {
       -1.0, -1.0, -1.0, 1.0,   // FR: front right
       +1.0, +1.0, -1.0, 1.0,   // RL: rear left
       -1.0, +1.0, +1.0, 1.0;   // RR: rear right
-  return {"team_quad", "the team's quad: sign table per motor, order FL, FR, RL, RR",
-          {"FL", "FR", "RL", "RR"}, m};
+  return {"team_quad",
+          "the team's quad: sign table per motor, order FL, FR, RL, RR",
+          {"FL", "FR", "RL", "RR"},
+          m};
 }
 
 }  // namespace

@@ -56,8 +56,8 @@ struct CycleResult {
   bool state_changed = false;  // state differs from the previous cycle's
   bool setpoint_stale = true;
   bool pid_stale = true;
-  std::int64_t setpoint_utime = 0;  // utime of the setpoint in force, 0 if none
-  std::int64_t pid_utime = 0;       // utime of the pid in force, 0 if none
+  std::int64_t setpoint_utime = 0;         // utime of the setpoint in force, 0 if none
+  std::int64_t pid_utime = 0;              // utime of the pid in force, 0 if none
   AllocationResult last_armed_allocation;  // from the most recent armed cycle
 };
 

@@ -147,7 +147,8 @@ class Node {
     pwm_msg_.setpoint_utime = r.setpoint_utime;
     pwm_msg_.pid_utime = r.pid_utime;
     const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
-    if (len > 0) lcm_.publish(config_.channels.motor_pwm, pwm_buffer_.data(), static_cast<unsigned>(len));
+    if (len > 0)
+      lcm_.publish(config_.channels.motor_pwm, pwm_buffer_.data(), static_cast<unsigned>(len));
   }
 
   void publish_status(const CycleResult& r) {
@@ -174,7 +175,8 @@ class Node {
     s.rejected_stale_order = c.rejected_out_of_order;
     s.failsafe_events = c.failsafe_events;
     const int len = s.encode(status_buffer_.data(), 0, static_cast<int>(status_buffer_.size()));
-    if (len > 0) lcm_.publish(config_.channels.status, status_buffer_.data(), static_cast<unsigned>(len));
+    if (len > 0)
+      lcm_.publish(config_.channels.status, status_buffer_.data(), static_cast<unsigned>(len));
   }
 
   const config::Config& config_;
@@ -242,8 +244,8 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return 1;
   }
 
-  pollfd fds[3] = {{lcm.getFileno(), POLLIN, 0}, {timer_fd.get(), POLLIN, 0},
-                   {signal_fd.get(), POLLIN, 0}};
+  pollfd fds[3] = {
+      {lcm.getFileno(), POLLIN, 0}, {timer_fd.get(), POLLIN, 0}, {signal_fd.get(), POLLIN, 0}};
   long long cycles = 0;
   while (true) {
     if (poll(fds, 3, -1) < 0) {

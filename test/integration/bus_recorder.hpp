@@ -37,10 +37,9 @@ class BusRecorder {
   bool good() { return lcm_.good(); }
 
   // Waits until `done(pwm, status)` holds; false on timeout.
-  bool wait_until(
-      const std::function<bool(const std::vector<motor_pwm_t>&, const std::vector<mixer_status_t>&)>&
-          done,
-      std::chrono::milliseconds timeout) {
+  bool wait_until(const std::function<bool(const std::vector<motor_pwm_t>&,
+                                           const std::vector<mixer_status_t>&)>& done,
+                  std::chrono::milliseconds timeout) {
     std::unique_lock<std::mutex> lock(mutex_);
     return changed_.wait_for(lock, timeout, [&] { return done(pwm_, status_); });
   }

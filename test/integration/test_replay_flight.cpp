@@ -95,8 +95,7 @@ TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
   // Its final status comes after its final outputs: once it is here, so are they.
   ASSERT_TRUE(bus.wait_until(
       [&](const auto&, const auto& status) {
-        return status.size() > before_stop &&
-               status.back().state == mixer_status_t::STATE_DISARMED;
+        return status.size() > before_stop && status.back().state == mixer_status_t::STATE_DISARMED;
       },
       10s));
 

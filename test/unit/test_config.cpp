@@ -48,9 +48,9 @@ TEST(Config, UnknownKeysAreErrorsWithTheirPath) {
 }
 
 TEST(Config, OutOfRangeNamesKeyValueAndRange) {
-  EXPECT_THAT(error_of(std::string(kMinimal) + "mixer: {legacy_budget: {yaw: 1.5}}\n"),
-              AllOf(HasSubstr("mixer.legacy_budget.yaw"), HasSubstr("'1.5'"),
-                    HasSubstr("from 0 to 1")));
+  EXPECT_THAT(
+      error_of(std::string(kMinimal) + "mixer: {legacy_budget: {yaw: 1.5}}\n"),
+      AllOf(HasSubstr("mixer.legacy_budget.yaw"), HasSubstr("'1.5'"), HasSubstr("from 0 to 1")));
   EXPECT_THAT(error_of(std::string(kMinimal) + "loop_rate_hz: 20\n"),
               AllOf(HasSubstr("loop_rate_hz"), HasSubstr("'20'"), HasSubstr("from 50 to 10000")));
   EXPECT_THAT(error_of(std::string(kMinimal) + "output: {min_us: 1500, max_us: 1200}\n"),
@@ -76,8 +76,7 @@ TEST(Config, WrongTypesAreErrors) {
 
 TEST(Config, GeometryIsRequiredAndExclusive) {
   EXPECT_THAT(error_of("name: x\n"), HasSubstr("'geometry'"));
-  EXPECT_THAT(error_of("geometry: {preset: team_quad, mixing: [[1,1,1,1]]}\n"),
-              HasSubstr("both"));
+  EXPECT_THAT(error_of("geometry: {preset: team_quad, mixing: [[1,1,1,1]]}\n"), HasSubstr("both"));
   EXPECT_THAT(error_of("geometry: {preset: dodecacopter}\n"),
               AllOf(HasSubstr("geometry.preset"), HasSubstr("'dodecacopter'")));
 }

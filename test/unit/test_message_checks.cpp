@@ -31,7 +31,7 @@ TEST(MessageChecks, PidRangesAndOrder) {
   EXPECT_EQ(check_pid({5, 1, -1, 0}, kFirst), Rejection::kNone);
   EXPECT_EQ(check_pid({5, 0, std::nan(""), 0}, kFirst), Rejection::kNonFinite);
   EXPECT_EQ(check_pid({5, 0, 0, -2}, kFirst), Rejection::kOutOfRange);
-  EXPECT_EQ(check_pid({5, 0, 0, 0}, 5), Rejection::kNone);   // a repeat is fine
+  EXPECT_EQ(check_pid({5, 0, 0, 0}, 5), Rejection::kNone);  // a repeat is fine
   EXPECT_EQ(check_pid({4, 0, 0, 0}, 5), Rejection::kOutOfOrder);
   EXPECT_EQ(check_pid({std::numeric_limits<std::int64_t>::min(), 0, 0, 0},
                       std::numeric_limits<std::int64_t>::max()),

@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""Plots a motormix flight log to PNG: inputs, per-motor commands and PWM,
+and armed state over time. With --compare, overlays the motor commands of a
+second log (e.g. the same flight through another strategy)."""
+
+import argparse
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from flight_log import Flight  # noqa: E402
+
+
+def plot(f, output, compare=None, title=None):
+    fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True,
+                             gridspec_kw={"height_ratios": [2, 2, 2, 0.7]})
+    ax = axes[0]
+    ax.plot(f.setpoint_t, f.throttle, label="throttle", color="k")
+    ax.plot(f.setpoint_t, f.yaw, label="yaw")
+    ax.plot(f.pid_t, f.roll, label="roll", lw=0.8)
+    ax.plot(f.pid_t, f.pitch, label="pitch", lw=0.8)
+    ax.set_ylabel("inputs")
+    ax.set_ylim(-1.1, 1.1)
+    ax.legend(loc="upper right", ncol=4, fontsize=8)
+
+    ax = axes[1]
+    for i in range(f.motors):
+        ax.plot(f.pwm_t, f.command[:, i], lw=0.9, label=f"motor {i}")
+    if compare is not None:
+        for i in range(compare.motors):
+            ax.plot(compare.pwm_t, compare.command[:, i], lw=0.9, ls="--", label=f"motor {i} (b)")
+    ax.set_ylabel("command (0..1)")
+    ax.legend(loc="upper right", ncol=4, fontsize=8)
+
+    ax = axes[2]
+    for i in range(f.motors):
+        ax.plot(f.pwm_t, f.pwm[:, i], lw=0.9, label=f"motor {i}")
+    ax.set_ylabel("PWM (us)")
+    ax.legend(loc="upper right", ncol=4, fontsize=8)
+
+    ax = axes[3]
+    ax.fill_between(f.pwm_t, 0, f.armed.astype(float), step="post", alpha=0.4, label="armed")
+    if f.status:
+        sat = [bin(s.saturated_upper | s.saturated_lower).count("1") / max(1, f.motors) for s in f.status]
+        ax.step(f.status_t, sat, where="post", color="r", label="saturated motors (share)")
+    ax.set_ylim(-0.05, 1.05)
+    ax.set_xlabel("time (s)")
+    ax.legend(loc="upper right", ncol=2, fontsize=8)
+    fig.suptitle(title or os.path.basename(f.path))
+    fig.tight_layout()
+    fig.savefig(output, dpi=90)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("log")
+    ap.add_argument("-o", "--output", required=True, help="PNG file to write")
+    ap.add_argument("--compare", help="a second log whose motor commands are overlaid")
+    ap.add_argument("--title")
+    args = ap.parse_args()
+    plot(Flight(args.log), args.output, Flight(args.compare) if args.compare else None, args.title)
+    print(f"plot written to {args.output}")
+
+
+if __name__ == "__main__":
+    main()
