@@ -2,6 +2,7 @@
 
 #include "config/build_mixer.hpp"
 #include "config/load_config.hpp"
+#include "config/matrix_export.hpp"
 #include "node/lcm_node.hpp"
 
 #include <nlohmann/json.hpp>
@@ -62,7 +63,7 @@ int run(const RunCommand& cmd) {
 int mix(const MixCommand& cmd) {
   const auto config = load(cmd.common);
   if (!config) return kExitUsage;
-  const double throttle_low = config->thrust_range == ThrustRange::kUnipolar ? 0.0 : -1.0;
+  const double throttle_low = config->thrust_range() == ThrustRange::kUnipolar ? 0.0 : -1.0;
   if (!check_range("throttle", cmd.throttle, throttle_low, 1.0) ||
       !check_range("roll", cmd.roll, -1.0, 1.0) || !check_range("pitch", cmd.pitch, -1.0, 1.0) ||
       !check_range("yaw", cmd.yaw, -1.0, 1.0)) {
@@ -77,7 +78,7 @@ int mix(const MixCommand& cmd) {
 
   if (cmd.json) {
     nlohmann::json j;
-    j["motors"] = config->motor_names;
+    j["motors"] = config->motor_names();
     j["strategy"] = config::to_string(config->strategy);
     j["command"] = std::vector<double>(out.command.data(), out.command.data() + n);
     j["pwm"] = std::vector<double>(out.output.data(), out.output.data() + n);
@@ -92,10 +93,25 @@ int mix(const MixCommand& cmd) {
   std::cout << std::left << std::setw(8) << "motor" << std::setw(12) << "command"
             << "pwm\n";
   for (int i = 0; i < n; ++i) {
-    std::cout << std::setw(8) << config->motor_names[static_cast<std::size_t>(i)] << std::setw(12)
+    std::cout << std::setw(8) << config->motor_names()[static_cast<std::size_t>(i)] << std::setw(12)
               << out.command[i] << out.output[i] << "\n";
   }
   return kExitOk;
+}
+
+int matrix(const MatrixCommand& cmd) {
+  try {
+    const config::Config config =
+        cmd.preset.empty()
+            ? config::load_config_file(cmd.config_path, cmd.overrides)
+            : config::load_config_text("geometry: {preset: " + cmd.preset + "}\n",
+                                       "preset " + cmd.preset, cmd.overrides);
+    std::cout << config::export_matrix(config, config::matrix_format_from(cmd.format));
+    return kExitOk;
+  } catch (const config::ConfigError& e) {
+    std::cerr << "motormix: " << e.what() << "\n";
+    return kExitUsage;
+  }
 }
 
 }  // namespace motormix::app

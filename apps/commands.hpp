@@ -34,4 +34,12 @@ struct MixCommand {
 };
 int mix(const MixCommand& cmd);
 
+struct MatrixCommand {
+  std::string config_path;  // one of config_path and preset
+  std::string preset;
+  std::vector<std::string> overrides;
+  std::string format = "table";
+};
+int matrix(const MatrixCommand& cmd);
+
 }  // namespace motormix::app

@@ -1,6 +1,7 @@
 // motormix: one binary, one subcommand per job. Wiring only.
 
 #include "commands.hpp"
+#include "config/matrix_export.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -41,8 +42,22 @@ int main(int argc, char** argv) {
   mix_app->add_option("--yaw", mix_cmd.yaw, "yaw demand -1..1");
   mix_app->add_flag("--json", mix_cmd.json, "print one JSON object");
 
+  MatrixCommand matrix_cmd;
+  CLI::App* matrix_app =
+      app.add_subcommand("matrix", "print the mixing matrix of a configuration or a preset");
+  auto* config_opt = matrix_app->add_option("--config", matrix_cmd.config_path, "YAML configuration file")
+                         ->check(CLI::ExistingFile);
+  auto* preset_opt = matrix_app->add_option("--preset", matrix_cmd.preset, "a preset vehicle");
+  config_opt->excludes(preset_opt);
+  matrix_app->add_option("--set", matrix_cmd.overrides, "override a config value: key.path=value");
+  matrix_app->add_option("--format", matrix_cmd.format, "output format")
+      ->check(CLI::IsMember(motormix::config::matrix_format_names()));
+
   try {
     app.parse(argc, argv);
+    if (matrix_app->parsed() && matrix_cmd.config_path.empty() == matrix_cmd.preset.empty()) {
+      throw CLI::RequiredError("exactly one of --config and --preset");
+    }
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
@@ -55,5 +70,6 @@ int main(int argc, char** argv) {
   }
   if (run_app->parsed()) return run(run_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);
+  if (matrix_app->parsed()) return matrix(matrix_cmd);
   return kExitUsage;
 }

@@ -19,6 +19,10 @@ inline constexpr std::array<const char*, kNumAxes> kAxisNames = {"roll", "pitch"
 // ground vehicles).
 using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;
 
+// Range of the thrust axis: aircraft push only up (0..1); ground vehicles
+// drive both ways (-1..1).
+enum class ThrustRange : std::uint8_t { kUnipolar, kBipolar };
+
 constexpr int index(Axis axis) { return static_cast<int>(axis); }
 constexpr std::uint8_t bit(Axis axis) { return static_cast<std::uint8_t>(1U << index(axis)); }
 

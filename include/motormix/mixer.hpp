@@ -27,10 +27,6 @@ struct MixerOutput {
   AllocationResult allocation;
 };
 
-// Range the thrust axis is clamped to: aircraft push only up; ground vehicles
-// drive both ways.
-enum class ThrustRange : std::uint8_t { kUnipolar, kBipolar };
-
 class Mixer {
  public:
   Mixer(std::unique_ptr<const Allocator> allocator, OutputStage output_stage,

@@ -1,31 +1,64 @@
 #pragma once
 // The mixing matrix maps an axis demand to motor commands (one row per motor,
-// columns roll, pitch, yaw, thrust): command = M * demand. Its pseudo-inverse
-// is the normalized effectiveness matrix that tells what a set of motor
-// commands actually produces on each axis, which is how every strategy
-// reports what it could not deliver.
+// columns roll, pitch, yaw, thrust): command = M * demand. It is derived from
+// the effectiveness matrix by a pseudo-inverse and a normalization, or given
+// as a table. Its own pseudo-inverse is the normalized effectiveness that
+// tells what a set of motor commands actually produces per axis, which is how
+// every strategy reports what it could not deliver.
 
 #include <motormix/axes.hpp>
+#include <motormix/effectiveness.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <Eigen/Core>
+
+#include <cstdint>
+#include <string>
 
 namespace motormix {
 
 using MixingMatrix =
     Eigen::Matrix<double, Eigen::Dynamic, kNumAxes, Eigen::RowMajor, kMaxMotors, kNumAxes>;
 
-// kNumAxes x motors; produced = E * command.
-using EffectivenessMatrix =
-    Eigen::Matrix<double, kNumAxes, Eigen::Dynamic, Eigen::ColMajor, kNumAxes, kMaxMotors>;
+// Bit per Axis (see bit()).
+using AxisMask = std::uint8_t;
+inline constexpr AxisMask kAllAxes = 0b1111;
 
-// Moore-Penrose pseudo-inverse of the mixing matrix (complete orthogonal
-// decomposition: rank-revealing and exact for the square sign tables of
-// quads). Called at set-up only.
+enum class Normalization : std::uint8_t {
+  kAxisMax,  // each axis column scaled so its largest magnitude is 1 (0.71 -> 1 on a quad X)
+  kPx4,      // roll and pitch share one scale (RMS-based), yaw by its largest entry, thrust by its mean
+  kNone,     // the raw pseudo-inverse
+};
+
+const char* to_string(Normalization n);
+
+struct MixingDerivation {
+  MixingMatrix mixing;          // normalized; zero columns for axes not controlled
+  AxisVector scale;             // raw column = scale * normalized column
+  int rank = 0;                 // rank of the effectiveness rows that are controlled
+  AxisMask uncontrollable = 0;  // controlled axes that no motor combination can command alone
+  bool ok() const { return uncontrollable == 0; }
+};
+
+// Moore-Penrose pseudo-inverse by complete orthogonal decomposition: rank
+// revealing like the SVD, cheaper, and exact for the square sign tables of
+// quads. Set-up time only.
+MixingDerivation derive_mixing(const EffectivenessMatrix& effectiveness, AxisMask controlled,
+                               Normalization normalization);
+
+// The normalized effectiveness, pinv(M): produced demand = E * command.
 EffectivenessMatrix effectiveness_of(const MixingMatrix& mixing);
 
-// Rank of the mixing matrix with a tolerance relative to its largest singular
-// value; a matrix that cannot command all four axes has rank < 4.
+// Rank with a tolerance relative to the largest singular value.
 int rank_of(const MixingMatrix& mixing);
+
+// Columns that are entirely zero: axes the matrix does not command.
+AxisMask controlled_axes(const MixingMatrix& mixing);
+
+// Per axis, the largest pure demand on that axis (others zero, thrust at
+// `base_thrust`) that keeps every command within [lower, upper]. Thrust's
+// authority is measured from zero torque demand and zero thrust.
+AxisVector authority_of(const MixingMatrix& mixing, double base_thrust, double lower,
+                        double upper);
 
 }  // namespace motormix

@@ -13,7 +13,7 @@ Mixer build_mixer(const Config& config) {
       allocator = std::make_unique<LegacyBudgetAllocator>(config.mixing, config.legacy_budgets);
       break;
   }
-  return Mixer(std::move(allocator), OutputStage(config.outputs), config.thrust_range);
+  return Mixer(std::move(allocator), OutputStage(config.outputs), config.thrust_range());
 }
 
 }  // namespace motormix::config

@@ -3,11 +3,14 @@
 // which strategy, which output ranges, which channels and rates. Built once
 // at start-up by load_config(); nothing downstream re-validates it.
 
+#include <motormix/geometry.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
 #include <motormix/mixing_matrix.hpp>
 #include <motormix/output_stage.hpp>
+#include <motormix/vehicle.hpp>
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -38,11 +41,13 @@ struct Inputs {
 };
 
 struct Config {
-  std::string name;                      // vehicle name, for logs and status
-  std::string geometry_description;      // where the mixing table came from
-  MixingMatrix mixing;                   // rows: motors; columns: roll, pitch, yaw, thrust
-  std::vector<std::string> motor_names;  // one per motor
-  ThrustRange thrust_range = ThrustRange::kUnipolar;
+  std::string name;             // for logs and status
+  Vehicle vehicle;              // as described: preset, rotors, effectiveness, table or wheels
+  std::string geometry_source;  // which form described it, for logs
+  Normalization normalization = Normalization::kAxisMax;
+  std::optional<MixingDerivation> derivation;  // set when derived from an effectiveness matrix
+  std::optional<WheelBase> wheel_base;         // set for wheeled vehicles
+  MixingMatrix mixing;  // the matrix the mixer applies; rows: motors; columns: roll, pitch, yaw, thrust
 
   Strategy strategy = Strategy::kLegacyBudget;
   LegacyBudgets legacy_budgets;
@@ -55,6 +60,9 @@ struct Config {
   double status_rate_hz = 10.0;
 
   int motors() const { return static_cast<int>(mixing.rows()); }
+  const std::vector<std::string>& motor_names() const { return vehicle.motor_names; }
+  ThrustRange thrust_range() const { return vehicle.thrust_range; }
+  std::string description() const;
 };
 
 const char* to_string(Strategy strategy);

@@ -46,7 +46,7 @@ const char* to_string(FailsafeReason reason) {
 
 ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
     : mixer_(std::move(mixer)),
-      thrust_range_(config.thrust_range),
+      thrust_range_(config.thrust_range()),
       yaw_source_(config.inputs.yaw_source),
       setpoint_timeout_us_(seconds_to_us(config.inputs.setpoint_timeout_s)),
       pid_timeout_us_(seconds_to_us(config.inputs.pid_timeout_s)) {

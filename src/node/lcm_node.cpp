@@ -192,7 +192,7 @@ class Node {
 
 void log_summary(const config::Config& config, const std::string& url, std::ostream& log) {
   log << "motormix: vehicle '" << config.name << "', " << config.motors() << " motors ("
-      << config.geometry_description << "), strategy " << to_string(config.strategy) << "\n"
+      << config.description() << "), strategy " << to_string(config.strategy) << "\n"
       << "motormix: inputs '" << config.channels.setpoint << "' (setpoint, timeout "
       << config.inputs.setpoint_timeout_s * 1e3 << " ms), '" << config.channels.pid
       << "' (pid, timeout " << config.inputs.pid_timeout_s * 1e3 << " ms), yaw from "

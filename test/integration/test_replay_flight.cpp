@@ -100,6 +100,7 @@ TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
       10s));
 
   const std::vector<motor_pwm_t> outputs = bus.pwm();
+  EXPECT_EQ(bus.undecodable(), 0);
   ASSERT_FALSE(outputs.back().armed) << "the last output before exit must be disarmed";
 
   std::size_t armed = 0;

@@ -87,7 +87,7 @@ TEST(Config, ExplicitMixingTable) {
       "  motor_names: [a, b, c, d]\n",
       "test.yaml");
   EXPECT_EQ(c.mixing, team_quad_config().mixing);
-  EXPECT_EQ(c.motor_names[2], "c");
+  EXPECT_EQ(c.motor_names()[2], "c");
   EXPECT_THAT(error_of("geometry: {mixing: [[1, 1, 1], [1, 1, 1, 1]]}\n"),
               AllOf(HasSubstr("geometry.mixing[0]"), HasSubstr("row of 4")));
   EXPECT_THAT(error_of("geometry: {mixing: [[1, 1, x, 1]]}\n"),

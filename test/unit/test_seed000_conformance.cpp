@@ -33,7 +33,7 @@ class Seed000 : public ::testing::Test {
 
 TEST_F(Seed000, ConfigIsTheTeamQuad) {
   EXPECT_EQ(config_.motors(), 4);
-  EXPECT_EQ(config_.motor_names, (std::vector<std::string>{"FL", "FR", "RL", "RR"}));
+  EXPECT_EQ(config_.motor_names(), (std::vector<std::string>{"FL", "FR", "RL", "RR"}));
   EXPECT_EQ(config_.channels.setpoint, "pos_deseada");
   EXPECT_EQ(config_.channels.pid, "pid");
   EXPECT_EQ(config_.inputs.yaw_source, config::YawSource::kSetpoint);

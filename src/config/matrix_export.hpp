@@ -1,0 +1,28 @@
+#pragma once
+// The mixing matrix of a configuration, written out for people and for other
+// tools: a readable table, JSON, a config fragment that freezes it, the
+// MIXING section of a Paparazzi airframe file, and a C header for firmware.
+
+#include "config/config.hpp"
+
+#include <string>
+#include <vector>
+
+namespace motormix::config {
+
+enum class MatrixFormat { kTable, kJson, kYaml, kPaparazzi, kHeader };
+
+std::vector<std::string> matrix_format_names();
+MatrixFormat matrix_format_from(const std::string& name);  // name from matrix_format_names()
+
+std::string export_matrix(const Config& config, MatrixFormat format);
+
+// Per axis, the largest pure demand the configuration can deliver: torques
+// from half thrust (aircraft) or standstill (ground), thrust from zero.
+AxisVector authority_of(const Config& config);
+
+// Coefficients scaled to `scale` and rounded half to even, the rounding of
+// the numpy script that Paparazzi users run.
+std::vector<std::vector<long>> scaled_coefficients(const MixingMatrix& mixing, double scale);
+
+}  // namespace motormix::config
