@@ -102,10 +102,9 @@ int mix(const MixCommand& cmd) {
 int matrix(const MatrixCommand& cmd) {
   try {
     const config::Config config =
-        cmd.preset.empty()
-            ? config::load_config_file(cmd.config_path, cmd.overrides)
-            : config::load_config_text("geometry: {preset: " + cmd.preset + "}\n",
-                                       "preset " + cmd.preset, cmd.overrides);
+        cmd.preset.empty() ? config::load_config_file(cmd.config_path, cmd.overrides)
+                           : config::load_config_text("geometry: {preset: " + cmd.preset + "}\n",
+                                                      "preset " + cmd.preset, cmd.overrides);
     std::cout << config::export_matrix(config, config::matrix_format_from(cmd.format));
     return kExitOk;
   } catch (const config::ConfigError& e) {

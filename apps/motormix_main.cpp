@@ -45,8 +45,9 @@ int main(int argc, char** argv) {
   MatrixCommand matrix_cmd;
   CLI::App* matrix_app =
       app.add_subcommand("matrix", "print the mixing matrix of a configuration or a preset");
-  auto* config_opt = matrix_app->add_option("--config", matrix_cmd.config_path, "YAML configuration file")
-                         ->check(CLI::ExistingFile);
+  auto* config_opt =
+      matrix_app->add_option("--config", matrix_cmd.config_path, "YAML configuration file")
+          ->check(CLI::ExistingFile);
   auto* preset_opt = matrix_app->add_option("--preset", matrix_cmd.preset, "a preset vehicle");
   config_opt->excludes(preset_opt);
   matrix_app->add_option("--set", matrix_cmd.overrides, "override a config value: key.path=value");

@@ -26,8 +26,8 @@ inline constexpr AxisMask kAllAxes = 0b1111;
 
 enum class Normalization : std::uint8_t {
   kAxisMax,  // each axis column scaled so its largest magnitude is 1 (0.71 -> 1 on a quad X)
-  kPx4,      // roll and pitch share one scale (RMS-based), yaw by its largest entry, thrust by its mean
-  kNone,     // the raw pseudo-inverse
+  kPx4,  // roll and pitch share one scale (RMS-based), yaw by its largest entry, thrust by its mean
+  kNone,  // the raw pseudo-inverse
 };
 
 const char* to_string(Normalization n);
@@ -58,7 +58,6 @@ AxisMask controlled_axes(const MixingMatrix& mixing);
 // Per axis, the largest pure demand on that axis (others zero, thrust at
 // `base_thrust`) that keeps every command within [lower, upper]. Thrust's
 // authority is measured from zero torque demand and zero thrust.
-AxisVector authority_of(const MixingMatrix& mixing, double base_thrust, double lower,
-                        double upper);
+AxisVector authority_of(const MixingMatrix& mixing, double base_thrust, double lower, double upper);
 
 }  // namespace motormix

@@ -47,7 +47,8 @@ struct Config {
   Normalization normalization = Normalization::kAxisMax;
   std::optional<MixingDerivation> derivation;  // set when derived from an effectiveness matrix
   std::optional<WheelBase> wheel_base;         // set for wheeled vehicles
-  MixingMatrix mixing;  // the matrix the mixer applies; rows: motors; columns: roll, pitch, yaw, thrust
+  MixingMatrix
+      mixing;  // the matrix the mixer applies; rows: motors; columns: roll, pitch, yaw, thrust
 
   Strategy strategy = Strategy::kLegacyBudget;
   LegacyBudgets legacy_budgets;

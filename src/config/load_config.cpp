@@ -68,10 +68,9 @@ std::string axis_list(AxisMask mask) {
 // A list of numbers of a given length (or a range of lengths).
 std::vector<double> read_numbers(const YAML::Node& node, const std::string& path,
                                  std::size_t min_len, std::size_t max_len, double lo, double hi) {
-  const std::string want = min_len == max_len
-                               ? "a list of " + std::to_string(min_len) + " numbers"
-                               : "a list of " + std::to_string(min_len) + " to " +
-                                     std::to_string(max_len) + " numbers";
+  const std::string want = min_len == max_len ? "a list of " + std::to_string(min_len) + " numbers"
+                                              : "a list of " + std::to_string(min_len) + " to " +
+                                                    std::to_string(max_len) + " numbers";
   if (!node.IsSequence() || node.size() < min_len || node.size() > max_len) {
     fail(path, describe(node), want);
   }
@@ -95,7 +94,8 @@ Vehicle rotors_vehicle(const YAML::Node& list, const std::string& path) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     MapReader r(list[i], path + "[" + std::to_string(i) + "]");
     Rotor rotor;
-    if (!r.has("position")) fail(r.path_of("position"), "nothing", "[x, y] or [x, y, z] (required)");
+    if (!r.has("position"))
+      fail(r.path_of("position"), "nothing", "[x, y] or [x, y, z] (required)");
     rotor.position = read_vector(r.raw("position"), r.path_of("position"));
     rotor.spin = r.choice("spin", "", {"cw", "ccw"}) == "cw" ? Spin::kCw : Spin::kCcw;
     rotor.thrust_coefficient = r.number("thrust_coefficient", 1.0, 1e-6, 1e6);
@@ -113,7 +113,8 @@ Vehicle rotors_vehicle(const YAML::Node& list, const std::string& path) {
   v.name = "rotors";
   v.description = std::to_string(rotors.size()) + " rotors described one by one";
   v.effectiveness = rotor_effectiveness(rotors);
-  for (std::size_t i = 0; i < rotors.size(); ++i) v.motor_names.push_back("m" + std::to_string(i + 1));
+  for (std::size_t i = 0; i < rotors.size(); ++i)
+    v.motor_names.push_back("m" + std::to_string(i + 1));
   return v;
 }
 
@@ -124,15 +125,15 @@ Vehicle effectiveness_vehicle(MapReader rows) {
     const std::string axis = kAxisNames[static_cast<std::size_t>(a)];
     const bool optional_row = a == index(Axis::kThrust);
     if (!rows.has(axis)) {
-      if (!optional_row) fail(rows.path_of(axis), "nothing", "a list of one number per motor (required)");
+      if (!optional_row)
+        fail(rows.path_of(axis), "nothing", "a list of one number per motor (required)");
       rows.raw(axis);
       continue;
     }
     const std::size_t min_len = n == 0 ? 1 : n;
     const std::size_t max_len = n == 0 ? kMaxMotors : n;
-    values[static_cast<std::size_t>(a)] =
-        read_numbers(rows.raw(axis), rows.path_of(axis), min_len, max_len, -kMaxCoefficient,
-                     kMaxCoefficient);
+    values[static_cast<std::size_t>(a)] = read_numbers(rows.raw(axis), rows.path_of(axis), min_len,
+                                                       max_len, -kMaxCoefficient, kMaxCoefficient);
     n = values[static_cast<std::size_t>(a)].size();
   }
   rows.finish();
@@ -140,7 +141,8 @@ Vehicle effectiveness_vehicle(MapReader rows) {
   if (thrust.empty()) thrust.assign(n, 1.0);
   EffectivenessMatrix e(kNumAxes, static_cast<Eigen::Index>(n));
   for (int a = 0; a < kNumAxes; ++a) {
-    for (std::size_t i = 0; i < n; ++i) e(a, static_cast<Eigen::Index>(i)) = values[static_cast<std::size_t>(a)][i];
+    for (std::size_t i = 0; i < n; ++i)
+      e(a, static_cast<Eigen::Index>(i)) = values[static_cast<std::size_t>(a)][i];
   }
   Vehicle v;
   v.name = "effectiveness";
@@ -173,7 +175,8 @@ Vehicle table_vehicle(const YAML::Node& rows, const std::string& path) {
   v.description = "explicit mixing table";
   v.mixing_table = m;
   v.controlled = controlled_axes(m);
-  for (std::size_t i = 0; i < rows.size(); ++i) v.motor_names.push_back("m" + std::to_string(i + 1));
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    v.motor_names.push_back("m" + std::to_string(i + 1));
   return v;
 }
 
@@ -181,7 +184,8 @@ WheelBase read_wheel_base(MapReader wheels, int default_per_side, bool per_side_
   WheelBase base;
   base.wheels_per_side = default_per_side;
   if (per_side_allowed) {
-    base.wheels_per_side = static_cast<int>(wheels.number("wheels_per_side", default_per_side, 2, 3));
+    base.wheels_per_side =
+        static_cast<int>(wheels.number("wheels_per_side", default_per_side, 2, 3));
     if (base.wheels_per_side != 2 && base.wheels_per_side != 3) {
       fail(wheels.path_of("wheels_per_side"), std::to_string(base.wheels_per_side), "2 or 3");
     }
@@ -195,8 +199,8 @@ WheelBase read_wheel_base(MapReader wheels, int default_per_side, bool per_side_
 
 std::vector<int> read_motor_order(const YAML::Node& node, const std::string& path, int motors) {
   const std::string want = "a permutation of 1.." + std::to_string(motors);
-  const std::vector<double> raw =
-      read_numbers(node, path, static_cast<std::size_t>(motors), static_cast<std::size_t>(motors), 1, motors);
+  const std::vector<double> raw = read_numbers(node, path, static_cast<std::size_t>(motors),
+                                               static_cast<std::size_t>(motors), 1, motors);
   std::vector<int> order;
   std::vector<bool> seen(static_cast<std::size_t>(motors) + 1, false);
   for (double v : raw) {
@@ -209,8 +213,8 @@ std::vector<int> read_motor_order(const YAML::Node& node, const std::string& pat
 }
 
 void read_geometry(MapReader geometry, Config& config) {
-  const std::vector<std::string> forms = {"preset",        "rotors",           "effectiveness",
-                                          "mixing",        "differential_drive", "skid_steer"};
+  const std::vector<std::string> forms = {
+      "preset", "rotors", "effectiveness", "mixing", "differential_drive", "skid_steer"};
   std::vector<std::string> given;
   for (const auto& f : forms) {
     if (geometry.has(f)) given.push_back(f);
@@ -232,7 +236,8 @@ void read_geometry(MapReader geometry, Config& config) {
   if (preset_form) {
     const std::string name = geometry.choice("preset", "", preset_names());
     PresetOptions options;
-    if (geometry.has("arm_length")) options.arm_length = geometry.number("arm_length", 0.25, 1e-4, 1e3);
+    if (geometry.has("arm_length"))
+      options.arm_length = geometry.number("arm_length", 0.25, 1e-4, 1e3);
     geometry.raw("arm_length");
     const YAML::Node reverse = geometry.raw("reverse_spin");
     if (reverse.IsDefined() && !reverse.IsNull()) {
@@ -243,7 +248,8 @@ void read_geometry(MapReader geometry, Config& config) {
     }
     if (geometry.has("motor_order")) {
       const int motors = find_preset(name)->motors();
-      options.motor_order = read_motor_order(geometry.raw("motor_order"), geometry.path_of("motor_order"), motors);
+      options.motor_order =
+          read_motor_order(geometry.raw("motor_order"), geometry.path_of("motor_order"), motors);
     } else {
       geometry.raw("motor_order");
     }
@@ -263,20 +269,21 @@ void read_geometry(MapReader geometry, Config& config) {
   } else {
     const bool skid = form == "skid_steer";
     const WheelBase base = read_wheel_base(geometry.map(form), skid ? 2 : 1, skid);
-    const std::string preset = skid ? "skid_steer_" + std::to_string(2 * base.wheels_per_side)
-                                    : "differential_drive";
+    const std::string preset =
+        skid ? "skid_steer_" + std::to_string(2 * base.wheels_per_side) : "differential_drive";
     config.vehicle = *find_preset(preset);
     config.wheel_base = base;
   }
   for (const auto& f : forms) geometry.raw(f);
 
-  const std::string norm = geometry.choice("normalization", "axis_max", {"axis_max", "px4", "none"});
+  const std::string norm =
+      geometry.choice("normalization", "axis_max", {"axis_max", "px4", "none"});
   config.normalization = norm == "px4"    ? Normalization::kPx4
                          : norm == "none" ? Normalization::kNone
                                           : Normalization::kAxisMax;
   if (config.vehicle.effectiveness) {
-    config.derivation =
-        derive_mixing(*config.vehicle.effectiveness, config.vehicle.controlled, config.normalization);
+    config.derivation = derive_mixing(*config.vehicle.effectiveness, config.vehicle.controlled,
+                                      config.normalization);
     if (!config.derivation->ok()) {
       fail(geometry.path_of(given[0]),
            "a geometry whose effectiveness has rank " + std::to_string(config.derivation->rank) +

@@ -34,13 +34,13 @@ std::string detail(const Config& c, int i) {
 std::string table(const Config& c) {
   std::ostringstream s;
   s << "vehicle: " << c.description() << "\n";
-  s << "normalization: " << to_string(c.normalization)
-    << ", rank: " << rank_of(c.mixing) << " of " << kNumAxes << " axes";
+  s << "normalization: " << to_string(c.normalization) << ", rank: " << rank_of(c.mixing) << " of "
+    << kNumAxes << " axes";
   if (c.wheel_base) {
-    s << "\nwheels: radius " << c.wheel_base->wheel_radius << ", track " << c.wheel_base->track_width
-      << ", max wheel speed " << c.wheel_base->max_wheel_speed << " rad/s -> forward "
-      << c.wheel_base->max_forward_speed() << " m/s, turn " << c.wheel_base->max_turn_rate()
-      << " rad/s at full command";
+    s << "\nwheels: radius " << c.wheel_base->wheel_radius << ", track "
+      << c.wheel_base->track_width << ", max wheel speed " << c.wheel_base->max_wheel_speed
+      << " rad/s -> forward " << c.wheel_base->max_forward_speed() << " m/s, turn "
+      << c.wheel_base->max_turn_rate() << " rad/s at full command";
   }
   s << "\n\n" << std::left << std::setw(7) << "motor" << std::setw(20) << "where" << std::right;
   for (const char* axis : kAxisNames) s << std::setw(9) << axis;
@@ -54,7 +54,8 @@ std::string table(const Config& c) {
   const AxisVector authority = authority_of(c);
   s << "\nauthority (largest pure demand deliverable; torques from "
     << (c.thrust_range() == ThrustRange::kUnipolar ? "half thrust" : "standstill") << "):";
-  for (int a = 0; a < kNumAxes; ++a) s << " " << kAxisNames[static_cast<std::size_t>(a)] << " " << fixed(authority[a], 0);
+  for (int a = 0; a < kNumAxes; ++a)
+    s << " " << kAxisNames[static_cast<std::size_t>(a)] << " " << fixed(authority[a], 0);
   s << "\n";
   return s.str();
 }
@@ -73,14 +74,15 @@ std::string json(const Config& c) {
     j["matrix"].push_back(row);
   }
   const AxisVector authority = authority_of(c);
-  for (int a = 0; a < kNumAxes; ++a) j["authority"][kAxisNames[static_cast<std::size_t>(a)]] = authority[a];
+  for (int a = 0; a < kNumAxes; ++a)
+    j["authority"][kAxisNames[static_cast<std::size_t>(a)]] = authority[a];
   return j.dump() + "\n";
 }
 
 std::string yaml(const Config& c) {
   std::ostringstream s;
-  s << "# mixing matrix of " << c.description() << ", normalization "
-    << to_string(c.normalization) << "\n# columns: roll, pitch, yaw, thrust\ngeometry:\n  mixing:\n";
+  s << "# mixing matrix of " << c.description() << ", normalization " << to_string(c.normalization)
+    << "\n# columns: roll, pitch, yaw, thrust\ngeometry:\n  mixing:\n";
   for (int i = 0; i < c.motors(); ++i) {
     s << "    - [";
     for (int a = 0; a < kNumAxes; ++a) s << (a ? ", " : "") << exact(c.mixing(i, a));
@@ -90,7 +92,8 @@ std::string yaml(const Config& c) {
     s << "\n";
   }
   s << "  motor_names: [";
-  for (int i = 0; i < c.motors(); ++i) s << (i ? ", " : "") << c.motor_names()[static_cast<std::size_t>(i)];
+  for (int i = 0; i < c.motors(); ++i)
+    s << (i ? ", " : "") << c.motor_names()[static_cast<std::size_t>(i)];
   s << "]\n";
   return s.str();
 }

@@ -46,7 +46,8 @@ AxisVector px4_scale(const Eigen::MatrixXd& raw) {
   s[index(Axis::kPitch)] = roll_pitch;
   s[index(Axis::kYaw)] = raw.col(index(Axis::kYaw)).maxCoeff();
   const auto thrust = raw.col(index(Axis::kThrust)).array().abs();
-  const double nonzero = static_cast<double>((thrust > std::numeric_limits<double>::epsilon()).count());
+  const double nonzero =
+      static_cast<double>((thrust > std::numeric_limits<double>::epsilon()).count());
   s[index(Axis::kThrust)] = nonzero > 0 ? thrust.sum() / nonzero : 0.0;
   return s;
 }

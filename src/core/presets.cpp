@@ -102,12 +102,13 @@ Vehicle h_hexa(double arm) {
 }
 
 // Y6: three arms (right front, left front, rear), two coaxial rotors each,
-// numbered as ArduPilot's default Y6.
+// numbered as ArduPilot's default Y6. Arms at x = 2/3 and -4/3 of the
+// lateral offset, so the centre of thrust is the centre of the frame.
 Vehicle y6(double arm) {
-  const double s = arm / 1.333;
-  const Eigen::Vector3d right{0.666 * s, 1.0 * s, 0.0};
-  const Eigen::Vector3d left{0.666 * s, -1.0 * s, 0.0};
-  const Eigen::Vector3d rear{-1.333 * s, 0.0, 0.0};
+  const double s = arm * 0.75;
+  const Eigen::Vector3d right{2.0 / 3.0 * s, s, 0.0};
+  const Eigen::Vector3d left{2.0 / 3.0 * s, -s, 0.0};
+  const Eigen::Vector3d rear{-4.0 / 3.0 * s, 0.0, 0.0};
   const std::vector<std::pair<Eigen::Vector3d, Spin>> spec = {
       {right, CCW}, {left, CW}, {left, CCW}, {rear, CW}, {right, CW}, {rear, CCW}};
   std::vector<Rotor> rotors;
@@ -155,14 +156,12 @@ const std::map<std::string, Factory>& factories() {
       {"hexa_x",
        [](double a) {
          return multirotor("hexa_x", "hexarotor X (PX4 and ArduPilot numbering)",
-                           {{90, CW}, {-90, CCW}, {-30, CW}, {150, CCW}, {30, CCW}, {-150, CW}},
-                           a);
+                           {{90, CW}, {-90, CCW}, {-30, CW}, {150, CCW}, {30, CCW}, {-150, CW}}, a);
        }},
       {"hexa_plus",
        [](double a) {
          return multirotor("hexa_plus", "hexarotor + (PX4 and ArduPilot numbering)",
-                           {{0, CW}, {180, CCW}, {-120, CW}, {60, CCW}, {-60, CCW}, {120, CW}},
-                           a);
+                           {{0, CW}, {180, CCW}, {-120, CW}, {60, CCW}, {-60, CCW}, {120, CW}}, a);
        }},
       {"h_hexa", [](double a) { return h_hexa(a); }},
       {"octo_x",
@@ -265,7 +264,8 @@ std::optional<Vehicle> find_preset(std::string_view name, const PresetOptions& o
     std::vector<std::string> details;
     for (int o : order) {
       names.push_back(v.motor_names[static_cast<std::size_t>(o - 1)]);
-      if (!v.motor_details.empty()) details.push_back(v.motor_details[static_cast<std::size_t>(o - 1)]);
+      if (!v.motor_details.empty())
+        details.push_back(v.motor_details[static_cast<std::size_t>(o - 1)]);
     }
     v.motor_names = names;
     v.motor_details = details;

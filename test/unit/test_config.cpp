@@ -76,7 +76,8 @@ TEST(Config, WrongTypesAreErrors) {
 
 TEST(Config, GeometryIsRequiredAndExclusive) {
   EXPECT_THAT(error_of("name: x\n"), HasSubstr("'geometry'"));
-  EXPECT_THAT(error_of("geometry: {preset: team_quad, mixing: [[1,1,1,1]]}\n"), HasSubstr("both"));
+  EXPECT_THAT(error_of("geometry: {preset: team_quad, mixing: [[1,1,1,1]]}\n"),
+              AllOf(HasSubstr("found preset, mixing"), HasSubstr("exactly one of")));
   EXPECT_THAT(error_of("geometry: {preset: dodecacopter}\n"),
               AllOf(HasSubstr("geometry.preset"), HasSubstr("'dodecacopter'")));
 }
