@@ -86,7 +86,10 @@ def controlled_rows(e):
 
 def normalize(raw, mode):
     m = raw.copy()
-    if mode == "none":
+    if mode == "none":  # torques raw; thrust by the mean of its non-zero magnitudes
+        nz = np.sum(np.abs(m[:, 3]) > np.finfo(float).eps)
+        if nz:
+            m[:, 3] /= np.sum(np.abs(m[:, 3])) / nz
         return m
     if mode == "axis_max":
         for a in range(4):

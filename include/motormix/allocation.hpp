@@ -41,6 +41,26 @@ class Allocator {
   virtual AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const = 0;
 };
 
+// Shared state of the strategies that work from a mixing matrix: the matrix,
+// its normalized effectiveness (for reporting) and the command range.
+class MatrixAllocator : public Allocator {
+ public:
+  MatrixAllocator(const MixingMatrix& mixing, CommandRange range);
+  int motors() const override { return static_cast<int>(mixing_.rows()); }
+  const MixingMatrix& mixing() const { return mixing_; }
+  CommandRange range() const { return range_; }
+
+ protected:
+  // Unconstrained mix: M * demand.
+  void mix_linear(const AxisVector& demand, MotorVector& commands) const;
+  // Clamps into the range and reports against `target`.
+  AllocationResult finish(const AxisVector& target, MotorVector& commands) const;
+
+  MixingMatrix mixing_;
+  EffectivenessMatrix effectiveness_;
+  CommandRange range_;
+};
+
 // Fills saturation flags and the unallocated demand by comparing `target` with
 // what `commands` produce through `effectiveness`. Shared by all strategies so
 // they report alike.

@@ -7,6 +7,9 @@
 
 namespace motormix::config {
 
+// Motor command range: 0..1 for motors that only push, -1..1 for wheels.
+CommandRange command_range(const Config& config);
+
 Mixer build_mixer(const Config& config);
 
 }  // namespace motormix::config

@@ -7,7 +7,9 @@
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
 #include <motormix/mixing_matrix.hpp>
+#include <motormix/optimal_allocator.hpp>
 #include <motormix/output_stage.hpp>
+#include <motormix/prioritized_allocator.hpp>
 #include <motormix/vehicle.hpp>
 
 #include <optional>
@@ -24,7 +26,7 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class Strategy { kLegacyBudget };
+enum class Strategy { kLegacyBudget, kBudget, kShift, kClip, kPrioritized, kOptimal };
 enum class YawSource { kSetpoint, kPid };
 
 struct Channels {
@@ -51,7 +53,10 @@ struct Config {
       mixing;  // the matrix the mixer applies; rows: motors; columns: roll, pitch, yaw, thrust
 
   Strategy strategy = Strategy::kLegacyBudget;
-  LegacyBudgets legacy_budgets;
+  LegacyBudgets legacy_budgets;     // legacy_budget and budget
+  Airmode airmode = Airmode::kOff;  // prioritized
+  double yaw_headroom = 0.15;       // prioritized
+  OptimalSettings optimal;          // optimal
 
   std::vector<OutputChannel> outputs;  // one per motor
 

@@ -316,8 +316,24 @@ void read_geometry(MapReader geometry, Config& config) {
 }
 
 void read_mixer(MapReader mixer, Config& config) {
-  const std::string strategy = mixer.choice("strategy", "legacy_budget", {"legacy_budget"});
-  if (strategy == "legacy_budget") config.strategy = Strategy::kLegacyBudget;
+  const std::vector<std::string> names = {"legacy_budget", "budget",      "shift",
+                                          "clip",          "prioritized", "optimal"};
+  // Default: sequential desaturation for aircraft, shifting for wheels.
+  const std::string fallback =
+      config.thrust_range() == ThrustRange::kBipolar ? "shift" : "prioritized";
+  const std::string strategy = mixer.choice("strategy", fallback, names);
+  const std::vector<Strategy> values = {Strategy::kLegacyBudget, Strategy::kBudget,
+                                        Strategy::kShift,        Strategy::kClip,
+                                        Strategy::kPrioritized,  Strategy::kOptimal};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == strategy) config.strategy = values[i];
+  }
+  const bool budgeted =
+      config.strategy == Strategy::kLegacyBudget || config.strategy == Strategy::kBudget;
+  if (budgeted && config.thrust_range() == ThrustRange::kBipolar) {
+    fail(mixer.path_of("strategy"), "'" + strategy + "' for a wheeled vehicle",
+         "shift, clip, prioritized or optimal (budgets assume motors that only push)");
+  }
 
   MapReader budgets = mixer.map("legacy_budget");
   config.legacy_budgets.throttle = budgets.number("throttle", 0.60, 0.0, 1.0);
@@ -331,6 +347,25 @@ void read_mixer(MapReader mixer, Config& config) {
     fail(mixer.path_of("legacy_budget"), found.str(), "a sum of at most 1 (full power)");
   }
   budgets.finish();
+
+  MapReader prioritized = mixer.map("prioritized");
+  const std::string airmode =
+      prioritized.choice("airmode", "off", {"off", "roll_pitch", "roll_pitch_yaw"});
+  config.airmode = airmode == "roll_pitch"       ? Airmode::kRollPitch
+                   : airmode == "roll_pitch_yaw" ? Airmode::kRollPitchYaw
+                                                 : Airmode::kOff;
+  config.yaw_headroom = prioritized.number("yaw_headroom", 0.15, 0.0, 1.0);
+  prioritized.finish();
+
+  MapReader optimal = mixer.map("optimal");
+  MapReader weights = optimal.map("weights");
+  for (int a = 0; a < kNumAxes; ++a) {
+    config.optimal.weights[a] = weights.number(kAxisNames[static_cast<std::size_t>(a)],
+                                               config.optimal.weights[a], 0.0, 1e3);
+  }
+  weights.finish();
+  config.optimal.max_iterations = static_cast<int>(optimal.number("max_iterations", 100, 1, 1000));
+  optimal.finish();
   mixer.finish();
 }
 
@@ -393,6 +428,16 @@ const char* to_string(Strategy strategy) {
   switch (strategy) {
     case Strategy::kLegacyBudget:
       return "legacy_budget";
+    case Strategy::kBudget:
+      return "budget";
+    case Strategy::kShift:
+      return "shift";
+    case Strategy::kClip:
+      return "clip";
+    case Strategy::kPrioritized:
+      return "prioritized";
+    case Strategy::kOptimal:
+      return "optimal";
   }
   return "?";
 }

@@ -1,5 +1,6 @@
 #include <motormix/allocation.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace motormix {
@@ -29,6 +30,22 @@ AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
     }
   }
   return result;
+}
+
+MatrixAllocator::MatrixAllocator(const MixingMatrix& mixing, CommandRange range)
+    : mixing_(mixing), effectiveness_(effectiveness_of(mixing)), range_(range) {}
+
+void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands) const {
+  commands.noalias() = mixing_ * demand;
+}
+
+AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& commands) const {
+  for (Eigen::Index i = 0; i < commands.size(); ++i) {
+    // NaN cannot come from finite inputs; if it ever did, the safe end.
+    commands[i] = std::isnan(commands[i]) ? range_.lower
+                                          : std::clamp(commands[i], range_.lower, range_.upper);
+  }
+  return describe_allocation(effectiveness_, target, commands, range_);
 }
 
 }  // namespace motormix

@@ -95,6 +95,9 @@ MixingDerivation derive_mixing(const EffectivenessMatrix& effectiveness, AxisMas
       break;
     case Normalization::kNone:
       d.scale = AxisVector::Ones();
+      // Thrust is still scaled by its mean, so full thrust means full
+      // command on identical rotors (PX4 does the same without rpy scaling).
+      d.scale[index(Axis::kThrust)] = px4_scale(raw)[index(Axis::kThrust)];
       break;
   }
   d.mixing.resize(n, kNumAxes);

@@ -1,0 +1,41 @@
+#pragma once
+// Strategy `optimal`: bounded weighted least squares (active-set method, as
+// in Harkegard's WLS allocation). It finds motor commands within their
+// limits that minimize
+//     gamma * |W (E u - d)|^2 + |u - u_p|^2
+// where E is the normalized effectiveness, d the demand, W the per-axis
+// weights from config, u_p the plain linear mix clipped to the limits, and
+// gamma large (attitude error dominates; the second term only picks among
+// equally good answers). Every iterate stays within the limits, so stopping
+// at the iteration cap still returns a feasible answer, never a worse one
+// than where it started. No heap: all matrices have fixed capacity.
+
+#include <motormix/allocation.hpp>
+
+namespace motormix {
+
+struct OptimalSettings {
+  AxisVector weights{1.0, 1.0, 0.2, 0.5};  // roll, pitch, yaw, thrust
+  int max_iterations = 100;
+};
+
+class OptimalAllocator final : public MatrixAllocator {
+ public:
+  OptimalAllocator(const MixingMatrix& mixing, CommandRange range, OptimalSettings settings);
+  std::string_view name() const override { return "optimal"; }
+  AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
+
+  // Iterations used by the last call (for tests and benchmarks).
+  int last_iterations() const { return last_iterations_; }
+
+ private:
+  OptimalSettings settings_;
+  mutable int last_iterations_ = 0;
+};
+
+// The weighted squared error |W (E u - d)|^2 that `optimal` minimizes, for
+// comparing strategies.
+double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector& weights,
+                      const AxisVector& demand, const MotorVector& commands);
+
+}  // namespace motormix

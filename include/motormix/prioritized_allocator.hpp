@@ -1,0 +1,43 @@
+#pragma once
+// Strategy `prioritized`: sequential desaturation. Roll and pitch come
+// first, then thrust, then yaw. Each step moves all motors along one axis's
+// column by the gain that best removes the saturation the previous steps
+// left, so a lower-priority axis gives way before a higher one.
+//
+// Airmode decides what may happen to thrust:
+// - off: thrust may only be lowered to make room (at low throttle, roll and
+//   pitch are reduced instead);
+// - roll_pitch: thrust may also be raised so roll and pitch are kept at low
+//   throttle; yaw is still mixed last and gives way first;
+// - roll_pitch_yaw: as roll_pitch, with yaw mixed in from the start.
+// Yaw may use `yaw_headroom` (fraction of the range) above the top before it
+// is cut, and thrust is lowered afterwards to pay for it: at full thrust yaw
+// keeps some authority instead of none.
+
+#include <motormix/allocation.hpp>
+
+namespace motormix {
+
+enum class Airmode : std::uint8_t { kOff, kRollPitch, kRollPitchYaw };
+
+class PrioritizedAllocator final : public MatrixAllocator {
+ public:
+  PrioritizedAllocator(const MixingMatrix& mixing, CommandRange range, Airmode airmode,
+                       double yaw_headroom);
+  std::string_view name() const override { return "prioritized"; }
+  AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
+
+ private:
+  enum class Direction { kBoth, kDecreaseOnly };
+  // Gain along `v` that removes as much of the range violation as possible.
+  double desaturation_gain(const MotorVector& u, const MotorVector& v, CommandRange range) const;
+  void desaturate(MotorVector& u, const MotorVector& v, CommandRange range,
+                  Direction direction = Direction::kBoth) const;
+  void mix_yaw(double yaw, MotorVector& u) const;
+
+  Airmode airmode_;
+  double yaw_headroom_;
+  MotorVector roll_, pitch_, yaw_, thrust_;  // columns of the mixing matrix
+};
+
+}  // namespace motormix

@@ -1,0 +1,25 @@
+#pragma once
+// Strategy `shift`: keep the differences between motors, move them together.
+//
+// When the linear mix leaves the range, every motor is shifted along the
+// thrust column (all motors alike for identical rotors) by just enough to
+// bring them back: the torques (or, for wheels, the turn) are kept and
+// thrust (forward speed) gives way. If the spread between motors alone is
+// wider than the range, the torque part is scaled down until it fits, and
+// the report says which axes lost.
+
+#include <motormix/allocation.hpp>
+
+namespace motormix {
+
+class ShiftAllocator final : public MatrixAllocator {
+ public:
+  ShiftAllocator(const MixingMatrix& mixing, CommandRange range);
+  std::string_view name() const override { return "shift"; }
+  AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
+
+ private:
+  MotorVector direction_;  // shift direction: the thrust column scaled to max 1 (or all ones)
+};
+
+}  // namespace motormix
