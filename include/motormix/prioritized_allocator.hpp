@@ -13,6 +13,13 @@
 // Yaw may use `yaw_headroom` (fraction of the range) above the top before it
 // is cut, and thrust is lowered afterwards to pay for it: at full thrust yaw
 // keeps some authority instead of none.
+//
+// A demand whose linear mix already fits is returned as is. If the sequence
+// above still leaves a motor out of range, a final repair keeps the promise
+// of the priorities exactly: thrust moves first (only downward without
+// airmode), then yaw is scaled down, and roll and pitch only when yaw alone
+// cannot make room. Nothing is clipped that a lower priority could have paid
+// for.
 
 #include <motormix/allocation.hpp>
 
@@ -31,9 +38,12 @@ class PrioritizedAllocator final : public MatrixAllocator {
   enum class Direction { kBoth, kDecreaseOnly };
   // Gain along `v` that removes as much of the range violation as possible.
   double desaturation_gain(const MotorVector& u, const MotorVector& v, CommandRange range) const;
-  void desaturate(MotorVector& u, const MotorVector& v, CommandRange range,
+  // Moves u along the column of `axis`, and the effective demand with it.
+  void desaturate(MotorVector& u, AxisVector& effective, Axis axis, CommandRange range,
                   Direction direction = Direction::kBoth) const;
-  void mix_yaw(double yaw, MotorVector& u) const;
+  void mix_yaw(double yaw, MotorVector& u, AxisVector& effective) const;
+  void repair(AxisVector& effective, MotorVector& u) const;
+  const MotorVector& column(Axis axis) const;
 
   Airmode airmode_;
   double yaw_headroom_;

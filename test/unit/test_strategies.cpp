@@ -1,0 +1,239 @@
+// Each allocation strategy against its reference: sequential desaturation
+// against the published PX4 unit tests, shift against the differential-drive
+// document, budget against the team quad document's "possible improvement".
+
+#include "test_support.hpp"
+
+#include <motormix/optimal_allocator.hpp>
+
+#include <gtest/gtest.h>
+
+namespace motormix::test {
+namespace {
+
+// Sums of a few exact binary fractions: equality up to rounding.
+constexpr double kAllocation = 1e-9;
+
+using Motors4 = std::array<double, 4>;
+
+// The quad of PX4's ControlAllocationSequentialDesaturationTest
+// (src/lib/control_allocation/control_allocation/): rotors at (+-1, +-1)
+// numbered clockwise from front right, moment ratio +1/-1, no roll/pitch/yaw
+// normalization, thrust normalized.
+std::string px4_test_quad(const std::string& airmode) {
+  return "geometry:\n"
+         "  rotors:\n"
+         "    - {position: [1, 1], spin: ccw, torque_ratio: 1}\n"
+         "    - {position: [-1, 1], spin: cw, torque_ratio: 1}\n"
+         "    - {position: [-1, -1], spin: ccw, torque_ratio: 1}\n"
+         "    - {position: [1, -1], spin: cw, torque_ratio: 1}\n"
+         "  normalization: none\n"
+         "mixer: {strategy: prioritized, prioritized: {airmode: " +
+         airmode + ", yaw_headroom: 0.15}}\n";
+}
+
+class Px4SequentialDesaturation : public ::testing::Test {
+ protected:
+  void use(const std::string& airmode) {
+    config_ = config::load_config_text(px4_test_quad(airmode), "px4.yaml");
+    mixer_ = std::make_unique<Mixer>(config::build_mixer(config_));
+  }
+  // PX4's allocate(roll, pitch, yaw, thrust) with thrust positive up. The
+  // allocator is called directly: some published cases command more than
+  // full thrust, which the Mixer would clamp first.
+  Motors4 allocate(double roll, double pitch, double yaw, double thrust) {
+    MotorVector u;
+    mixer_->allocator().allocate(AxisVector(roll, pitch, yaw, thrust), u);
+    return {u[0], u[1], u[2], u[3]};
+  }
+  void expect(double roll, double pitch, double yaw, double thrust, Motors4 want) {
+    const Motors4 got = allocate(roll, pitch, yaw, thrust);
+    for (std::size_t i = 0; i < 4; ++i) {
+      EXPECT_NEAR(got[i], want[i], kAllocation) << "motor " << i << " for (" << roll << ", "
+                                                << pitch << ", " << yaw << ", " << thrust << ")";
+    }
+  }
+  config::Config config_;
+  std::unique_ptr<Mixer> mixer_;
+};
+
+// TEST_F(..., Zero), CollectiveThrust, AirmodeDisabledThrustZ
+TEST_F(Px4SequentialDesaturation, ZeroAndCollectiveThrust) {
+  use("off");
+  expect(0, 0, 0, 0, {0, 0, 0, 0});
+  for (int k = 0; k <= 10; ++k) {
+    const double t = k / 10.0;
+    expect(0, 0, 0, t, {t, t, t, t});
+  }
+}
+
+// TEST_F(..., RollPitchYaw)
+TEST_F(Px4SequentialDesaturation, RollPitchYawAtHalfThrust) {
+  use("off");
+  expect(1, 0, 0, .5, {.25, .25, .75, .75});
+  expect(-1, 0, 0, .5, {.75, .75, .25, .25});
+  expect(0, 1, 0, .5, {.75, .25, .25, .75});
+  expect(0, -1, 0, .5, {.25, .75, .75, .25});
+  expect(0, 0, 1, .5, {.75, .25, .75, .25});
+  expect(0, 0, -1, .5, {.25, .75, .25, .75});
+}
+
+// TEST_F(..., RollPitchYawFullThrust): yaw keeps 30 % authority at full thrust.
+TEST_F(Px4SequentialDesaturation, RollPitchYawAtFullThrust) {
+  use("off");
+  expect(1, 0, 0, 1, {.5, .5, 1, 1});
+  expect(-1, 0, 0, 1, {1, 1, .5, .5});
+  expect(0, 1, 0, 1, {1, .5, .5, 1});
+  expect(0, -1, 0, 1, {.5, 1, 1, .5});
+  expect(0, 0, 1, 1, {1, .7, 1, .7});
+  expect(0, 0, -1, 1, {.7, 1, .7, 1});
+}
+
+// TEST_F(..., RollPitchYawZeroThrust): without airmode nothing is allocated.
+TEST_F(Px4SequentialDesaturation, ZeroThrustWithoutAirmode) {
+  use("off");
+  for (const auto& d : {AxisVector(1, 0, 0, 0), AxisVector(-1, 0, 0, 0), AxisVector(0, 1, 0, 0),
+                        AxisVector(0, -1, 0, 0), AxisVector(0, 0, 1, 0), AxisVector(0, 0, -1, 0)}) {
+    expect(d[0], d[1], d[2], d[3], {0, 0, 0, 0});
+  }
+}
+
+// TEST_F(..., RollPitchYawZeroThrustAirmodeRP)
+TEST_F(Px4SequentialDesaturation, ZeroThrustAirmodeRollPitch) {
+  use("roll_pitch");
+  expect(1, 0, 0, 0, {0, 0, .5, .5});
+  expect(-1, 0, 0, 0, {.5, .5, 0, 0});
+  expect(0, 1, 0, 0, {.5, 0, 0, .5});
+  expect(0, -1, 0, 0, {0, .5, .5, 0});
+  expect(0, 0, 1, 0, {0, 0, 0, 0});
+  expect(0, 0, -1, 0, {0, 0, 0, 0});
+}
+
+// TEST_F(..., RollPitchYawZeroThrustAirmodeRPY), AirmodeLimOneAndYawMatchRPY
+TEST_F(Px4SequentialDesaturation, ZeroThrustAirmodeRollPitchYaw) {
+  use("roll_pitch_yaw");
+  expect(1, 0, 0, 0, {0, 0, .5, .5});
+  expect(-1, 0, 0, 0, {.5, .5, 0, 0});
+  expect(0, 1, 0, 0, {.5, 0, 0, .5});
+  expect(0, -1, 0, 0, {0, .5, .5, 0});
+  expect(0, 0, 1, 0, {.5, 0, .5, 0});
+  expect(0, 0, -1, 0, {0, .5, 0, .5});
+  expect(1, 1, -1, 0, {0, 0, 0, 1});
+}
+
+// TEST_F(..., AirmodeDisabledThrustAndYaw), ...ThrustAndSaturatedYaw,
+// ...ThrustAndPitch, ...ReducedThrustAndYaw, ...ReducedThrustAndPitch
+TEST_F(Px4SequentialDesaturation, AirmodeDisabledThrustWithYawAndPitch) {
+  use("off");
+  const double t = 0.75;
+  expect(0, 0, 0.02, t, {t + .005, t - .005, t + .005, t - .005});
+  expect(0, 0, 1, t, {t + .25, t - .25, t + .25, t - .25});
+  expect(0, 0.1, 0, t, {t + .025, t - .025, t - .025, t + .025});
+  expect(0, 0, 1, 3.2, {1, 1 - 2 * 0.15, 1, 1 - 2 * 0.15});
+  expect(0, 2, 0, 3, {1, 0, 0, 1});
+}
+
+// The differential-drive document's two saturating turns, with its numbers
+// (wheel radius 5, track 10, max wheel speed 1: forward 5, turn 1 at full
+// command). move(1.0, 0.9) -> wheels (-0.8, 1.0); move(-1.0, 0.9) -> (-1.0, 0.8).
+TEST(ShiftStrategy, Seed002DesaturationKeepsTheTurn) {
+  const auto c = config::load_config_text(
+      "geometry: {differential_drive: {wheel_radius: 5, track_width: 10, max_wheel_speed: 1}}\n"
+      "mixer: {strategy: shift}\n",
+      "drive.yaml");
+  const Mixer mixer = config::build_mixer(c);
+  MixerOutput out;
+  mixer.mix(AxisVector(0, 0, 0.9, 1.0 / 5.0), out);
+  EXPECT_NEAR(out.command[0], -0.8, kAllocation);
+  EXPECT_NEAR(out.command[1], 1.0, kAllocation);
+  EXPECT_NEAR(out.command[1] - out.command[0], 1.8, kAllocation);  // the turn is kept
+  EXPECT_NEAR(out.allocation.unallocated[index(Axis::kYaw)], 0.0, kAllocation);
+  EXPECT_GT(std::abs(out.allocation.unallocated[index(Axis::kThrust)]), 0.05);  // speed gave way
+  mixer.mix(AxisVector(0, 0, 0.9, -1.0 / 5.0), out);
+  EXPECT_NEAR(out.command[0], -1.0, kAllocation);
+  EXPECT_NEAR(out.command[1], 0.8, kAllocation);
+  // A spread wider than the range: the turn itself is scaled, and says so.
+  mixer.mix(AxisVector(0, 0, 1.0, 0.5), out);
+  EXPECT_NEAR(out.command[0], -1.0, kAllocation);
+  EXPECT_NEAR(out.command[1], 1.0, kAllocation);
+}
+
+TEST(ShiftStrategy, AircraftKeepTorquesAndGiveUpThrust) {
+  const auto c =
+      config::load_config_text("geometry: {preset: quad_x}\nmixer: {strategy: shift}\n", "q.yaml");
+  const Mixer mixer = config::build_mixer(c);
+  MixerOutput out;
+  mixer.mix(AxisVector(0.3, 0.0, 0.0, 0.95), out);  // 0.95 +- 0.3 overflows by 0.25
+  EXPECT_NEAR(out.command.maxCoeff(), 1.0, kAllocation);
+  EXPECT_NEAR(out.allocation.unallocated[index(Axis::kRoll)], 0.0, kAllocation);
+  EXPECT_NEAR(out.allocation.unallocated[index(Axis::kThrust)], 0.25, kAllocation);
+}
+
+// The team quad document's "possible improvement": a negative contribution
+// is taken from the power a motor has, down to zero.
+TEST(BudgetStrategy, NegativeContributionsComeFromAvailablePower) {
+  const auto c = config::load_config_text(
+      "geometry: {preset: team_quad}\nmixer: {strategy: budget}\n", "b.yaml");
+  const Mixer mixer = config::build_mixer(c);
+  MixerOutput out;
+  // The worked example at zero throttle: nothing to take from, as before.
+  mixer.mix(AxisVector(0.5, 0, 0, 0), out);
+  EXPECT_NEAR(out.command[0], 0.125, kAllocation);
+  EXPECT_NEAR(out.command[1], 0.0, kAllocation);
+  // At half throttle (0.3 of full power) the right motors give 0.125.
+  mixer.mix(AxisVector(0.5, 0, 0, 0.5), out);
+  EXPECT_NEAR(out.command[0], 0.425, kAllocation);  // FL
+  EXPECT_NEAR(out.command[1], 0.175, kAllocation);  // FR
+  EXPECT_NEAR(out.command[2], 0.425, kAllocation);  // RL
+  EXPECT_NEAR(out.command[3], 0.175, kAllocation);  // RR
+  EXPECT_NEAR(out.allocation.unallocated[index(Axis::kRoll)], 0.0, kAllocation);
+  // Roll and pitch beyond their share are scaled together, keeping direction.
+  mixer.mix(AxisVector(1, 0.5, 0, 0.5), out);
+  const double rl = out.command[2] - 0.3;  // roll and pitch both positive on RL
+  EXPECT_NEAR(rl, 0.25, kAllocation);
+}
+
+TEST(ClipStrategy, ClipsAndReports) {
+  const auto c =
+      config::load_config_text("geometry: {preset: quad_x}\nmixer: {strategy: clip}\n", "c.yaml");
+  const Mixer mixer = config::build_mixer(c);
+  MixerOutput out;
+  mixer.mix(AxisVector(0.5, 0, 0, 0.9), out);
+  EXPECT_NEAR(out.command.maxCoeff(), 1.0, kAllocation);
+  EXPECT_NEAR(out.command.minCoeff(), 0.4, kAllocation);
+  EXPECT_NE(out.allocation.saturated_upper, 0U);
+  EXPECT_TRUE(out.allocation.axis_limited & bit(Axis::kRoll));
+}
+
+TEST(OptimalStrategy, DeliversWhatIsAttainableAndBeatsTheOthersWhenNot) {
+  const std::string geometry = "geometry: {preset: hexa_x}\n";
+  const auto optimal_cfg = config::load_config_text(geometry + "mixer: {strategy: optimal}\n", "o");
+  const auto prio_cfg =
+      config::load_config_text(geometry + "mixer: {strategy: prioritized}\n", "p");
+  const Mixer optimal = config::build_mixer(optimal_cfg);
+  const Mixer prioritized = config::build_mixer(prio_cfg);
+  MixerOutput a;
+  MixerOutput b;
+  optimal.mix(AxisVector(0.1, -0.1, 0.05, 0.5), a);
+  EXPECT_LT(a.allocation.unallocated.cwiseAbs().maxCoeff(), 1e-6);
+  // Full roll and yaw at high thrust: not attainable.
+  const AxisVector hard(1.0, 0.0, 1.0, 0.9);
+  optimal.mix(hard, a);
+  prioritized.mix(hard, b);
+  const EffectivenessMatrix e = effectiveness_of(optimal_cfg.mixing);
+  const AxisVector w = optimal_cfg.optimal.weights;
+  EXPECT_LE(weighted_error(e, w, hard, a.command), weighted_error(e, w, hard, b.command) + 1e-6);
+  for (int i = 0; i < a.command.size(); ++i) {
+    EXPECT_GE(a.command[i], 0.0);
+    EXPECT_LE(a.command[i], 1.0);
+  }
+}
+
+TEST(Strategies, LegacyAndBudgetAreRefusedForWheels) {
+  EXPECT_THROW(config::load_config_text(
+                   "geometry: {preset: differential_drive}\nmixer: {strategy: budget}\n", "w"),
+               config::ConfigError);
+}
+
+}  // namespace
+}  // namespace motormix::test
