@@ -82,6 +82,7 @@ int mix(const MixCommand& cmd) {
     j["strategy"] = config::to_string(config->strategy);
     j["command"] = std::vector<double>(out.command.data(), out.command.data() + n);
     j["pwm"] = std::vector<double>(out.output.data(), out.output.data() + n);
+    j["direction"] = std::vector<int>(out.direction.begin(), out.direction.begin() + n);
     j["saturated_motors"] = {{"upper", motors_in(out.allocation.saturated_upper, n)},
                              {"lower", motors_in(out.allocation.saturated_lower, n)}};
     nlohmann::json unallocated;

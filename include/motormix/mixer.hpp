@@ -20,10 +20,12 @@ enum class MixStatus : std::uint8_t {
   kNonFiniteDemand = 2,  // NaN or infinite demand: outputs are the disarmed values
 };
 
+// Also the memory of the previous cycle: the slew limit works from `output`.
 struct MixerOutput {
   bool armed = false;
-  MotorVector command;  // normalized motor commands after allocation (0 when disarmed)
-  MotorVector output;   // output-stage values, e.g. PWM microseconds
+  MotorVector command;          // normalized motor commands after allocation (0 when disarmed)
+  MotorVector output;           // output-stage values, e.g. PWM microseconds
+  DirectionVector direction{};  // magnitude/direction outputs: +1, -1, 0; others 0
   AllocationResult allocation;
 };
 
@@ -36,7 +38,8 @@ class Mixer {
   const Allocator& allocator() const { return *allocator_; }
   const OutputStage& output_stage() const { return output_stage_; }
 
-  MixStatus mix(const AxisVector& demand, MixerOutput& out) const;
+  // dt_s: time since the previous cycle, for slew limits (0: none).
+  MixStatus mix(const AxisVector& demand, MixerOutput& out, double dt_s = 0.0) const;
   void disarm(MixerOutput& out) const;
 
  private:

@@ -59,6 +59,7 @@ struct Config {
   OptimalSettings optimal;          // optimal
 
   std::vector<OutputChannel> outputs;  // one per motor
+  std::string output_unit = "us";      // for logs and tools
 
   Inputs inputs;
   Channels channels;

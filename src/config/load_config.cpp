@@ -369,18 +369,86 @@ void read_mixer(MapReader mixer, Config& config) {
   mixer.finish();
 }
 
-void read_output(MapReader output, Config& config) {
-  OutputChannel ch;
-  ch.min = output.number("min_us", 1000.0, 0.0, kMaxOutputValue);
-  ch.max = output.number("max_us", 2000.0, 0.0, kMaxOutputValue);
-  ch.disarmed = output.number("disarmed_us", 1000.0, 0.0, kMaxOutputValue);
+bool read_bool(MapReader& map, const std::string& key, bool fallback) {
+  const YAML::Node node = map.raw(key);
+  if (!node.IsDefined() || node.IsNull()) return fallback;
+  if (!node.IsScalar() || (node.Scalar() != "true" && node.Scalar() != "false")) {
+    fail(map.path_of(key), describe(node), "true or false");
+  }
+  return node.Scalar() == "true";
+}
+
+// Range, centre and disarmed value of one channel; shared by the defaults and
+// the per-motor overrides.
+void read_range(MapReader& map, OutputChannel& ch) {
+  ch.min = map.number("min", ch.min, 0.0, kMaxOutputValue);
+  ch.max = map.number("max", ch.max, 0.0, kMaxOutputValue);
+  ch.center =
+      map.number("center", ch.mode == OutputMode::kCentered ? (ch.min + ch.max) / 2 : ch.center,
+                 0.0, kMaxOutputValue);
+  ch.disarmed = map.number("disarmed", ch.disarmed, 0.0, kMaxOutputValue);
   if (!(ch.min < ch.max)) {
     std::ostringstream found;
-    found << "min_us " << ch.min << " and max_us " << ch.max;
-    fail(output.path_of("max_us"), found.str(), "max_us greater than min_us");
+    found << "min " << ch.min << " and max " << ch.max;
+    fail(map.path_of("max"), found.str(), "max greater than min");
+  }
+  if (ch.mode == OutputMode::kCentered && !(ch.center > ch.min && ch.center < ch.max)) {
+    std::ostringstream found;
+    found << ch.center << " with min " << ch.min << " and max " << ch.max;
+    fail(map.path_of("center"), found.str(), "a value strictly between min and max");
+  }
+}
+
+void read_output(MapReader output, Config& config) {
+  const bool wheels = config.thrust_range() == ThrustRange::kBipolar;
+  const std::string mode =
+      output.choice("mode", wheels ? "centered" : "unipolar",
+                    wheels ? std::vector<std::string>{"centered", "magnitude_direction"}
+                           : std::vector<std::string>{"unipolar"});
+  OutputChannel ch;
+  if (mode == "centered") {
+    ch.mode = OutputMode::kCentered;
+    ch.disarmed = 1500.0;
+  } else if (mode == "magnitude_direction") {
+    ch.mode = OutputMode::kMagnitudeDirection;
+    ch.min = 0.0;
+    ch.max = 255.0;
+    ch.disarmed = 0.0;
+  }
+  config.output_unit =
+      output.text("unit", ch.mode == OutputMode::kMagnitudeDirection ? "duty" : "us");
+  read_range(output, ch);
+  if (ch.mode == OutputMode::kUnipolar) {
+    ch.idle = output.number("idle", 0.0, 0.0, 0.5);
+    ch.thrust_model_factor = output.number("thrust_model_factor", 0.0, 0.0, 1.0);
+  } else {
+    for (const char* key : {"idle", "thrust_model_factor"}) {
+      if (output.has(key))
+        fail(output.path_of(key), "'" + std::string(key) + "' with mode " + mode,
+             "only with mode unipolar");
+      output.raw(key);
+    }
+  }
+  ch.slew_per_s = output.number("slew_per_s", 0.0, 0.0, 1e9);
+  config.outputs.assign(static_cast<std::size_t>(config.motors()), ch);
+
+  const YAML::Node per_motor = output.raw("per_motor");
+  if (per_motor.IsDefined() && !per_motor.IsNull()) {
+    const std::string path = output.path_of("per_motor");
+    if (!per_motor.IsSequence() || static_cast<int>(per_motor.size()) != config.motors()) {
+      fail(path, describe(per_motor),
+           "a list of " + std::to_string(config.motors()) + " entries, one per motor");
+    }
+    for (std::size_t i = 0; i < per_motor.size(); ++i) {
+      MapReader m(per_motor[i], path + "[" + std::to_string(i) + "]");
+      OutputChannel& c = config.outputs[i];
+      read_range(m, c);
+      c.trim = m.number("trim", 0.0, -0.5, 0.5);
+      c.reversed = read_bool(m, "reversed", false);
+      m.finish();
+    }
   }
   output.finish();
-  config.outputs.assign(static_cast<std::size_t>(config.motors()), ch);
 }
 
 void read_inputs(MapReader inputs, Config& config) {

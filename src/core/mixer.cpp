@@ -11,7 +11,7 @@ Mixer::Mixer(std::unique_ptr<const Allocator> allocator, OutputStage output_stag
       output_stage_(std::move(output_stage)),
       thrust_range_(thrust_range) {}
 
-MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out) const {
+MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out, double dt_s) const {
   if (!demand.allFinite()) {
     disarm(out);
     return MixStatus::kNonFiniteDemand;
@@ -23,7 +23,7 @@ MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out) const {
       std::clamp(demand[index(Axis::kYaw)], -1.0, 1.0),
       std::clamp(demand[index(Axis::kThrust)], thrust_low, 1.0);
   out.allocation = allocator_->allocate(clamped, out.command);
-  output_stage_.armed(out.command, out.output);
+  output_stage_.armed(out.command, out.output, out.direction, dt_s, out.armed);
   out.armed = true;
   return clamped == demand ? MixStatus::kOk : MixStatus::kDemandClamped;
 }
@@ -32,7 +32,7 @@ void Mixer::disarm(MixerOutput& out) const {
   out.armed = false;
   out.command.setZero(motors());
   out.allocation = AllocationResult{};
-  output_stage_.disarmed(out.output);
+  output_stage_.disarmed(out.output, out.direction);
 }
 
 }  // namespace motormix

@@ -136,7 +136,9 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
     AxisVector demand;
     const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
     demand << pid_.roll, pid_.pitch, yaw, setpoint_.throttle;
-    if (mixer_.mix(demand, result_.mix) == MixStatus::kNonFiniteDemand) {
+    const double dt_s =
+        last_cycle_us_ == kNever ? 0.0 : static_cast<double>(now_us - last_cycle_us_) / 1e6;
+    if (mixer_.mix(demand, result_.mix, dt_s) == MixStatus::kNonFiniteDemand) {
       // Unreachable while message checks hold; kept so the promise does not
       // depend on them.
       enter_failsafe(FailsafeReason::kInvalidInput);
@@ -146,6 +148,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   }
   if (result_.state != LoopState::kArmed) mixer_.disarm(result_.mix);
   result_.state_changed = result_.state != previous;
+  last_cycle_us_ = now_us;
   return result_;
 }
 

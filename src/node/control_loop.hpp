@@ -96,6 +96,7 @@ class ControlLoop {
   std::int64_t pid_received_us_ = kNever;
   std::int64_t last_setpoint_utime_ = kNever;
   std::int64_t last_pid_utime_ = kNever;
+  std::int64_t last_cycle_us_ = kNever;
   bool arm_permitted_ = false;  // a disarmed setpoint has been seen since boot or failsafe
 
   CycleResult result_;

@@ -69,6 +69,7 @@ class Node {
     pwm_msg_.num_motors = n;
     pwm_msg_.command.assign(static_cast<std::size_t>(n), 0.0F);
     pwm_msg_.pwm.assign(static_cast<std::size_t>(n), 0.0F);
+    pwm_msg_.direction.assign(static_cast<std::size_t>(n), 0);
     pwm_buffer_.resize(static_cast<std::size_t>(pwm_msg_.getEncodedSize()));
     status_msg_.num_motors = n;
     status_buffer_.resize(static_cast<std::size_t>(status_msg_.getEncodedSize()));
@@ -142,6 +143,8 @@ class Node {
     for (int i = 0; i < pwm_msg_.num_motors; ++i) {
       pwm_msg_.command[static_cast<std::size_t>(i)] = static_cast<float>(r.mix.command[i]);
       pwm_msg_.pwm[static_cast<std::size_t>(i)] = static_cast<float>(r.mix.output[i]);
+      pwm_msg_.direction[static_cast<std::size_t>(i)] =
+          r.mix.direction[static_cast<std::size_t>(i)];
     }
     pwm_msg_.armed = r.mix.armed;
     pwm_msg_.setpoint_utime = r.setpoint_utime;

@@ -53,8 +53,8 @@ TEST(Config, OutOfRangeNamesKeyValueAndRange) {
       AllOf(HasSubstr("mixer.legacy_budget.yaw"), HasSubstr("'1.5'"), HasSubstr("from 0 to 1")));
   EXPECT_THAT(error_of(std::string(kMinimal) + "loop_rate_hz: 20\n"),
               AllOf(HasSubstr("loop_rate_hz"), HasSubstr("'20'"), HasSubstr("from 50 to 10000")));
-  EXPECT_THAT(error_of(std::string(kMinimal) + "output: {min_us: 1500, max_us: 1200}\n"),
-              AllOf(HasSubstr("output.max_us"), HasSubstr("greater than min_us")));
+  EXPECT_THAT(error_of(std::string(kMinimal) + "output: {min: 1500, max: 1200}\n"),
+              AllOf(HasSubstr("output.max"), HasSubstr("greater than min")));
   EXPECT_THAT(error_of(std::string(kMinimal) + "inputs: {pid_timeout_ms: .nan}\n"),
               HasSubstr("inputs.pid_timeout_ms"));
 }

@@ -16,25 +16,103 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+OutputChannel esc(double min, double max, double disarmed) {
+  OutputChannel ch;
+  ch.min = min;
+  ch.max = max;
+  ch.disarmed = disarmed;
+  return ch;
+}
+
 TEST(OutputStage, MapsLinearlyAndNeverLeavesTheRange) {
-  const OutputStage stage({{1150, 1924, 1000}, {1000, 2000, 900}});
+  const OutputStage stage({esc(1150, 1924, 1000), esc(1000, 2000, 900)});
   MotorVector command(2);
   MotorVector out;
+  DirectionVector dir{};
   command << 0.5, 1.0;
-  stage.armed(command, out);
+  stage.armed(command, out, dir, 0.0, false);
   EXPECT_NEAR(out[0], 1537.0, kExact);
   EXPECT_NEAR(out[1], 2000.0, kExact);
   command << -3.0, kNaN;
-  stage.armed(command, out);
+  stage.armed(command, out, dir, 0.0, false);
   EXPECT_EQ(out[0], 1150.0);
   EXPECT_EQ(out[1], 1000.0);
   command << kInf, -kInf;  // not a command: the safe end, not full power
-  stage.armed(command, out);
+  stage.armed(command, out, dir, 0.0, false);
   EXPECT_EQ(out[0], 1150.0);
   EXPECT_EQ(out[1], 1000.0);
-  stage.disarmed(out);
+  stage.disarmed(out, dir);
   EXPECT_EQ(out[0], 1000.0);
   EXPECT_EQ(out[1], 900.0);
+}
+
+TEST(OutputStage, IdleTrimReversalAndThrustModel) {
+  OutputChannel ch = esc(1000, 2000, 900);
+  ch.idle = 0.1;
+  MotorVector command(1);
+  MotorVector out;
+  DirectionVector dir{};
+  command << 0.0;
+  OutputStage({ch}).armed(command, out, dir, 0.0, false);
+  EXPECT_NEAR(out[0], 1100.0, kExact);  // armed motors keep spinning at idle
+  ch.idle = 0.0;
+  ch.thrust_model_factor = 1.0;  // thrust ~ x^2: a quarter thrust needs half command
+  command << 0.25;
+  OutputStage({ch}).armed(command, out, dir, 0.0, false);
+  EXPECT_NEAR(out[0], 1500.0, kExact);
+  ch.thrust_model_factor = 0.5;
+  for (double t : {0.0, 0.1, 0.5, 0.9, 1.0}) {
+    const double x = OutputStage::linearize(t, 0.5);
+    EXPECT_NEAR(0.5 * x * x + 0.5 * x, t, kExact);
+  }
+  ch.thrust_model_factor = 0.0;
+  ch.reversed = true;
+  ch.trim = 0.05;
+  command << 0.25;
+  OutputStage({ch}).armed(command, out, dir, 0.0, false);
+  EXPECT_NEAR(out[0], 1700.0, kExact);  // (0.25 + 0.05) reversed: 0.7
+}
+
+TEST(OutputStage, ReversibleOutputs) {
+  OutputChannel centred = esc(1000, 2000, 1500);
+  centred.mode = OutputMode::kCentered;
+  centred.center = 1500;
+  OutputChannel bridge = esc(0, 255, 0);
+  bridge.mode = OutputMode::kMagnitudeDirection;
+  const OutputStage stage({centred, bridge});
+  MotorVector command(2);
+  MotorVector out;
+  DirectionVector dir{};
+  command << -0.5, -0.8;
+  stage.armed(command, out, dir, 0.0, false);
+  EXPECT_NEAR(out[0], 1250.0, kExact);
+  EXPECT_NEAR(out[1], 0.8 * 255, kExact);
+  EXPECT_EQ(dir[1], -1);
+  command << 1.0, 0.0;
+  stage.armed(command, out, dir, 0.0, false);
+  EXPECT_NEAR(out[0], 2000.0, kExact);
+  EXPECT_NEAR(out[1], 0.0, kExact);
+  EXPECT_EQ(dir[1], 0);
+  stage.disarmed(out, dir);
+  EXPECT_EQ(out[0], 1500.0);
+  EXPECT_EQ(out[1], 0.0);
+}
+
+TEST(OutputStage, SlewLimitFromThePreviousArmedCycle) {
+  OutputChannel ch = esc(1000, 2000, 900);
+  ch.slew_per_s = 1000.0;  // 1000 us per second: 2.5 us per 400 Hz cycle
+  const OutputStage stage({ch});
+  MotorVector command(1);
+  MotorVector out;
+  DirectionVector dir{};
+  command << 0.0;
+  stage.armed(command, out, dir, 0.0025, false);  // first armed cycle: no history
+  EXPECT_NEAR(out[0], 1000.0, kExact);
+  command << 1.0;
+  stage.armed(command, out, dir, 0.0025, true);
+  EXPECT_NEAR(out[0], 1002.5, kExact);
+  for (int k = 0; k < 1000; ++k) stage.armed(command, out, dir, 0.0025, true);
+  EXPECT_NEAR(out[0], 2000.0, kExact);
 }
 
 TEST(Mixer, RefusesNonFiniteDemandWithDisarmedOutputs) {
