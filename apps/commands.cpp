@@ -48,7 +48,8 @@ int run(const RunCommand& cmd) {
   if (!config) return kExitUsage;
   if (cmd.check_only) {
     std::cout << "config " << cmd.common.config_path << " is valid: " << config->motors()
-              << " motors, strategy " << config::to_string(config->strategy) << "\n";
+              << " motors, strategy " << config::to_string(config->strategy) << "\n\n"
+              << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
   }
   node::RunOptions options;

@@ -12,6 +12,7 @@
 #include <motormix/prioritized_allocator.hpp>
 #include <motormix/vehicle.hpp>
 
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -36,10 +37,33 @@ struct Channels {
   std::string status = "MIXER_STATUS";
 };
 
+// What the outputs do when an input goes stale, is lost or turns invalid
+// while armed.
+enum class FailsafeAction {
+  kDisarm,    // disarmed values at once (default)
+  kHoldLast,  // keep mixing the last valid inputs for hold_last_s, then disarm
+  kIdle,      // armed with zero demand (idle spin) until re-armed
+};
+
 struct Inputs {
   YawSource yaw_source = YawSource::kSetpoint;
   double setpoint_timeout_s = 0.100;  // older setpoints are stale
   double pid_timeout_s = 0.100;       // older pid messages are stale
+  FailsafeAction failsafe = FailsafeAction::kDisarm;
+  double hold_last_s = 0.5;       // kHoldLast: how long, at most
+  double max_future_s = 1.0;      // utime further ahead of this host's clock: rejected
+  double arm_max_throttle = 0.1;  // arming refused while |throttle| is above this
+};
+
+enum class PublishMode {
+  kTimer,    // outputs on the loop timer only
+  kOnInput,  // also right after each accepted pid message (the timer stays as watchdog)
+};
+
+struct Realtime {
+  int priority = 0;          // SCHED_FIFO priority 1..99; 0 leaves the scheduler alone
+  std::vector<int> cpus;     // CPU affinity; empty leaves it alone
+  bool lock_memory = false;  // mlockall
 };
 
 struct Config {
@@ -65,6 +89,9 @@ struct Config {
   Channels channels;
   double loop_rate_hz = 400.0;
   double status_rate_hz = 10.0;
+  PublishMode publish = PublishMode::kTimer;
+  Realtime realtime;
+  std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }
   const std::vector<std::string>& motor_names() const { return vehicle.motor_names; }

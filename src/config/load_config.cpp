@@ -81,6 +81,15 @@ std::vector<double> read_numbers(const YAML::Node& node, const std::string& path
   return out;
 }
 
+bool read_bool(MapReader& map, const std::string& key, bool fallback) {
+  const YAML::Node node = map.raw(key);
+  if (!node.IsDefined() || node.IsNull()) return fallback;
+  if (!node.IsScalar() || (node.Scalar() != "true" && node.Scalar() != "false")) {
+    fail(map.path_of(key), describe(node), "true or false");
+  }
+  return node.Scalar() == "true";
+}
+
 Eigen::Vector3d read_vector(const YAML::Node& node, const std::string& path) {
   const std::vector<double> v = read_numbers(node, path, 2, 3, -kMaxCoefficient, kMaxCoefficient);
   return {v[0], v[1], v.size() == 3 ? v[2] : 0.0};
@@ -239,13 +248,7 @@ void read_geometry(MapReader geometry, Config& config) {
     if (geometry.has("arm_length"))
       options.arm_length = geometry.number("arm_length", 0.25, 1e-4, 1e3);
     geometry.raw("arm_length");
-    const YAML::Node reverse = geometry.raw("reverse_spin");
-    if (reverse.IsDefined() && !reverse.IsNull()) {
-      if (!reverse.IsScalar() || (reverse.Scalar() != "true" && reverse.Scalar() != "false")) {
-        fail(geometry.path_of("reverse_spin"), describe(reverse), "true or false");
-      }
-      options.reverse_spin = reverse.Scalar() == "true";
-    }
+    options.reverse_spin = read_bool(geometry, "reverse_spin", false);
     if (geometry.has("motor_order")) {
       const int motors = find_preset(name)->motors();
       options.motor_order =
@@ -369,15 +372,6 @@ void read_mixer(MapReader mixer, Config& config) {
   mixer.finish();
 }
 
-bool read_bool(MapReader& map, const std::string& key, bool fallback) {
-  const YAML::Node node = map.raw(key);
-  if (!node.IsDefined() || node.IsNull()) return fallback;
-  if (!node.IsScalar() || (node.Scalar() != "true" && node.Scalar() != "false")) {
-    fail(map.path_of(key), describe(node), "true or false");
-  }
-  return node.Scalar() == "true";
-}
-
 // Range, centre and disarmed value of one channel; shared by the defaults and
 // the per-motor overrides.
 void read_range(MapReader& map, OutputChannel& ch) {
@@ -457,7 +451,26 @@ void read_inputs(MapReader inputs, Config& config) {
   config.inputs.setpoint_timeout_s =
       inputs.number("setpoint_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
   config.inputs.pid_timeout_s = inputs.number("pid_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
+  const std::string failsafe = inputs.choice("failsafe", "disarm", {"disarm", "hold_last", "idle"});
+  config.inputs.failsafe = failsafe == "hold_last" ? FailsafeAction::kHoldLast
+                           : failsafe == "idle"    ? FailsafeAction::kIdle
+                                                   : FailsafeAction::kDisarm;
+  config.inputs.hold_last_s = inputs.number("hold_last_ms", 500.0, 1.0, 5000.0) / 1e3;
+  config.inputs.max_future_s = inputs.number("max_future_ms", 1000.0, 1.0, 3.6e6) / 1e3;
+  config.inputs.arm_max_throttle = inputs.number("arm_max_throttle", 0.1, 0.0, 1.0);
   inputs.finish();
+}
+
+void read_realtime(MapReader rt, Config& config) {
+  config.realtime.priority = static_cast<int>(rt.number("priority", 0, 0, 99));
+  const YAML::Node cpus = rt.raw("cpus");
+  if (cpus.IsDefined() && !cpus.IsNull()) {
+    for (double c : read_numbers(cpus, rt.path_of("cpus"), 1, 1024, 0, 1023)) {
+      config.realtime.cpus.push_back(static_cast<int>(c));
+    }
+  }
+  config.realtime.lock_memory = read_bool(rt, "lock_memory", false);
+  rt.finish();
 }
 
 void read_channels(MapReader channels, Config& config) {
@@ -479,6 +492,10 @@ Config read_document(const YAML::Node& document) {
   read_output(root.map("output"), config);
   read_inputs(root.map("inputs"), config);
   read_channels(root.map("channels"), config);
+  read_realtime(root.map("realtime"), config);
+  config.publish = root.choice("publish", "timer", {"timer", "on_input"}) == "on_input"
+                       ? PublishMode::kOnInput
+                       : PublishMode::kTimer;
   config.loop_rate_hz = root.number("loop_rate_hz", 400.0, 50.0, 10000.0);
   config.status_rate_hz = root.number("status_rate_hz", 10.0, 0.1, 1000.0);
   if (config.status_rate_hz > config.loop_rate_hz) {
@@ -523,7 +540,15 @@ Config load_config_text(const std::string& yaml_text, const std::string& source_
   if (!document.IsDefined() || document.IsNull()) document = YAML::Node(YAML::NodeType::Map);
   for (const std::string& o : overrides) apply_override(document, o);
   try {
-    return read_document(document);
+    Config config = read_document(document);
+    // FNV-1a over the text and the overrides: tells which configuration a
+    // status message came from.
+    std::uint64_t h = 1469598103934665603ULL;
+    std::string all = yaml_text;
+    for (const std::string& o : overrides) all += "\n--set " + o;
+    for (unsigned char c : all) h = (h ^ c) * 1099511628211ULL;
+    config.hash = h;
+    return config;
   } catch (const ConfigError& e) {
     throw ConfigError(source_name + ": " + e.what());
   } catch (const YAML::Exception& e) {

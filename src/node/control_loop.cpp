@@ -1,6 +1,7 @@
 #include "node/control_loop.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <utility>
 
 namespace motormix::node {
@@ -49,7 +50,11 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       thrust_range_(config.thrust_range()),
       yaw_source_(config.inputs.yaw_source),
       setpoint_timeout_us_(seconds_to_us(config.inputs.setpoint_timeout_s)),
-      pid_timeout_us_(seconds_to_us(config.inputs.pid_timeout_s)) {
+      pid_timeout_us_(seconds_to_us(config.inputs.pid_timeout_s)),
+      failsafe_action_(config.inputs.failsafe),
+      hold_last_us_(seconds_to_us(config.inputs.hold_last_s)),
+      max_future_us_(seconds_to_us(config.inputs.max_future_s)),
+      arm_max_throttle_(config.inputs.arm_max_throttle) {
   mixer_.disarm(result_.mix);
 }
 
@@ -66,10 +71,23 @@ void ControlLoop::count(Rejection rejection) {
     case Rejection::kOutOfOrder:
       ++counters_.rejected_out_of_order;
       break;
+    case Rejection::kFromFuture:
+      break;  // counted where it is detected
   }
 }
 
-Rejection ControlLoop::on_setpoint(const SetpointSample& sample, std::int64_t now_us) {
+bool ControlLoop::from_future(std::int64_t utime, std::int64_t wall_us) {
+  if (static_cast<double>(utime) - static_cast<double>(wall_us) <=
+      static_cast<double>(max_future_us_)) {
+    return false;
+  }
+  ++counters_.rejected_future;
+  return true;
+}
+
+Rejection ControlLoop::on_setpoint(const SetpointSample& sample, std::int64_t now_us,
+                                   std::int64_t wall_us) {
+  if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
   const Rejection rejection = check_setpoint(sample, thrust_range_, last_setpoint_utime_);
   count(rejection);
   if (rejection != Rejection::kNone) return rejection;
@@ -81,7 +99,8 @@ Rejection ControlLoop::on_setpoint(const SetpointSample& sample, std::int64_t no
   return rejection;
 }
 
-Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us) {
+Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us, std::int64_t wall_us) {
+  if (from_future(pid.utime, wall_us)) return Rejection::kFromFuture;
   const Rejection rejection = check_pid(pid, last_pid_utime_);
   count(rejection);
   if (rejection != Rejection::kNone) return rejection;
@@ -92,11 +111,25 @@ Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us) {
   return rejection;
 }
 
-void ControlLoop::enter_failsafe(FailsafeReason reason) {
+void ControlLoop::enter_failsafe(FailsafeReason reason, std::int64_t now_us) {
   result_.state = LoopState::kFailsafe;
   result_.reason = reason;
   arm_permitted_ = false;
+  failsafe_since_us_ = now_us;
   ++counters_.failsafe_events;
+}
+
+void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us) {
+  const double dt_s =
+      last_cycle_us_ == kNever ? 0.0 : static_cast<double>(now_us - last_cycle_us_) / 1e6;
+  if (mixer_.mix(demand, result_.mix, dt_s) == MixStatus::kNonFiniteDemand) {
+    // Unreachable while message checks hold; kept so the promise does not
+    // depend on them.
+    if (result_.state == LoopState::kArmed) enter_failsafe(FailsafeReason::kInvalidInput, now_us);
+    mixer_.disarm(result_.mix);
+  } else {
+    result_.last_armed_allocation = result_.mix.allocation;
+  }
 }
 
 const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
@@ -112,9 +145,9 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   switch (result_.state) {
     case LoopState::kArmed:
       if (!setpoint_fresh) {
-        enter_failsafe(FailsafeReason::kSetpointStale);
+        enter_failsafe(FailsafeReason::kSetpointStale, now_us);
       } else if (!pid_fresh) {
-        enter_failsafe(FailsafeReason::kPidStale);
+        enter_failsafe(FailsafeReason::kPidStale, now_us);
       } else if (!setpoint_.armed) {
         result_.state = LoopState::kDisarmed;
       }
@@ -127,26 +160,31 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
       break;
     case LoopState::kDisarmed:
       if (setpoint_fresh && pid_fresh && setpoint_.armed && arm_permitted_) {
-        result_.state = LoopState::kArmed;
+        if (std::abs(setpoint_.throttle) <= arm_max_throttle_) {
+          result_.state = LoopState::kArmed;
+        } else if (!arm_refused_logged_) {
+          ++counters_.arming_refused;
+          arm_refused_logged_ = true;  // once per request, not once per cycle
+        }
       }
+      if (!setpoint_.armed) arm_refused_logged_ = false;
       break;
   }
 
+  const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
+  const AxisVector demand(pid_.roll, pid_.pitch, yaw, setpoint_.throttle);
   if (result_.state == LoopState::kArmed) {
-    AxisVector demand;
-    const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
-    demand << pid_.roll, pid_.pitch, yaw, setpoint_.throttle;
-    const double dt_s =
-        last_cycle_us_ == kNever ? 0.0 : static_cast<double>(now_us - last_cycle_us_) / 1e6;
-    if (mixer_.mix(demand, result_.mix, dt_s) == MixStatus::kNonFiniteDemand) {
-      // Unreachable while message checks hold; kept so the promise does not
-      // depend on them.
-      enter_failsafe(FailsafeReason::kInvalidInput);
-    } else {
-      result_.last_armed_allocation = result_.mix.allocation;
-    }
+    mix_inputs(demand, now_us);
+  } else if (result_.state == LoopState::kFailsafe &&
+             failsafe_action_ == config::FailsafeAction::kHoldLast &&
+             now_us - failsafe_since_us_ <= hold_last_us_) {
+    mix_inputs(demand, now_us);
+  } else if (result_.state == LoopState::kFailsafe &&
+             failsafe_action_ == config::FailsafeAction::kIdle) {
+    mix_inputs(AxisVector::Zero(), now_us);
+  } else {
+    mixer_.disarm(result_.mix);
   }
-  if (result_.state != LoopState::kArmed) mixer_.disarm(result_.mix);
   result_.state_changed = result_.state != previous;
   last_cycle_us_ = now_us;
   return result_;

@@ -9,9 +9,12 @@
 //   arrives while a fresh pid is in force, and only after a setpoint with
 //   armed=false has been seen: arming needs an explicit disarmed -> armed
 //   transition, so a mixer (re)started mid-command never jumps the motors.
+// - Arming is refused while |throttle| is above inputs.arm_max_throttle.
 // - While armed, a setpoint or pid older than its timeout puts the loop in
-//   failsafe: disarmed outputs. Leaving failsafe needs fresh inputs and a new
-//   disarmed -> armed transition.
+//   failsafe. The configured action decides the outputs: disarmed values
+//   (default), the last valid inputs for at most hold_last_ms and then
+//   disarmed, or idle (armed, zero demand). Leaving failsafe needs fresh
+//   inputs and a new disarmed -> armed transition.
 // - Rejected messages (non-finite, out of range, out of order) are counted
 //   and otherwise ignored: the previous valid message stays in force and
 //   keeps ageing toward its timeout.
@@ -46,7 +49,9 @@ struct Counters {
   std::int64_t rejected_nonfinite = 0;
   std::int64_t rejected_range = 0;
   std::int64_t rejected_out_of_order = 0;
+  std::int64_t rejected_future = 0;
   std::int64_t failsafe_events = 0;
+  std::int64_t arming_refused = 0;  // armed requests refused by the arming check
 };
 
 struct CycleResult {
@@ -66,9 +71,10 @@ class ControlLoop {
   ControlLoop(const config::Config& config, Mixer mixer);
 
   // now_us: a monotonic clock in microseconds (receive time, not the
-  // publisher's utime, which may come from another clock).
-  Rejection on_setpoint(const SetpointSample& sample, std::int64_t now_us);
-  Rejection on_pid(const PidSample& pid, std::int64_t now_us);
+  // publisher's utime, which may come from another clock). wall_us: this
+  // host's wall clock, to spot messages from the future.
+  Rejection on_setpoint(const SetpointSample& sample, std::int64_t now_us, std::int64_t wall_us);
+  Rejection on_pid(const PidSample& pid, std::int64_t now_us, std::int64_t wall_us);
   void on_undecodable() { ++counters_.rejected_decode; }
 
   // One control cycle at time now_us. The returned reference stays valid
@@ -81,13 +87,20 @@ class ControlLoop {
 
  private:
   void count(Rejection rejection);
-  void enter_failsafe(FailsafeReason reason);
+  bool from_future(std::int64_t utime, std::int64_t wall_us);
+  void enter_failsafe(FailsafeReason reason, std::int64_t now_us);
+  void mix_inputs(const AxisVector& demand, std::int64_t now_us);
 
   Mixer mixer_;
   ThrustRange thrust_range_;
   config::YawSource yaw_source_;
   std::int64_t setpoint_timeout_us_;
   std::int64_t pid_timeout_us_;
+  config::FailsafeAction failsafe_action_;
+  std::int64_t hold_last_us_;
+  std::int64_t max_future_us_;
+  double arm_max_throttle_;
+  std::int64_t failsafe_since_us_ = 0;
 
   static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::min();
   SetpointSample setpoint_;
@@ -97,7 +110,8 @@ class ControlLoop {
   std::int64_t last_setpoint_utime_ = kNever;
   std::int64_t last_pid_utime_ = kNever;
   std::int64_t last_cycle_us_ = kNever;
-  bool arm_permitted_ = false;  // a disarmed setpoint has been seen since boot or failsafe
+  bool arm_permitted_ = false;
+  bool arm_refused_logged_ = false;  // a disarmed setpoint has been seen since boot or failsafe
 
   CycleResult result_;
   Counters counters_;

@@ -1,7 +1,9 @@
 #include "node/lcm_node.hpp"
 
 #include "config/build_mixer.hpp"
+#include "config/matrix_export.hpp"
 #include "node/control_loop.hpp"
+#include "node/window_stats.hpp"
 
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
@@ -11,7 +13,9 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <poll.h>
+#include <sched.h>
 #include <signal.h>
+#include <sys/mman.h>
 #include <sys/signalfd.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
@@ -64,7 +68,12 @@ class Fd {
 class Node {
  public:
   Node(const config::Config& config, lcm::LCM& lcm, std::ostream& log)
-      : config_(config), lcm_(lcm), log_(log), loop_(config, config::build_mixer(config)) {
+      : config_(config),
+        lcm_(lcm),
+        log_(log),
+        loop_(config, config::build_mixer(config)),
+        period_stats_(window_capacity(config)),
+        compute_stats_(window_capacity(config)) {
     const int n = config.motors();
     pwm_msg_.num_motors = n;
     pwm_msg_.command.assign(static_cast<std::size_t>(n), 0.0F);
@@ -87,7 +96,10 @@ class Node {
     }
   }
 
-  void cycle(std::int64_t now_us) {
+  // One control cycle; `woke_us` is when the loop woke up for it.
+  void cycle(std::int64_t now_us, std::int64_t woke_us) {
+    if (last_cycle_us_ > 0) period_stats_.add(static_cast<double>(now_us - last_cycle_us_));
+    last_cycle_us_ = now_us;
     const CycleResult& r = loop_.cycle(now_us);
     if (r.state_changed) {
       log_ << "motormix: " << to_string(r.state);
@@ -95,10 +107,20 @@ class Node {
       log_ << std::endl;
     }
     publish_pwm(r);
+    compute_stats_.add(static_cast<double>(monotonic_us() - woke_us));
     if (now_us >= next_status_us_) {
       publish_status(r);
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
     }
+  }
+
+  void add_overruns(std::uint64_t missed) { overruns_ += static_cast<std::int64_t>(missed); }
+
+  // publish: on_input: a pid message accepted since the last cycle.
+  bool take_new_pid() {
+    const bool fresh = new_pid_;
+    new_pid_ = false;
+    return fresh;
   }
 
   // Final word on shutdown: every output at its disarmed value.
@@ -119,7 +141,7 @@ class Node {
         return;
       }
       loop_.on_setpoint(SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0},
-                        monotonic_us());
+                        monotonic_us(), wall_us());
     } catch (...) {
       loop_.on_undecodable();
     }
@@ -132,7 +154,10 @@ class Node {
         loop_.on_undecodable();
         return;
       }
-      loop_.on_pid(PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw}, monotonic_us());
+      if (loop_.on_pid(PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw}, monotonic_us(),
+                       wall_us()) == Rejection::kNone) {
+        new_pid_ = true;
+      }
     } catch (...) {
       loop_.on_undecodable();
     }
@@ -176,7 +201,17 @@ class Node {
     s.rejected_nonfinite = c.rejected_nonfinite;
     s.rejected_range = c.rejected_range;
     s.rejected_stale_order = c.rejected_out_of_order;
+    s.rejected_future = c.rejected_future;
     s.failsafe_events = c.failsafe_events;
+    s.arming_refused = c.arming_refused;
+    const auto period = period_stats_.take();
+    const auto compute = compute_stats_.take();
+    for (int i = 0; i < 4; ++i) {
+      s.period_us[i] = period[static_cast<std::size_t>(i)];
+      s.compute_us[i] = compute[static_cast<std::size_t>(i)];
+    }
+    s.overruns = overruns_;
+    s.config_hash = static_cast<int64_t>(config_.hash);
     const int len = s.encode(status_buffer_.data(), 0, static_cast<int>(status_buffer_.size()));
     if (len > 0)
       lcm_.publish(config_.channels.status, status_buffer_.data(), static_cast<unsigned>(len));
@@ -191,7 +226,41 @@ class Node {
   std::vector<uint8_t> pwm_buffer_;
   std::vector<uint8_t> status_buffer_;
   std::int64_t next_status_us_ = 0;
+  std::int64_t last_cycle_us_ = 0;
+  std::int64_t overruns_ = 0;
+  bool new_pid_ = false;
+  WindowStats period_stats_;
+  WindowStats compute_stats_;
+
+  static std::size_t window_capacity(const config::Config& c) {
+    return static_cast<std::size_t>(c.loop_rate_hz / c.status_rate_hz) * 2 + 64;
+  }
 };
+
+// Real-time settings are requests: when the system refuses, say so and go on.
+void apply_realtime(const config::Realtime& rt, std::ostream& log) {
+  if (rt.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    log << "motormix: warning: mlockall refused (" << std::strerror(errno) << "); continuing"
+        << std::endl;
+  }
+  if (!rt.cpus.empty()) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    for (int cpu : rt.cpus) CPU_SET(cpu, &set);
+    if (sched_setaffinity(0, sizeof set, &set) != 0) {
+      log << "motormix: warning: CPU affinity refused (" << std::strerror(errno) << "); continuing"
+          << std::endl;
+    }
+  }
+  if (rt.priority > 0) {
+    sched_param param{};
+    param.sched_priority = rt.priority;
+    if (sched_setscheduler(0, SCHED_FIFO, &param) != 0) {
+      log << "motormix: warning: SCHED_FIFO priority " << rt.priority << " refused ("
+          << std::strerror(errno) << "); continuing with the default scheduler" << std::endl;
+    }
+  }
+}
 
 void log_summary(const config::Config& config, const std::string& url, std::ostream& log) {
   log << "motormix: vehicle '" << config.name << "', " << config.motors() << " motors ("
@@ -202,7 +271,8 @@ void log_summary(const config::Config& config, const std::string& url, std::ostr
       << to_string(config.inputs.yaw_source) << "\n"
       << "motormix: outputs '" << config.channels.motor_pwm << "' at " << config.loop_rate_hz
       << " Hz, status '" << config.channels.status << "' at " << config.status_rate_hz
-      << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'" << std::endl;
+      << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'\n"
+      << config::export_matrix(config, config::MatrixFormat::kTable) << std::flush;
 }
 
 }  // namespace
@@ -234,6 +304,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return 1;
   }
   log_summary(config, options.lcm_url, log);
+  apply_realtime(config.realtime, log);
   Node node(config, lcm, log);
   node.subscribe();
 
@@ -265,16 +336,25 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
       node.publish_disarmed();
       return 0;
     }
-    if (fds[0].revents & POLLIN) node.drain();
+    const std::int64_t woke_us = monotonic_us();
+    bool run_cycle = false;
+    if (fds[0].revents & POLLIN) {
+      node.drain();
+      run_cycle = config.publish == config::PublishMode::kOnInput && node.take_new_pid();
+    }
     if (fds[1].revents & POLLIN) {
       std::uint64_t expirations = 0;
       if (read(timer_fd.get(), &expirations, sizeof expirations) == sizeof expirations) {
+        if (expirations > 1) node.add_overruns(expirations - 1);
         node.drain();  // inputs that arrived together with the tick count for it
-        node.cycle(monotonic_us());
-        if (options.max_cycles > 0 && ++cycles >= options.max_cycles) {
-          node.publish_disarmed();
-          return 0;
-        }
+        run_cycle = true;
+      }
+    }
+    if (run_cycle) {
+      node.cycle(monotonic_us(), woke_us);
+      if (options.max_cycles > 0 && ++cycles >= options.max_cycles) {
+        node.publish_disarmed();
+        return 0;
       }
     }
   }

@@ -28,6 +28,8 @@ const char* to_string(Rejection rejection) {
       return "field out of range";
     case Rejection::kOutOfOrder:
       return "utime went backwards";
+    case Rejection::kFromFuture:
+      return "utime in the future";
   }
   return "?";
 }

@@ -15,6 +15,7 @@ enum class Rejection : std::uint8_t {
   kNonFinite,   // a NaN or infinite field
   kOutOfRange,  // a field outside its documented range
   kOutOfOrder,  // utime went backwards on this channel
+  kFromFuture,  // utime further ahead of this host's clock than inputs.max_future_ms
 };
 
 const char* to_string(Rejection rejection);

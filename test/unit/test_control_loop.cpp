@@ -19,19 +19,24 @@ using node::Rejection;
 using node::SetpointSample;
 
 constexpr std::int64_t kMs = 1000;
+// This host's wall clock in the tests: ahead of every utime used.
+constexpr std::int64_t kWall = 1'800'000'000'000'000;
 
 class ControlLoopTest : public ::testing::Test {
  protected:
-  config::Config config_ = team_quad_config();
+  // These tests arm at half throttle; the arming check has a test of its own.
+  config::Config config_ =
+      config::load_config_file(source_path("config/team_quad.yaml"), {"inputs.arm_max_throttle=1"});
   ControlLoop loop_{config_, config::build_mixer(config_)};
   std::int64_t utime_ = 1'700'000'000'000'000;
 
   void setpoint(std::int64_t now, bool armed, double throttle = 0.5, double yaw = 0.0) {
-    ASSERT_EQ(loop_.on_setpoint(SetpointSample{utime_ += 1000, throttle, yaw, armed}, now),
+    ASSERT_EQ(loop_.on_setpoint(SetpointSample{utime_ += 1000, throttle, yaw, armed}, now, kWall),
               Rejection::kNone);
   }
   void pid(std::int64_t now, double roll = 0.0, double pitch = 0.0) {
-    ASSERT_EQ(loop_.on_pid(PidSample{utime_ += 1000, roll, pitch, 0.0}, now), Rejection::kNone);
+    ASSERT_EQ(loop_.on_pid(PidSample{utime_ += 1000, roll, pitch, 0.0}, now, kWall),
+              Rejection::kNone);
   }
   void arm(std::int64_t now) {
     setpoint(now, false);
@@ -137,11 +142,12 @@ TEST_F(ControlLoopTest, DisarmFromTheSetpoint) {
 TEST_F(ControlLoopTest, RejectedMessagesAreCountedAndLeaveTheOldInputInForce) {
   arm(0);
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(loop_.on_pid(PidSample{utime_ + 1, nan, 0, 0}, 1 * kMs), Rejection::kNonFinite);
-  EXPECT_EQ(loop_.on_pid(PidSample{utime_ + 2, 1.5, 0, 0}, 1 * kMs), Rejection::kOutOfRange);
-  EXPECT_EQ(loop_.on_setpoint(SetpointSample{utime_ + 3, -0.1, 0, true}, 1 * kMs),
+  EXPECT_EQ(loop_.on_pid(PidSample{utime_ + 1, nan, 0, 0}, 1 * kMs, kWall), Rejection::kNonFinite);
+  EXPECT_EQ(loop_.on_pid(PidSample{utime_ + 2, 1.5, 0, 0}, 1 * kMs, kWall), Rejection::kOutOfRange);
+  EXPECT_EQ(loop_.on_setpoint(SetpointSample{utime_ + 3, -0.1, 0, true}, 1 * kMs, kWall),
             Rejection::kOutOfRange);
-  EXPECT_EQ(loop_.on_pid(PidSample{utime_ - 500'000, 0.2, 0, 0}, 1 * kMs), Rejection::kOutOfOrder);
+  EXPECT_EQ(loop_.on_pid(PidSample{utime_ - 500'000, 0.2, 0, 0}, 1 * kMs, kWall),
+            Rejection::kOutOfOrder);
   loop_.on_undecodable();
   const auto& c = loop_.counters();
   EXPECT_EQ(c.rejected_nonfinite, 1);
@@ -157,21 +163,79 @@ TEST_F(ControlLoopTest, RejectedMessagesAreCountedAndLeaveTheOldInputInForce) {
 
 TEST_F(ControlLoopTest, PublisherRestartWithEarlierClockIsAccepted) {
   arm(0);
-  EXPECT_EQ(loop_.on_pid(PidSample{1000, 0.1, 0, 0}, 1 * kMs), Rejection::kNone);
+  EXPECT_EQ(loop_.on_pid(PidSample{1000, 0.1, 0, 0}, 1 * kMs, kWall), Rejection::kNone);
 }
 
 TEST_F(ControlLoopTest, YawFromPidWhenConfigured) {
   config_.inputs.yaw_source = config::YawSource::kPid;
   ControlLoop loop(config_, config::build_mixer(config_));
-  loop.on_setpoint(SetpointSample{1, 0.0, 1.0, false}, 0);
-  loop.on_pid(PidSample{1, 0.0, 0.0, -1.0}, 0);
+  loop.on_setpoint(SetpointSample{1, 0.0, 1.0, false}, 0, kWall);
+  loop.on_pid(PidSample{1, 0.0, 0.0, -1.0}, 0, kWall);
   loop.cycle(0);
-  loop.on_setpoint(SetpointSample{2, 0.0, 1.0, true}, 0);
+  loop.on_setpoint(SetpointSample{2, 0.0, 1.0, true}, 0, kWall);
   const auto& r = loop.cycle(0);
   ASSERT_EQ(r.state, LoopState::kArmed);
   // Negative yaw from the pid: FR and RL get 15 %.
   EXPECT_NEAR(r.mix.command[1], 0.15, kExact);
   EXPECT_NEAR(r.mix.command[0], 0.0, kExact);
+}
+
+TEST(ArmingCheck, RefusedWithThrottleUp) {
+  const config::Config c = team_quad_config();  // default check: |throttle| <= 0.1
+  ControlLoop loop(c, config::build_mixer(c));
+  loop.on_setpoint(SetpointSample{1, 0.5, 0, false}, 0, kWall);
+  loop.on_pid(PidSample{1, 0, 0, 0}, 0, kWall);
+  loop.cycle(0);
+  loop.on_setpoint(SetpointSample{2, 0.5, 0, true}, 1 * kMs, kWall);  // half throttle: refused
+  EXPECT_EQ(loop.cycle(1 * kMs).state, LoopState::kDisarmed);
+  EXPECT_EQ(loop.cycle(2 * kMs).state, LoopState::kDisarmed);
+  EXPECT_EQ(loop.counters().arming_refused, 1);  // counted once per request
+  loop.on_setpoint(SetpointSample{3, 0.05, 0, true}, 3 * kMs, kWall);
+  loop.on_pid(PidSample{3, 0, 0, 0}, 3 * kMs, kWall);
+  EXPECT_EQ(loop.cycle(3 * kMs).state, LoopState::kArmed);
+}
+
+TEST_F(ControlLoopTest, MessagesFromTheFutureAreRejected) {
+  EXPECT_EQ(loop_.on_pid(PidSample{kWall + 2'000'000, 0, 0, 0}, 0, kWall), Rejection::kFromFuture);
+  EXPECT_EQ(loop_.on_pid(PidSample{kWall + 500'000, 0, 0, 0}, 0, kWall), Rejection::kNone);
+  EXPECT_EQ(loop_.counters().rejected_future, 1);
+}
+
+class FailsafeActionTest : public ::testing::Test {
+ protected:
+  ControlLoop make(const std::string& action) {
+    config::Config c =
+        config::load_config_file(source_path("config/team_quad.yaml"),
+                                 {"inputs.failsafe=" + action, "inputs.hold_last_ms=200"});
+    return ControlLoop(c, config::build_mixer(c));
+  }
+  static void arm(ControlLoop& loop) {
+    loop.on_setpoint(SetpointSample{1, 0.0, 0, false}, 0, kWall);
+    loop.on_pid(PidSample{1, 0.2, 0, 0}, 0, kWall);
+    loop.cycle(0);
+    loop.on_setpoint(SetpointSample{2, 0.05, 0, true}, 0, kWall);
+    ASSERT_EQ(loop.cycle(0).state, LoopState::kArmed);
+  }
+};
+
+TEST_F(FailsafeActionTest, HoldLastKeepsMixingForABoundedTime) {
+  ControlLoop loop = make("hold_last");
+  arm(loop);
+  const double armed_output = loop.last().mix.output[0];
+  const auto& r = loop.cycle(150 * kMs);  // stale, within the hold
+  EXPECT_EQ(r.state, LoopState::kFailsafe);
+  EXPECT_TRUE(r.mix.armed);
+  EXPECT_EQ(r.mix.output[0], armed_output);
+  EXPECT_FALSE(loop.cycle(351 * kMs).mix.armed);  // hold (200 ms) over: disarmed
+}
+
+TEST_F(FailsafeActionTest, IdleSpinsWithZeroDemand) {
+  ControlLoop loop = make("idle");
+  arm(loop);
+  const auto& r = loop.cycle(150 * kMs);
+  EXPECT_EQ(r.state, LoopState::kFailsafe);
+  EXPECT_TRUE(r.mix.armed);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(r.mix.output[i], 1150.0);
 }
 
 }  // namespace
