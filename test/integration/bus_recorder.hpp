@@ -52,6 +52,14 @@ class BusRecorder {
     std::lock_guard<std::mutex> lock(mutex_);
     return status_;
   }
+  std::vector<std::chrono::steady_clock::time_point> pwm_times() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pwm_times_;
+  }
+  std::size_t pwm_count() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pwm_.size();
+  }
   int undecodable() {
     std::lock_guard<std::mutex> lock(mutex_);
     return undecodable_;
@@ -61,20 +69,26 @@ class BusRecorder {
   // Untyped subscriptions, decoded here: undecodable messages are counted
   // as failures of the test, not skipped by LCM with a line on stderr.
   template <typename Message>
-  void store(const lcm::ReceiveBuffer* rbuf, std::vector<Message>& into) {
+  void store(const lcm::ReceiveBuffer* rbuf, std::vector<Message>& into,
+             std::vector<std::chrono::steady_clock::time_point>* times) {
     Message msg{};
     const bool ok = msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
                     static_cast<int>(rbuf->data_size);
     std::lock_guard<std::mutex> lock(mutex_);
     if (ok) {
       into.push_back(msg);
+      if (times) times->push_back(std::chrono::steady_clock::now());
     } else {
       ++undecodable_;
     }
     changed_.notify_all();
   }
-  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) { store(rbuf, pwm_); }
-  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) { store(rbuf, status_); }
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    store(rbuf, pwm_, &pwm_times_);
+  }
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    store(rbuf, status_, nullptr);
+  }
 
   lcm::LCM lcm_;
   std::atomic<bool> stop_{false};
@@ -82,6 +96,7 @@ class BusRecorder {
   std::condition_variable changed_;
   std::vector<motor_pwm_t> pwm_;
   std::vector<mixer_status_t> status_;
+  std::vector<std::chrono::steady_clock::time_point> pwm_times_;  // arrival of each pwm_ entry
   int undecodable_ = 0;
   std::thread thread_;
 };

@@ -1,0 +1,275 @@
+// `motormix run` as a process on a private bus: the publisher goes away and
+// comes back, garbage arrives, SIGTERM arrives mid-flight, and the loop keeps
+// its rate. Every wait is on messages, with a bounded timeout; every loop is
+// bounded in count.
+
+#include "integration/bus_recorder.hpp"
+#include "integration/process.hpp"
+#include "test_support.hpp"
+
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <random>
+#include <thread>
+
+namespace motormix::test {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+// Two loopback hops and scheduling on a loaded two-core machine (or under the
+// sanitizers) on top of the mixer's own promise of timeout + one period.
+constexpr auto kTransportSlack = 40ms;
+
+std::int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+bool in_private_bus() {
+  const char* flag = std::getenv("MOTORMIX_PRIVATE_BUS");
+  return flag != nullptr && std::string(flag) == "1";
+}
+
+// The test side of the bus: publishes inputs like a flight controller would.
+class Pilot {
+ public:
+  explicit Pilot(const config::Config& c) : c_(c) {}
+  bool good() { return lcm_.good(); }
+
+  void send(bool armed, double throttle, double roll = 0.0) {
+    setpoint_t sp{};
+    sp.utime = wall_us();
+    sp.throttle = static_cast<float>(throttle);
+    sp.armed = armed;
+    lcm_.publish(c_.channels.setpoint, &sp);
+    pid_t pid{};
+    pid.utime = sp.utime;
+    pid.roll = static_cast<float>(roll);
+    lcm_.publish(c_.channels.pid, &pid);
+    last_utime = sp.utime;
+    last_sent = Clock::now();
+  }
+  void raw(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+  template <typename Message>
+  void message(const std::string& channel, const Message& m) {
+    lcm_.publish(channel, &m);
+  }
+
+  std::int64_t last_utime = 0;
+  Clock::time_point last_sent;
+
+ private:
+  const config::Config& c_;
+  lcm::LCM lcm_;
+};
+
+class ProcessSafety : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(in_private_bus()) << "run through scripts/private-bus"; }
+
+  void start(const std::vector<std::string>& overrides = {}) {
+    config_ = config::load_config_file(source_path("config/team_quad.yaml"), overrides);
+    bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
+    pilot_ = std::make_unique<Pilot>(config_);
+    std::vector<std::string> argv = {MOTORMIX_BINARY, "run", "--config",
+                                     source_path("config/team_quad.yaml")};
+    for (const auto& o : overrides) {
+      argv.push_back("--set");
+      argv.push_back(o);
+    }
+    mixer_ = std::make_unique<ChildProcess>(argv);
+    ASSERT_TRUE(bus_->wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
+  }
+
+  // Publishes at 200 Hz (bounded count) until an output names the last input
+  // and satisfies `want`.
+  bool fly_until(bool armed, double throttle, const std::function<bool(const motor_pwm_t&)>& want,
+                 int max_sends = 400) {
+    for (int k = 0; k < max_sends; ++k) {
+      pilot_->send(armed, throttle);
+      const std::int64_t sent = pilot_->last_utime;
+      if (bus_->wait_until(
+              [&](const auto& pwm, const auto&) {
+                return !pwm.empty() && pwm.back().setpoint_utime == sent && want(pwm.back());
+              },
+              5ms)) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  void arm() {
+    ASSERT_TRUE(fly_until(false, 0.0, [](const motor_pwm_t& m) { return !m.armed; }));
+    ASSERT_TRUE(fly_until(true, 0.0, [](const motor_pwm_t& m) { return m.armed; }));
+    ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  }
+
+  config::Config config_;
+  std::unique_ptr<BusRecorder> bus_;
+  std::unique_ptr<Pilot> pilot_;
+  std::unique_ptr<ChildProcess> mixer_;
+};
+
+TEST_F(ProcessSafety, PublisherDropoutFailsSafeWithinTimeoutPlusOnePeriod) {
+  start();
+  const auto timeout =
+      std::chrono::milliseconds(static_cast<int>(config_.inputs.setpoint_timeout_s * 1e3));
+  const auto period = std::chrono::microseconds(static_cast<int>(1e6 / config_.loop_rate_hz));
+  for (int trial = 0; trial < 5; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    arm();
+    const Clock::time_point stopped = pilot_->last_sent;
+    const std::size_t before = bus_->pwm_count();
+    ASSERT_TRUE(bus_->wait_until(
+        [&](const auto& pwm, const auto&) {
+          for (std::size_t i = before; i < pwm.size(); ++i) {
+            if (!pwm[i].armed) return true;
+          }
+          return false;
+        },
+        2s));
+    const auto pwm = bus_->pwm();
+    const auto times = bus_->pwm_times();
+    std::size_t first = before;
+    while (pwm[first].armed) ++first;
+    const auto took = times[first] - stopped;
+    EXPECT_LE(took, timeout + period + kTransportSlack)
+        << std::chrono::duration_cast<std::chrono::microseconds>(took).count() << " us";
+    EXPECT_GE(took, timeout - 5ms);  // and not before the timeout
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(pwm[first].pwm[static_cast<std::size_t>(i)], 1000.0F);
+
+    // The publisher comes back still saying "armed": no output until re-armed.
+    ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return !m.armed; }));
+    for (int k = 0; k < 20; ++k) {
+      ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t&) { return true; }));
+      ASSERT_FALSE(bus_->pwm().back().armed) << "motors restarted without a re-arm";
+    }
+    ASSERT_TRUE(bus_->wait_until(
+        [](const auto&, const auto& status) {
+          return !status.empty() && status.back().state == mixer_status_t::STATE_FAILSAFE;
+        },
+        2s));
+  }
+  EXPECT_GE(bus_->status().back().failsafe_events, 5);
+  mixer_->signal(SIGTERM);
+  EXPECT_EQ(mixer_->wait_for(10s), 0);
+}
+
+TEST_F(ProcessSafety, GarbageIsCountedNeverFatalNeverOutOfRange) {
+  start();
+  arm();
+  std::mt19937 rng(99);
+  std::uniform_int_distribution<int> byte(0, 255);
+  std::uniform_int_distribution<int> length(0, 64);
+  constexpr int kRandom = 200;
+  for (int k = 0; k < kRandom; ++k) {
+    std::vector<std::uint8_t> junk(static_cast<std::size_t>(length(rng)));
+    for (auto& b : junk) b = static_cast<std::uint8_t>(byte(rng));
+    pilot_->raw(k % 2 ? config_.channels.setpoint : config_.channels.pid, junk);
+  }
+  // Another type on the setpoint channel, and a truncated setpoint.
+  pid_t wrong{};
+  pilot_->message(config_.channels.setpoint, wrong);
+  setpoint_t sp{};
+  sp.utime = wall_us();
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(sp.getEncodedSize()));
+  sp.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  bytes.resize(bytes.size() - 3);
+  pilot_->raw(config_.channels.setpoint, bytes);
+  // Well-formed messages with bad values.
+  pid_t nan_pid{};
+  nan_pid.utime = wall_us();
+  nan_pid.roll = std::numeric_limits<float>::quiet_NaN();
+  pilot_->message(config_.channels.pid, nan_pid);
+  setpoint_t big{};
+  big.utime = wall_us();
+  big.throttle = 7.0F;
+  big.armed = true;
+  pilot_->message(config_.channels.setpoint, big);
+  pid_t inf_pid{};
+  inf_pid.utime = wall_us();
+  inf_pid.pitch = std::numeric_limits<float>::infinity();
+  pilot_->message(config_.channels.pid, inf_pid);
+
+  // Keep flying and wait for the counters to show all of it.
+  bool counted = false;
+  for (int k = 0; k < 300 && !counted; ++k) {
+    pilot_->send(true, 0.5, 0.3);
+    counted = bus_->wait_until(
+        [&](const auto&, const auto& status) {
+          if (status.empty()) return false;
+          const auto& s = status.back();
+          return s.rejected_decode >= kRandom / 2 + 2 && s.rejected_nonfinite >= 2 &&
+                 s.rejected_range >= 1;
+        },
+        5ms);
+  }
+  EXPECT_TRUE(counted);
+  ASSERT_TRUE(mixer_->running()) << "garbage killed the mixer";
+  ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  for (const auto& m : bus_->pwm()) {
+    for (float v : m.pwm) {
+      ASSERT_TRUE(std::isfinite(v));
+      ASSERT_TRUE(m.armed ? (v >= 1150.0F && v <= 1924.0F) : v == 1000.0F) << v;
+    }
+  }
+  mixer_->signal(SIGTERM);
+  EXPECT_EQ(mixer_->wait_for(10s), 0);
+}
+
+TEST_F(ProcessSafety, SigtermInFlightEndsWithADisarmedMessage) {
+  start({"inputs.setpoint_timeout_ms=2000", "inputs.pid_timeout_ms=2000"});
+  arm();
+  ASSERT_TRUE(bus_->pwm().back().armed);
+  mixer_->signal(SIGTERM);
+  ASSERT_EQ(mixer_->wait_for(10s), 0);
+  // Its final status follows its final outputs: once it is here, so are they.
+  ASSERT_TRUE(bus_->wait_until(
+      [](const auto&, const auto& status) {
+        return !status.empty() && status.back().state == mixer_status_t::STATE_DISARMED;
+      },
+      5s));
+  const auto pwm = bus_->pwm();
+  EXPECT_FALSE(pwm.back().armed);
+  for (float v : pwm.back().pwm) EXPECT_EQ(v, 1000.0F);
+}
+
+// Generous bounds: tight numbers belong to the benchmarks.
+TEST_F(ProcessSafety, LoopKeepsItsRate) {
+  for (int rate : {400, 2000}) {
+    SCOPED_TRACE(std::to_string(rate) + " Hz");
+    start({"loop_rate_hz=" + std::to_string(rate)});
+    const std::size_t from = bus_->pwm_count();
+    const auto t0 = Clock::now();
+    ASSERT_TRUE(bus_->wait_until(
+        [&](const auto& pwm, const auto&) {
+          return pwm.size() >= from + static_cast<std::size_t>(rate * 2);
+        },
+        10s));
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double measured = static_cast<double>(rate * 2) / seconds;
+    EXPECT_NEAR(measured, rate, 0.15 * rate);
+    ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return s.size() >= 3; }, 5s));
+    const auto status = bus_->status().back();
+    EXPECT_NEAR(status.period_us[1], 1e6 / rate, 0.15 * 1e6 / rate);  // mean period
+    EXPECT_GT(status.compute_us[2], 0.0F);
+    mixer_->signal(SIGTERM);
+    EXPECT_EQ(mixer_->wait_for(10s), 0);
+    mixer_.reset();
+    bus_.reset();
+  }
+}
+
+}  // namespace
+}  // namespace motormix::test
