@@ -42,4 +42,11 @@ struct MatrixCommand {
 };
 int matrix(const MatrixCommand& cmd);
 
+struct ReplayCommand {
+  CommonOptions common;
+  std::string in_log;
+  std::string out_log;
+};
+int replay(const ReplayCommand& cmd);
+
 }  // namespace motormix::app

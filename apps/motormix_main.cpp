@@ -54,6 +54,16 @@ int main(int argc, char** argv) {
   matrix_app->add_option("--format", matrix_cmd.format, "output format")
       ->check(CLI::IsMember(motormix::config::matrix_format_names()));
 
+  ReplayCommand replay_cmd;
+  CLI::App* replay_app = app.add_subcommand(
+      "replay", "run the mixer offline over a flight log (log time as the clock)");
+  add_common(replay_app, replay_cmd.common);
+  replay_app->add_option("in", replay_cmd.in_log, "input LCM event log")
+      ->required()
+      ->check(CLI::ExistingFile);
+  replay_app->add_option("out", replay_cmd.out_log, "output LCM event log (inputs + outputs)")
+      ->required();
+
   try {
     app.parse(argc, argv);
     if (matrix_app->parsed() && matrix_cmd.config_path.empty() == matrix_cmd.preset.empty()) {
@@ -72,5 +82,6 @@ int main(int argc, char** argv) {
   if (run_app->parsed()) return run(run_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
+  if (replay_app->parsed()) return replay(replay_cmd);
   return kExitUsage;
 }

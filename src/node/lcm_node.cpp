@@ -3,6 +3,7 @@
 #include "config/build_mixer.hpp"
 #include "config/matrix_export.hpp"
 #include "node/control_loop.hpp"
+#include "node/messages.hpp"
 #include "node/window_stats.hpp"
 
 #include <motormix/mixer_status_t.hpp>
@@ -75,10 +76,7 @@ class Node {
         period_stats_(window_capacity(config)),
         compute_stats_(window_capacity(config)) {
     const int n = config.motors();
-    pwm_msg_.num_motors = n;
-    pwm_msg_.command.assign(static_cast<std::size_t>(n), 0.0F);
-    pwm_msg_.pwm.assign(static_cast<std::size_t>(n), 0.0F);
-    pwm_msg_.direction.assign(static_cast<std::size_t>(n), 0);
+    size_pwm_message(pwm_msg_, n);
     pwm_buffer_.resize(static_cast<std::size_t>(pwm_msg_.getEncodedSize()));
     status_msg_.num_motors = n;
     status_buffer_.resize(static_cast<std::size_t>(status_msg_.getEncodedSize()));
@@ -133,88 +131,46 @@ class Node {
   }
 
  private:
+  // No exception may leave an LCM callback: decoding reports failure as a
+  // value, and nothing else here throws.
   void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    try {
-      setpoint_t msg{};
-      if (msg.decode(rbuf->data, 0, rbuf->data_size) != static_cast<int>(rbuf->data_size)) {
-        loop_.on_undecodable();
-        return;
-      }
-      loop_.on_setpoint(SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0},
-                        monotonic_us(), wall_us());
-    } catch (...) {
+    SetpointSample sample;
+    if (!decode_setpoint(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
       loop_.on_undecodable();
+      return;
     }
+    loop_.on_setpoint(sample, monotonic_us(), wall_us());
   }
 
   void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    try {
-      pid_t msg{};
-      if (msg.decode(rbuf->data, 0, rbuf->data_size) != static_cast<int>(rbuf->data_size)) {
-        loop_.on_undecodable();
-        return;
-      }
-      if (loop_.on_pid(PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw}, monotonic_us(),
-                       wall_us()) == Rejection::kNone) {
-        new_pid_ = true;
-      }
-    } catch (...) {
+    PidSample sample;
+    if (!decode_pid(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
       loop_.on_undecodable();
+      return;
     }
+    if (loop_.on_pid(sample, monotonic_us(), wall_us()) == Rejection::kNone) new_pid_ = true;
   }
 
   void publish_pwm(const CycleResult& r) {
-    pwm_msg_.utime = wall_us();
-    for (int i = 0; i < pwm_msg_.num_motors; ++i) {
-      pwm_msg_.command[static_cast<std::size_t>(i)] = static_cast<float>(r.mix.command[i]);
-      pwm_msg_.pwm[static_cast<std::size_t>(i)] = static_cast<float>(r.mix.output[i]);
-      pwm_msg_.direction[static_cast<std::size_t>(i)] =
-          r.mix.direction[static_cast<std::size_t>(i)];
-    }
-    pwm_msg_.armed = r.mix.armed;
-    pwm_msg_.setpoint_utime = r.setpoint_utime;
-    pwm_msg_.pid_utime = r.pid_utime;
+    fill_pwm_message(pwm_msg_, r, wall_us());
     const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
-    if (len > 0)
+    if (len > 0) {
       lcm_.publish(config_.channels.motor_pwm, pwm_buffer_.data(), static_cast<unsigned>(len));
+    }
   }
 
   void publish_status(const CycleResult& r) {
-    const Counters& c = loop_.counters();
-    mixer_status_t& s = status_msg_;
-    s.utime = wall_us();
-    s.state = static_cast<int8_t>(r.state);
-    s.failsafe_reason = static_cast<int8_t>(r.reason);
-    s.setpoint_stale = r.setpoint_stale;
-    s.pid_stale = r.pid_stale;
-    const AllocationResult& a = r.last_armed_allocation;
-    s.saturated_upper = static_cast<int32_t>(a.saturated_upper);
-    s.saturated_lower = static_cast<int32_t>(a.saturated_lower);
-    for (int i = 0; i < kNumAxes; ++i) {
-      s.axis_limited[i] = (a.axis_limited >> i) & 1U;
-      s.unallocated[i] = static_cast<float>(a.unallocated[i]);
-    }
-    s.cycles = c.cycles;
-    s.setpoint_received = c.setpoint_received;
-    s.pid_received = c.pid_received;
-    s.rejected_decode = c.rejected_decode;
-    s.rejected_nonfinite = c.rejected_nonfinite;
-    s.rejected_range = c.rejected_range;
-    s.rejected_stale_order = c.rejected_out_of_order;
-    s.rejected_future = c.rejected_future;
-    s.failsafe_events = c.failsafe_events;
-    s.arming_refused = c.arming_refused;
-    const auto period = period_stats_.take();
-    const auto compute = compute_stats_.take();
-    for (int i = 0; i < 4; ++i) {
-      s.period_us[i] = period[static_cast<std::size_t>(i)];
-      s.compute_us[i] = compute[static_cast<std::size_t>(i)];
-    }
-    s.overruns = overruns_;
-    s.config_hash = static_cast<int64_t>(config_.hash);
-    const int len = s.encode(status_buffer_.data(), 0, static_cast<int>(status_buffer_.size()));
-    if (len > 0)
+    LoopTiming timing;
+    timing.period_us = period_stats_.take();
+    timing.compute_us = compute_stats_.take();
+    timing.overruns = overruns_;
+    fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
+                        wall_us());
+    const int len =
+        status_msg_.encode(status_buffer_.data(), 0, static_cast<int>(status_buffer_.size()));
+    if (len > 0) {
       lcm_.publish(config_.channels.status, status_buffer_.data(), static_cast<unsigned>(len));
+    }
   }
 
   const config::Config& config_;

@@ -1,0 +1,40 @@
+#pragma once
+// `motormix replay`: the control loop run offline over an LCM event log, with
+// the log's own timestamps as the clock. The loop ticks at the configured
+// rate from the first event; inputs are handled at their timestamps, exactly
+// as the live node would see them arrive. The output log holds every input
+// event plus the produced motor_pwm_t and mixer_status_t. Deterministic: the
+// same log and configuration give the same bytes.
+
+#include "config/config.hpp"
+
+#include <array>
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+
+namespace motormix::node {
+
+struct ReplaySummary {
+  double duration_s = 0.0;
+  std::int64_t input_events = 0;  // on the setpoint and pid channels
+  std::int64_t other_events = 0;  // copied through untouched
+  std::int64_t outputs = 0;       // motor_pwm_t written
+  double armed_s = 0.0;           // time with armed outputs
+  std::array<double, 4>
+      limited_s{};  // per axis (roll, pitch, yaw, thrust): armed time not fully delivered
+  std::int64_t failsafe_events = 0;
+  std::int64_t rejected = 0;  // all rejection counters together
+};
+
+struct ReplayOptions {
+  bool progress = false;  // a progress bar on `log`
+  double tail_s = -1.0;   // loop time after the last event; < 0: twice the longest timeout
+};
+
+// Returns false (with a message on `log`) if a log cannot be read or written.
+bool replay_log(const config::Config& config, const std::string& in_path,
+                const std::string& out_path, const ReplayOptions& options, ReplaySummary& summary,
+                std::ostream& log);
+
+}  // namespace motormix::node

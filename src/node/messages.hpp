@@ -1,0 +1,38 @@
+#pragma once
+// Control-loop results as LCM messages, shared by the live node and the
+// offline replay so both publish exactly the same thing. Filling reuses the
+// messages' storage (sized once at set-up): no allocation per cycle.
+
+#include "config/config.hpp"
+#include "node/control_loop.hpp"
+
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <array>
+#include <cstdint>
+
+namespace motormix::node {
+
+struct LoopTiming {
+  std::array<float, 4> period_us{};   // min, mean, max, p99
+  std::array<float, 4> compute_us{};  // min, mean, max, p99
+  std::int64_t overruns = 0;
+};
+
+// Sizes the variable-length fields for `motors` outputs.
+void size_pwm_message(motor_pwm_t& msg, int motors);
+
+void fill_pwm_message(motor_pwm_t& msg, const CycleResult& r, std::int64_t utime);
+void fill_status_message(mixer_status_t& msg, const CycleResult& r, const Counters& c,
+                         const LoopTiming& timing, std::uint64_t config_hash, int motors,
+                         std::int64_t utime);
+
+// Decoded inputs, or nothing when the bytes are not a whole message of the
+// type (wrong type, truncated, trailing bytes).
+bool decode_setpoint(const void* data, int size, SetpointSample& out);
+bool decode_pid(const void* data, int size, PidSample& out);
+
+}  // namespace motormix::node
