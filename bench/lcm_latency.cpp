@@ -122,8 +122,9 @@ int measure(bool motormix, int count, double rate) {
   if (!motormix) lcm.publish("LATENCY_STOP", "", 0);
   std::sort(latencies.begin(), latencies.end());
   const auto pct = [&](double p) {
-    return latencies.empty() ? 0.0
-                             : latencies[static_cast<std::size_t>(p * (latencies.size() - 1))];
+    return latencies.empty()
+               ? 0.0
+               : latencies[static_cast<std::size_t>(p * static_cast<double>(latencies.size() - 1))];
   };
   std::printf("%s: %zu replies, %d lost; latency us: median %.1f, p90 %.1f, p99 %.1f, max %.1f\n",
               motormix ? "motormix" : "raw LCM echo", latencies.size(), lost, pct(0.5), pct(0.9),
