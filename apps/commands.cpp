@@ -109,6 +109,7 @@ int replay(const ReplayCommand& cmd) {
   if (!config) return kExitUsage;
   node::ReplayOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
+  options.cycle_on_every_input = cmd.every_input;
   node::ReplaySummary s;
   if (!node::replay_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
     return kExitRuntime;

@@ -46,6 +46,7 @@ struct ReplayCommand {
   CommonOptions common;
   std::string in_log;
   std::string out_log;
+  bool every_input = false;
 };
 int replay(const ReplayCommand& cmd);
 

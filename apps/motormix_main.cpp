@@ -63,6 +63,8 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   replay_app->add_option("out", replay_cmd.out_log, "output LCM event log (inputs + outputs)")
       ->required();
+  replay_app->add_flag("--every-input", replay_cmd.every_input,
+                       "also run a cycle right after every input event (golden files)");
 
   try {
     app.parse(argc, argv);

@@ -1,13 +1,22 @@
 #!/usr/bin/env python3
-"""Writes a deterministic team-quad flight as an LCM event log.
+"""Writes deterministic flights as LCM event logs (same seed, same bytes).
 
-Setpoints (throttle, yaw, armed) at 50 Hz on one channel, pid (roll, pitch)
-at 400 Hz on another, with timing noise, through these phases: disarmed on
-the ground, arming, take-off, hover, a roll sine sweep, pitch steps, yaw
-left and right, an aggressive roll+pitch with a throttle punch, landing,
-disarmed. Same seed, same bytes.
+Setpoints (throttle, yaw, armed) at 50 Hz, pid (roll, pitch) at 400 Hz, with
+timing noise. Scenarios:
 
-    tools/make_flight.py --seed 1 -o test/data/team_quad_flight.lcmlog
+- team_quad: disarmed on the ground, arming, take-off, hover, a roll sine
+  sweep, pitch steps, yaw left and right, an aggressive roll+pitch with a
+  throttle punch, landing, disarmed (channels pos_deseada / pid).
+- dropout: hover, the publisher goes silent for 0.4 s, comes back still
+  "armed", is disarmed and re-armed; NaN, infinite and out-of-range messages
+  along the way (channels SETPOINT / PID).
+- flips: punch-outs, full-yaw spins at low and high throttle, saturating
+  flips (SETPOINT / PID).
+- diff_drive: a wheeled robot: straight, spin in place, saturating turns as
+  in the locomotion document, reverse (SETPOINT / PID; throttle -1..1).
+
+    tools/make_flight.py --scenario team_quad --seed 1 -o test/data/flights/team_quad.lcmlog
+    tools/make_flight.py --all test/data/flights     # every scenario + MANIFEST.md
 """
 
 import argparse
@@ -89,50 +98,184 @@ def pid_at(t, rng):
     return clip(roll + noise[0]), clip(pitch + noise[1])
 
 
-def events(seed, setpoint_channel, pid_channel):
+# --- further scenarios: (setpoint_at, pid_at, end_s, silent windows, bad-value times) ---
+
+def dropout_setpoint(t):
+    if t < 1.0:
+        return 0.0, 0.0, False
+    if t < 2.0:
+        return 0.05, 0.0, True  # armed at low throttle
+    if t < 6.0:
+        return 0.5, 0.1 * math.sin(t), True
+    if t < 6.5:
+        return 0.0, 0.0, False  # disarm after the dropout...
+    if t < 8.5:
+        return 0.05 if t < 7.0 else 0.5, 0.0, True  # ...and re-arm
+    return 0.0, 0.0, False
+
+
+def dropout_pid(t, rng):
+    if t < 1.0 or t >= 8.5:
+        return 0.0, 0.0
+    n = rng.normal(0.0, 0.02, size=2)
+    return float(np.clip(0.3 * math.sin(3 * t) + n[0], -1, 1)), float(np.clip(0.2 * math.cos(2 * t) + n[1], -1, 1))
+
+
+def flips_setpoint(t):
+    if t < 1.0:
+        return 0.0, 0.0, False
+    if t < 1.5:
+        return 0.05, 0.0, True
+    if t < 3.0:
+        return 1.0, 0.0, True          # punch-out
+    if t < 4.5:
+        return 0.15, 1.0, True         # full yaw, low throttle
+    if t < 6.0:
+        return 0.9, -1.0, True         # full yaw, high throttle
+    if t < 8.0:
+        return 0.6, 0.0, True          # flips below
+    return 0.0, 0.0, False
+
+
+def flips_pid(t, rng):
+    if t < 1.5 or t >= 8.0:
+        return 0.0, 0.0
+    n = rng.normal(0.0, 0.02, size=2)
+    if 1.5 <= t < 3.0:
+        return float(np.clip(0.5 + n[0], -1, 1)), float(np.clip(n[1], -1, 1))
+    if 6.0 <= t < 8.0:
+        phase = int((t - 6.0) / 0.5)
+        r, p = [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)][phase % 4]
+        return r, p
+    return float(np.clip(n[0], -1, 1)), float(np.clip(n[1], -1, 1))
+
+
+def drive_setpoint(t):
+    """Ground robot: throttle = forward command, yaw = turn command (left positive)."""
+    if t < 1.0:
+        return 0.0, 0.0, False
+    if t < 1.5:
+        return 0.0, 0.0, True
+    if t < 3.0:
+        return 0.8, 0.0, True      # straight
+    if t < 4.5:
+        return 0.0, 1.0, True      # spin in place
+    if t < 6.0:
+        return 0.2, 0.9, True      # the document's move(1.0, 0.9): saturating turn
+    if t < 7.5:
+        return -0.2, 0.9, True     # and move(-1.0, 0.9)
+    if t < 9.0:
+        return -0.6, -0.3, True    # reverse, turning right
+    return 0.0, 0.0, False
+
+
+def no_pid(t, rng):
+    return 0.0, 0.0
+
+
+SCENARIOS = {
+    # name: (setpoint_at, pid_at, end_s, channels, silent windows (s), bad-value times (s))
+    "team_quad": (setpoint_at, pid_at, END_S, ("pos_deseada", "pid"), [], []),
+    "dropout": (dropout_setpoint, dropout_pid, 9.0, ("SETPOINT", "PID"), [(5.0, 5.4)],
+                [2.5, 3.0, 3.5, 4.0]),
+    "flips": (flips_setpoint, flips_pid, 8.5, ("SETPOINT", "PID"), [], []),
+    "diff_drive": (drive_setpoint, no_pid, 9.5, ("SETPOINT", "PID"), [], []),
+}
+
+
+def events(seed, setpoint_channel, pid_channel, scenario="team_quad"):
+    sp_at, pid_fn, end_s, _, silent, bad_times = SCENARIOS[scenario]
     rng = np.random.default_rng(seed)
     out = []
     for rate, kind in ((SETPOINT_HZ, "setpoint"), (PID_HZ, "pid")):
-        n = int(END_S * rate)
+        n = int(end_s * rate)
         for k in range(n):
             t = k / rate + float(rng.normal(0.0, JITTER_S))
-            t = min(max(t, 0.0), END_S)
+            t = min(max(t, 0.0), end_s)
+            if any(a <= t < b for a, b in silent):
+                continue  # the publisher is silent
             out.append((t, kind))
+    for t in bad_times:  # NaN, infinity and out-of-range messages on both channels
+        out.append((t + 0.0001, "bad_setpoint"))
+        out.append((t + 0.0002, "bad_pid"))
     out.sort()
     encoded = []
     last_utime = {"setpoint": 0, "pid": 0}
     for t, kind in out:
         utime = START_UTIME + int(round(t * 1e6))
-        utime = max(utime, last_utime[kind] + 1)  # each publisher's clock moves forward
-        last_utime[kind] = utime
+        clock = kind.replace("bad_", "")  # bad messages come from the same publishers
+        utime = max(utime, last_utime[clock] + 1)  # each publisher's clock moves forward
+        last_utime[clock] = utime
         if kind == "setpoint":
             msg = setpoint_t()
             msg.utime = utime
-            msg.throttle, msg.yaw, msg.armed = setpoint_at(t)
+            msg.throttle, msg.yaw, msg.armed = sp_at(t)
+            encoded.append((utime, setpoint_channel, msg.encode()))
+        elif kind == "pid":
+            msg = pid_t()
+            msg.utime = utime
+            msg.roll, msg.pitch = pid_fn(t, rng)
+            msg.yaw = 0.0
+            encoded.append((utime, pid_channel, msg.encode()))
+        elif kind == "bad_setpoint":
+            msg = setpoint_t()
+            msg.utime = utime
+            msg.throttle, msg.yaw, msg.armed = float("nan") if int(t * 2) % 2 else 3.0, 0.0, True
             encoded.append((utime, setpoint_channel, msg.encode()))
         else:
             msg = pid_t()
             msg.utime = utime
-            msg.roll, msg.pitch = pid_at(t, rng)
-            msg.yaw = 0.0
+            msg.roll, msg.pitch = (float("inf"), 0.0) if int(t * 2) % 2 else (0.0, -2.0)
             encoded.append((utime, pid_channel, msg.encode()))
     encoded.sort(key=lambda e: e[0])
     return encoded
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("-o", "--output", required=True)
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--setpoint-channel", default="pos_deseada")
-    ap.add_argument("--pid-channel", default="pid")
-    args = ap.parse_args()
-    log = lcm.EventLog(args.output, "w", overwrite=True)
-    evs = events(args.seed, args.setpoint_channel, args.pid_channel)
+def write(path, seed, scenario, setpoint_channel=None, pid_channel=None):
+    channels = SCENARIOS[scenario][3]
+    evs = events(seed, setpoint_channel or channels[0], pid_channel or channels[1], scenario)
+    log = lcm.EventLog(path, "w", overwrite=True)
     for utime, channel, data in evs:
         log.write_event(utime, channel, data)
     log.close()
-    print(f"{args.output}: {len(evs)} events over {END_S:.1f} s (seed {args.seed})")
+    return len(evs)
+
+
+MANIFEST = {
+    "team_quad": "the team quad flight",
+    "dropout": "hover, 0.4 s publisher silence, return still armed, disarm and re-arm; NaN/Inf/out-of-range messages at 2.5, 3.0, 3.5, 4.0 s",
+    "flips": "punch-out with roll, full-yaw spins at low and high throttle, saturating roll+pitch flips",
+    "diff_drive": "wheeled robot: straight, spin in place, move(1.0, 0.9) and move(-1.0, 0.9) turns, reverse",
+}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("-o", "--output")
+    ap.add_argument("--all", metavar="DIR", help="write every scenario and MANIFEST.md into DIR")
+    ap.add_argument("--scenario", default="team_quad", choices=sorted(SCENARIOS))
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--setpoint-channel")
+    ap.add_argument("--pid-channel")
+    args = ap.parse_args()
+    if args.all:
+        os.makedirs(args.all, exist_ok=True)
+        lines = ["# Flight library", "", "Generated by `tools/make_flight.py --all test/data/flights --seed "
+                 f"{args.seed}`: deterministic, setpoints 50 Hz, pid 400 Hz, timing noise.", "",
+                 "| file | channels | duration | events | what |", "|---|---|---|---|---|"]
+        for name in sorted(SCENARIOS):
+            path = os.path.join(args.all, name + ".lcmlog")
+            n = write(path, args.seed, name)
+            ch = SCENARIOS[name][3]
+            lines.append(f"| {name}.lcmlog | {ch[0]} / {ch[1]} | {SCENARIOS[name][2]:.1f} s | {n} | {MANIFEST[name]} |")
+            print(f"{path}: {n} events")
+        with open(os.path.join(args.all, "MANIFEST.md"), "w") as f:
+            f.write("\n".join(lines) + "\n")
+        return
+    if not args.output:
+        ap.error("-o/--output or --all is required")
+    n = write(args.output, args.seed, args.scenario, args.setpoint_channel, args.pid_channel)
+    print(f"{args.output}: {n} events ({args.scenario}, seed {args.seed})")
 
 
 if __name__ == "__main__":

@@ -147,7 +147,10 @@ bool replay_log(const config::Config& config, const std::string& in_path,
           loop.on_undecodable();
         }
       }
-      if (accepted && config.publish == config::PublishMode::kOnInput) cycle_at(ev->timestamp);
+      if (options.cycle_on_every_input ||
+          (accepted && config.publish == config::PublishMode::kOnInput)) {
+        cycle_at(ev->timestamp);
+      }
     } else {
       ++summary.other_events;
     }

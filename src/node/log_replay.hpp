@@ -30,6 +30,10 @@ struct ReplaySummary {
 struct ReplayOptions {
   bool progress = false;  // a progress bar on `log`
   double tail_s = -1.0;   // loop time after the last event; < 0: twice the longest timeout
+  // Also run a cycle right after every input event, so the output log holds
+  // the result for every combination of inputs that is ever in force (what
+  // the golden files of the regression suite are made of).
+  bool cycle_on_every_input = false;
 };
 
 // Returns false (with a message on `log`) if a log cannot be read or written.

@@ -82,7 +82,7 @@ std::string read_bytes(const std::string& path) {
 TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
   ASSERT_TRUE(in_private_bus()) << "run this test through scripts/private-bus (ctest does)";
   const config::Config config = team_quad_config();
-  const std::string log_path = source_path("test/data/team_quad_flight.lcmlog");
+  const std::string log_path = source_path("test/data/flights/team_quad.lcmlog");
   const FlightLog flight = read_log(log_path, config.channels.setpoint, config.channels.pid);
   ASSERT_GT(flight.setpoints.size(), 100U);
   ASSERT_GT(flight.pids.size(), 1000U);
@@ -197,7 +197,7 @@ TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
 
 TEST(OfflineReplay, MatchesTheDocumentAndTheLiveProcess) {
   const config::Config config = team_quad_config();
-  const std::string log_path = source_path("test/data/team_quad_flight.lcmlog");
+  const std::string log_path = source_path("test/data/flights/team_quad.lcmlog");
   const FlightLog flight = read_log(log_path, config.channels.setpoint, config.channels.pid);
   const std::string dir = ::testing::TempDir();
   const auto a = replay_outputs(log_path, dir + "/replay_a.lcmlog", config.channels.motor_pwm);

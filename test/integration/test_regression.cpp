@@ -1,0 +1,178 @@
+// Regression suite: one flight from test/data/flights, one configuration.
+// lcm-logplayer replays the flight into a running `motormix run` on a private
+// bus; every recorded output is checked against the golden file (the offline
+// replay's output for the same pair of inputs, test/data/golden/NAME.csv)
+// and against the invariants: finite, within range, disarmed when the
+// setpoint in force says so. Correspondence is by the inputs each output
+// names, never by wall-clock timing.
+//
+//   regression_tests --flight F --config C --golden G [--set key=value ...]
+
+#include "integration/bus_recorder.hpp"
+#include "integration/process.hpp"
+#include "test_support.hpp"
+
+#include <motormix/setpoint_t.hpp>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace motormix::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct Args {
+  std::string flight;
+  std::string config;
+  std::string golden;
+  std::vector<std::string> overrides;
+};
+Args g_args;
+
+// Both sides are float32 from the same double computation.
+constexpr double kGoldenPwm = 1e-3;
+
+struct Golden {
+  std::map<std::pair<std::int64_t, std::int64_t>, std::vector<double>> armed;  // pwm then direction
+};
+
+Golden read_golden(const std::string& path) {
+  Golden g;
+  std::ifstream f(path);
+  EXPECT_TRUE(f.good()) << path << " (regenerate with scripts/regen-golden)";
+  for (std::string line; std::getline(f, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::stringstream s(line);
+    std::string cell;
+    std::vector<double> values;
+    std::int64_t sp = 0;
+    std::int64_t pid = 0;
+    for (int i = 0; std::getline(s, cell, ','); ++i) {
+      if (i == 0) {
+        sp = std::stoll(cell);
+      } else if (i == 1) {
+        pid = std::stoll(cell);
+      } else {
+        values.push_back(std::stod(cell));
+      }
+    }
+    g.armed[{sp, pid}] = values;
+  }
+  return g;
+}
+
+std::map<std::int64_t, bool> setpoint_armed(const std::string& log, const std::string& channel) {
+  std::map<std::int64_t, bool> out;
+  lcm::LogFile file(log, "r");
+  while (const lcm::LogEvent* ev = file.readNextEvent()) {
+    if (ev->channel != channel) continue;
+    setpoint_t m{};
+    if (m.decode(ev->data, 0, static_cast<int>(ev->datalen)) > 0) out[m.utime] = m.armed;
+  }
+  return out;
+}
+
+TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
+  const char* flag = std::getenv("MOTORMIX_PRIVATE_BUS");
+  ASSERT_TRUE(flag && std::string(flag) == "1") << "run through scripts/private-bus";
+  const std::string config_path = source_path("config/" + g_args.config);
+  const std::string flight = source_path("test/data/flights/" + g_args.flight + ".lcmlog");
+  const config::Config config = config::load_config_file(config_path, g_args.overrides);
+  const Golden golden = read_golden(source_path("test/data/golden/" + g_args.golden + ".csv"));
+  ASSERT_GT(golden.armed.size(), 100U);
+  const auto armed_by_setpoint = setpoint_armed(flight, config.channels.setpoint);
+
+  BusRecorder bus(config.channels.motor_pwm, config.channels.status);
+  std::vector<std::string> argv = {MOTORMIX_BINARY, "run", "--config", config_path};
+  for (const auto& o : g_args.overrides) {
+    argv.push_back("--set");
+    argv.push_back(o);
+  }
+  ChildProcess mixer(argv);
+  ASSERT_TRUE(bus.wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
+  ChildProcess player({"lcm-logplayer", flight});
+  ASSERT_EQ(player.wait_for(120s), 0);
+  const std::int64_t last_setpoint = armed_by_setpoint.rbegin()->first;
+  ASSERT_TRUE(bus.wait_until(
+      [&](const auto& pwm, const auto&) {
+        return !pwm.empty() && pwm.back().setpoint_utime == last_setpoint;
+      },
+      10s));
+  mixer.signal(SIGTERM);
+  ASSERT_EQ(mixer.wait_for(10s), 0);
+
+  const int n = config.motors();
+  std::size_t armed = 0;
+  std::size_t compared = 0;
+  for (const motor_pwm_t& out : bus.pwm()) {
+    ASSERT_EQ(out.num_motors, n);
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const OutputChannel& ch = config.outputs[k];
+      ASSERT_TRUE(std::isfinite(out.pwm[k]));
+      if (out.armed) {
+        ASSERT_GE(out.pwm[k], ch.min);
+        ASSERT_LE(out.pwm[k], ch.max);
+      } else {
+        ASSERT_EQ(out.pwm[k], static_cast<float>(ch.disarmed));
+        ASSERT_EQ(out.direction[k], 0);
+      }
+    }
+    const auto sp = armed_by_setpoint.find(out.setpoint_utime);
+    if (sp != armed_by_setpoint.end() && !sp->second) {
+      ASSERT_FALSE(out.armed) << "armed output while the setpoint in force says disarmed";
+    }
+    if (!out.armed) continue;
+    ++armed;
+    const auto g = golden.armed.find({out.setpoint_utime, out.pid_utime});
+    ASSERT_NE(g, golden.armed.end()) << "armed output for inputs (" << out.setpoint_utime << ", "
+                                     << out.pid_utime << ") that the golden replay never armed";
+    ++compared;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      ASSERT_NEAR(out.pwm[k], g->second[k], kGoldenPwm) << "motor " << i;
+      ASSERT_EQ(out.direction[k], static_cast<int>(g->second[k + static_cast<std::size_t>(n)]));
+    }
+  }
+  // Armed for (nearly) as long as the flight asks: the share of armed
+  // setpoints times the flight's duration, at the loop rate.
+  std::size_t armed_setpoints = 0;
+  for (const auto& [utime, is_armed] : armed_by_setpoint) armed_setpoints += is_armed;
+  const double span_s =
+      static_cast<double>(armed_by_setpoint.rbegin()->first - armed_by_setpoint.begin()->first) /
+      1e6;
+  const double expected = static_cast<double>(armed_setpoints) /
+                          static_cast<double>(armed_by_setpoint.size()) * span_s *
+                          config.loop_rate_hz;
+  EXPECT_GT(static_cast<double>(armed), 0.8 * expected);
+  EXPECT_EQ(compared, armed);
+}
+
+}  // namespace
+}  // namespace motormix::test
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  auto& a = motormix::test::g_args;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string key = argv[i];
+    const std::string value = argv[i + 1];
+    if (key == "--flight") a.flight = value;
+    if (key == "--config") a.config = value;
+    if (key == "--golden") a.golden = value;
+    if (key == "--set") a.overrides.push_back(value);
+  }
+  if (a.flight.empty() || a.config.empty() || a.golden.empty()) {
+    std::fprintf(stderr,
+                 "usage: regression_tests --flight F --config C --golden G [--set k=v ...]\n");
+    return 2;
+  }
+  return RUN_ALL_TESTS();
+}

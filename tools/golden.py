@@ -1,0 +1,48 @@
+#!/usr/bin/env python3
+"""Turns a `motormix replay --every-input` log into a golden file: for every
+pair of inputs (setpoint utime, pid utime) for which the mixer produced armed
+outputs, those outputs. Plain CSV, one line per pair, sorted, so a change in
+the mixer shows up as a reviewable diff.
+
+    tools/golden.py REPLAY.lcmlog --title "..." -o GOLDEN.csv
+"""
+
+import argparse
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import lcm_python  # noqa: E402
+
+lcm_python.add_types_path()
+import lcm  # noqa: E402
+from motormix import motor_pwm_t  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("log")
+    ap.add_argument("--channel", help="the motor_pwm channel (default: every event of that type)")
+    ap.add_argument("--title", default="")
+    ap.add_argument("-o", "--output", required=True)
+    args = ap.parse_args()
+    rows = {}
+    for ev in lcm.EventLog(args.log, "r"):
+        if args.channel and ev.channel != args.channel:
+            continue
+        try:
+            m = motor_pwm_t.decode(ev.data)  # the type's fingerprint picks the outputs out
+        except ValueError:
+            continue
+        if m.armed:
+            rows[(m.setpoint_utime, m.pid_utime)] = list(m.pwm) + list(m.direction)
+    with open(args.output, "w") as f:
+        f.write(f"# {args.title}\n")
+        f.write("# setpoint_utime,pid_utime,pwm per motor...,direction per motor...\n")
+        for (sp, pid), values in sorted(rows.items()):
+            f.write(f"{sp},{pid}," + ",".join(repr(float(v)) if isinstance(v, float) else str(v) for v in values) + "\n")
+    print(f"{args.output}: {len(rows)} input pairs")
+
+
+if __name__ == "__main__":
+    main()
