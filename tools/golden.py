@@ -36,11 +36,15 @@ def main():
             continue
         if m.armed:
             rows[(m.setpoint_utime, m.pid_utime)] = list(m.pwm) + list(m.direction)
+    # Directions only where an output uses them (H-bridges); PWM to 0.001.
+    with_direction = any(any(v != 0 for v in values[len(values) // 2:]) for values in rows.values())
     with open(args.output, "w") as f:
         f.write(f"# {args.title}\n")
-        f.write("# setpoint_utime,pid_utime,pwm per motor...,direction per motor...\n")
+        f.write("# setpoint_utime,pid_utime,pwm per motor" + (",direction per motor" if with_direction else "") + "\n")
         for (sp, pid), values in sorted(rows.items()):
-            f.write(f"{sp},{pid}," + ",".join(repr(float(v)) if isinstance(v, float) else str(v) for v in values) + "\n")
+            n = len(values) // 2
+            cells = [f"{v:.3f}" for v in values[:n]] + ([str(v) for v in values[n:]] if with_direction else [])
+            f.write(f"{sp},{pid}," + ",".join(cells) + "\n")
     print(f"{args.output}: {len(rows)} input pairs")
 
 

@@ -109,7 +109,24 @@ class Node {
     if (now_us >= next_status_us_) {
       publish_status(r);
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
+      warn_about_rejections(now_us);
     }
+  }
+
+  // At most one line per second, and only when something was rejected: a
+  // flood of bad input cannot flood the log.
+  void warn_about_rejections(std::int64_t now_us) {
+    const Counters& c = loop_.counters();
+    const std::int64_t total = c.rejected_decode + c.rejected_nonfinite + c.rejected_range +
+                               c.rejected_out_of_order + c.rejected_future;
+    if (total == warned_total_ || now_us - last_warning_us_ < 1'000'000) return;
+    log_ << "motormix: warning: " << total - warned_total_
+         << " input messages rejected since the last warning (totals: undecodable "
+         << c.rejected_decode << ", non-finite " << c.rejected_nonfinite << ", out of range "
+         << c.rejected_range << ", out of order " << c.rejected_out_of_order << ", from the future "
+         << c.rejected_future << ")" << std::endl;
+    warned_total_ = total;
+    last_warning_us_ = now_us;
   }
 
   void add_overruns(std::uint64_t missed) { overruns_ += static_cast<std::int64_t>(missed); }
@@ -184,6 +201,8 @@ class Node {
   std::int64_t next_status_us_ = 0;
   std::int64_t last_cycle_us_ = 0;
   std::int64_t overruns_ = 0;
+  std::int64_t warned_total_ = 0;
+  std::int64_t last_warning_us_ = 0;
   bool new_pid_ = false;
   WindowStats period_stats_;
   WindowStats compute_stats_;

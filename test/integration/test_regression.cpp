@@ -36,8 +36,12 @@ struct Args {
 };
 Args g_args;
 
-// Both sides are float32 from the same double computation.
+// Golden PWM is written to 0.001 (both sides come from the same double
+// computation, so only that rounding separates them).
 constexpr double kGoldenPwm = 1e-3;
+// Twice real time: the flights keep their meaning (a 0.4 s silence is still
+// longer than any timeout) and the suite runs in half the time.
+constexpr int kPlaybackSpeed = 2;
 
 struct Golden {
   std::map<std::pair<std::int64_t, std::int64_t>, std::vector<double>> armed;  // pwm then direction
@@ -97,7 +101,7 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
   }
   ChildProcess mixer(argv);
   ASSERT_TRUE(bus.wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
-  ChildProcess player({"lcm-logplayer", flight});
+  ChildProcess player({"lcm-logplayer", "-s", std::to_string(kPlaybackSpeed), flight});
   ASSERT_EQ(player.wait_for(120s), 0);
   const std::int64_t last_setpoint = armed_by_setpoint.rbegin()->first;
   ASSERT_TRUE(bus.wait_until(
@@ -138,11 +142,14 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
     for (int i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
       ASSERT_NEAR(out.pwm[k], g->second[k], kGoldenPwm) << "motor " << i;
-      ASSERT_EQ(out.direction[k], static_cast<int>(g->second[k + static_cast<std::size_t>(n)]));
+      const bool has_direction = g->second.size() == 2 * static_cast<std::size_t>(n);
+      const int direction =
+          has_direction ? static_cast<int>(g->second[k + static_cast<std::size_t>(n)]) : 0;
+      ASSERT_EQ(out.direction[k], direction);
     }
   }
   // Armed for (nearly) as long as the flight asks: the share of armed
-  // setpoints times the flight's duration, at the loop rate.
+  // setpoints times the flight's duration (played faster), at the loop rate.
   std::size_t armed_setpoints = 0;
   for (const auto& [utime, is_armed] : armed_by_setpoint) armed_setpoints += is_armed;
   const double span_s =
@@ -150,7 +157,7 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
       1e6;
   const double expected = static_cast<double>(armed_setpoints) /
                           static_cast<double>(armed_by_setpoint.size()) * span_s *
-                          config.loop_rate_hz;
+                          config.loop_rate_hz / kPlaybackSpeed;
   EXPECT_GT(static_cast<double>(armed), 0.8 * expected);
   EXPECT_EQ(compared, armed);
 }
