@@ -2,9 +2,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 namespace motormix::config {
@@ -29,6 +31,47 @@ std::string fixed(double v, int width = 8) {
 std::string detail(const Config& c, int i) {
   const auto& d = c.vehicle.motor_details;
   return static_cast<std::size_t>(i) < d.size() ? d[static_cast<std::size_t>(i)] : "";
+}
+
+// Top view of a rotor vehicle (front up, right to the right), recovered from
+// its effectiveness matrix: for upright rotors, pitch effectiveness is x and
+// roll effectiveness is -y; the sign of yaw gives the spin. Coaxial rotors
+// share a spot. Tables and wheels have no positions to draw.
+std::string diagram(const Config& c) {
+  if (!c.vehicle.effectiveness || c.wheel_base) return "";
+  const EffectivenessMatrix& e = *c.vehicle.effectiveness;
+  constexpr int kRows = 9;
+  constexpr int kCols = 41;
+  double extent = 0.0;
+  for (Eigen::Index i = 0; i < e.cols(); ++i) {
+    extent =
+        std::max({extent, std::abs(e(index(Axis::kRoll), i)), std::abs(e(index(Axis::kPitch), i))});
+  }
+  if (extent <= 0.0) return "";
+  std::vector<std::string> grid(kRows, std::string(kCols, ' '));
+  std::map<std::pair<int, int>, std::string> spots;
+  for (Eigen::Index i = 0; i < e.cols(); ++i) {
+    const double x = e(index(Axis::kPitch), i) / extent;
+    const double y = -e(index(Axis::kRoll), i) / extent;
+    const int row = static_cast<int>(std::lround((1.0 - x) * (kRows - 1) / 2.0));
+    const int col = static_cast<int>(std::lround((1.0 + y) * (kCols - 9) / 2.0)) + 4;
+    std::string& label = spots[{row, col}];
+    label += (label.empty() ? "" : "/") + std::to_string(i + 1) +
+             (e(index(Axis::kYaw), i) > 0 ? "ccw" : "cw");
+  }
+  grid[(kRows - 1) / 2][kCols / 2] = '+';
+  for (const auto& [at, label] : spots) {
+    const int start = std::clamp(at.second - static_cast<int>(label.size()) / 2, 0,
+                                 kCols - static_cast<int>(label.size()));
+    grid[static_cast<std::size_t>(at.first)].replace(static_cast<std::size_t>(start), label.size(),
+                                                     label);
+  }
+  std::string out = std::string(kCols / 2 - 2, ' ') + "front\n";
+  for (const std::string& line : grid) {
+    const auto end = line.find_last_not_of(' ');
+    out += (end == std::string::npos ? "" : line.substr(0, end + 1)) + "\n";
+  }
+  return out;
 }
 
 std::string table(const Config& c) {
@@ -57,6 +100,8 @@ std::string table(const Config& c) {
   for (int a = 0; a < kNumAxes; ++a)
     s << " " << kAxisNames[static_cast<std::size_t>(a)] << " " << fixed(authority[a], 0);
   s << "\n";
+  const std::string top_view = diagram(c);
+  if (!top_view.empty()) s << "\ntop view (motor number, spin seen from above):\n" << top_view;
   return s.str();
 }
 
