@@ -61,6 +61,18 @@ class MatrixAllocator : public Allocator {
   CommandRange range_;
 };
 
+// The shifts k along a direction d for which every motor of u + k d is in
+// range. Motors with d <= 0 cannot be moved by the shift: if one of them is
+// out of range, no shift helps and the interval is empty.
+struct ShiftInterval {
+  double lo;
+  double hi;
+  bool empty() const { return lo > hi; }
+  // The smallest move that lands inside (0 when already inside).
+  double smallest() const { return lo > 0.0 ? lo : (hi < 0.0 ? hi : 0.0); }
+};
+ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, CommandRange range);
+
 // Fills saturation flags and the unallocated demand by comparing `target` with
 // what `commands` produce through `effectiveness`. Shared by all strategies so
 // they report alike.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace motormix {
 
@@ -30,6 +31,20 @@ AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
     }
   }
   return result;
+}
+
+ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, CommandRange range) {
+  ShiftInterval k{-std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};
+  for (Eigen::Index i = 0; i < u.size(); ++i) {
+    if (d[i] <= 0.0) {
+      if (u[i] < range.lower || u[i] > range.upper) return {1.0, -1.0};
+      continue;
+    }
+    k.lo = std::max(k.lo, (range.lower - u[i]) / d[i]);
+    k.hi = std::min(k.hi, (range.upper - u[i]) / d[i]);
+  }
+  return k;
 }
 
 MatrixAllocator::MatrixAllocator(const MixingMatrix& mixing, CommandRange range)

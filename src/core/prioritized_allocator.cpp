@@ -80,27 +80,6 @@ void PrioritizedAllocator::mix_yaw(double yaw, MotorVector& u, AxisVector& effec
 
 namespace {
 
-// Shifts k along `d` (entries > 0) that keep lo <= u + k d <= hi; empty when
-// lo > hi.
-struct ShiftInterval {
-  double lo;
-  double hi;
-};
-
-ShiftInterval shift_interval(const MotorVector& u, const MotorVector& d, CommandRange r) {
-  ShiftInterval k{-std::numeric_limits<double>::infinity(),
-                  std::numeric_limits<double>::infinity()};
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    if (d[i] <= 0.0) {
-      if (u[i] < r.lower || u[i] > r.upper) return {1.0, -1.0};  // this motor cannot be moved
-      continue;
-    }
-    k.lo = std::max(k.lo, (r.lower - u[i]) / d[i]);
-    k.hi = std::min(k.hi, (r.upper - u[i]) / d[i]);
-  }
-  return k;
-}
-
 // Bisection iterations for the largest scale that still fits: 2^-50 of full.
 constexpr int kBisections = 50;
 
@@ -110,10 +89,10 @@ void PrioritizedAllocator::repair(AxisVector& effective, MotorVector& u) const {
   const bool may_raise = airmode_ != Airmode::kOff;
   // Fits after the best allowed thrust shift? Returns the shift, or NaN.
   const auto fit = [&](const MotorVector& candidate) {
-    ShiftInterval k = shift_interval(candidate, thrust_, range_);
+    ShiftInterval k = feasible_shifts(candidate, thrust_, range_);
     if (!may_raise) k.hi = std::min(k.hi, 0.0);
-    if (k.lo > k.hi) return std::numeric_limits<double>::quiet_NaN();
-    return std::clamp(0.0, k.lo, k.hi);
+    if (k.empty()) return std::numeric_limits<double>::quiet_NaN();
+    return k.smallest();
   };
   const auto mix_with = [&](double yaw_scale, double rp_scale) {
     MotorVector candidate = thrust_ * effective[index(Axis::kThrust)] +

@@ -6,28 +6,6 @@
 
 namespace motormix {
 
-namespace {
-
-// The interval of shifts k for which lo <= u + k d <= hi holds for every
-// motor; empty when lo > hi.
-struct Interval {
-  double lo = -std::numeric_limits<double>::infinity();
-  double hi = std::numeric_limits<double>::infinity();
-  bool empty() const { return lo > hi; }
-};
-
-Interval feasible_shifts(const MotorVector& u, const MotorVector& d, CommandRange r) {
-  Interval k;
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    if (d[i] <= 0.0) continue;  // such a motor cannot be moved by a shift
-    k.lo = std::max(k.lo, (r.lower - u[i]) / d[i]);
-    k.hi = std::min(k.hi, (r.upper - u[i]) / d[i]);
-  }
-  return k;
-}
-
-}  // namespace
-
 ShiftAllocator::ShiftAllocator(const MixingMatrix& mixing, CommandRange range)
     : MatrixAllocator(mixing, range) {
   direction_ = mixing.col(index(Axis::kThrust));
@@ -41,7 +19,7 @@ ShiftAllocator::ShiftAllocator(const MixingMatrix& mixing, CommandRange range)
 
 AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
   mix_linear(demand, commands);
-  Interval k = feasible_shifts(commands, direction_, range_);
+  ShiftInterval k = feasible_shifts(commands, direction_, range_);
   if (k.empty()) {
     // The spread alone does not fit: shrink the part that is not along the
     // shift direction about the mean, just enough, then shift.
@@ -54,7 +32,7 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
     k = feasible_shifts(commands, direction_, range_);
   }
   // The smallest shift that lands inside (0 when already inside).
-  const double shift = k.empty() ? 0.0 : std::clamp(0.0, k.lo, k.hi);
+  const double shift = k.empty() ? 0.0 : k.smallest();
   commands += shift * direction_;
   return finish(demand, commands);
 }
