@@ -25,12 +25,8 @@ class OptimalAllocator final : public MatrixAllocator {
   std::string_view name() const override { return "optimal"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
-  // Iterations used by the last call (for tests and benchmarks).
-  int last_iterations() const { return last_iterations_; }
-
  private:
   OptimalSettings settings_;
-  mutable int last_iterations_ = 0;
 };
 
 // The weighted squared error |W (E u - d)|^2 that `optimal` minimizes, for

@@ -67,8 +67,7 @@ AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVecto
   Eigen::Matrix<int, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxMotors, 1> free_index(n);
   Eigen::ColPivHouseholderQR<StackedMatrix> qr(kNumAxes + n, n);
 
-  int iteration = 0;
-  for (; iteration < settings_.max_iterations; ++iteration) {
+  for (int iteration = 0; iteration < settings_.max_iterations; ++iteration) {
     Eigen::Index nf = 0;
     for (Eigen::Index i = 0; i < n; ++i) {
       if (active[i] == kFree) free_index[nf++] = static_cast<int>(i);
@@ -116,7 +115,6 @@ AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVecto
     if (release < 0) break;
     active[release] = kFree;
   }
-  last_iterations_ = iteration;
   return finish(demand, commands);
 }
 

@@ -1,0 +1,99 @@
+// The per-cycle path allocates nothing: every strategy and the output stage,
+// on saturating and non-finite demands. Two nets: a counting global operator
+// new (std::vector, std::string, ...), and Eigen's own malloc guard (this
+// target compiles the core with EIGEN_RUNTIME_NO_MALLOC and assertions on,
+// so an Eigen heap allocation aborts the test).
+
+#include <motormix/budget_allocator.hpp>
+#include <motormix/clip_allocator.hpp>
+#include <motormix/legacy_budget_allocator.hpp>
+#include <motormix/mixer.hpp>
+#include <motormix/optimal_allocator.hpp>
+#include <motormix/presets.hpp>
+#include <motormix/prioritized_allocator.hpp>
+#include <motormix/shift_allocator.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <limits>
+#include <new>
+#include <random>
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (g_counting) ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace motormix {
+namespace {
+
+std::vector<std::unique_ptr<Mixer>> mixers_for(const MixingMatrix& m, bool wheels) {
+  const CommandRange range = wheels ? CommandRange{-1.0, 1.0} : CommandRange{0.0, 1.0};
+  OutputChannel ch;
+  ch.slew_per_s = 1e5;
+  ch.thrust_model_factor = wheels ? 0.0 : 0.3;
+  if (wheels) ch.mode = OutputMode::kMagnitudeDirection;
+  const std::vector<OutputChannel> outputs(static_cast<std::size_t>(m.rows()), ch);
+  const ThrustRange thrust = wheels ? ThrustRange::kBipolar : ThrustRange::kUnipolar;
+  std::vector<std::unique_ptr<Mixer>> out;
+  const auto add = [&](std::unique_ptr<const Allocator> a) {
+    out.push_back(std::make_unique<Mixer>(std::move(a), OutputStage(outputs), thrust));
+  };
+  add(std::make_unique<ClipAllocator>(m, range));
+  add(std::make_unique<ShiftAllocator>(m, range));
+  for (Airmode am : {Airmode::kOff, Airmode::kRollPitch, Airmode::kRollPitchYaw}) {
+    add(std::make_unique<PrioritizedAllocator>(m, range, am, 0.15));
+  }
+  add(std::make_unique<OptimalAllocator>(m, range, OptimalSettings{}));
+  if (!wheels) {
+    add(std::make_unique<LegacyBudgetAllocator>(m, LegacyBudgets{}));
+    add(std::make_unique<BudgetAllocator>(m, LegacyBudgets{}));
+  }
+  return out;
+}
+
+TEST(NoHeap, EveryStrategyMixesWithoutAllocating) {
+  for (const char* name : {"quad_x", "octo_coax_x8", "team_quad", "skid_steer_6"}) {
+    SCOPED_TRACE(name);
+    const Vehicle v = *find_preset(name);
+    const bool wheels = v.thrust_range == ThrustRange::kBipolar;
+    const MixingMatrix m =
+        v.mixing_table
+            ? *v.mixing_table
+            : derive_mixing(*v.effectiveness, v.controlled, Normalization::kAxisMax).mixing;
+    const auto mixers = mixers_for(m, wheels);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> wide(-2.0, 2.0);
+    std::vector<AxisVector> demands(2000);
+    for (auto& d : demands) d << wide(rng), wide(rng), wide(rng), wide(rng);
+    demands[7][0] = std::numeric_limits<double>::quiet_NaN();
+    MixerOutput out;
+    mixers.front()->mix(demands[0], out);  // sizes `out` once, outside the count
+    Eigen::internal::set_is_malloc_allowed(false);
+    g_allocations = 0;
+    g_counting = true;
+    for (const auto& mixer : mixers) {
+      for (const AxisVector& d : demands) mixer->mix(d, out, 0.0025);
+      mixer->disarm(out);
+    }
+    g_counting = false;
+    Eigen::internal::set_is_malloc_allowed(true);
+    EXPECT_EQ(g_allocations.load(), 0);
+  }
+}
+
+}  // namespace
+}  // namespace motormix
