@@ -259,10 +259,15 @@ TEST_F(ProcessSafety, LoopKeepsItsRate) {
         10s));
     const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     const double measured = static_cast<double>(rate * 2) / seconds;
-    EXPECT_NEAR(measured, rate, 0.15 * rate);
+    // Generous: a loaded two-core machine delays wake-ups, and the loop does
+    // not run missed cycles back to back (they would only repeat stale
+    // inputs). It must never run fast, and never fall far behind.
+    EXPECT_LE(measured, 1.05 * rate);
+    EXPECT_GE(measured, 0.6 * rate);
     ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return s.size() >= 3; }, 5s));
     const auto status = bus_->status().back();
-    EXPECT_NEAR(status.period_us[1], 1e6 / rate, 0.15 * 1e6 / rate);  // mean period
+    EXPECT_GE(status.period_us[1], 0.95 * 1e6 / rate);  // mean period
+    EXPECT_LE(status.period_us[1], 1.6 * 1e6 / rate);
     EXPECT_GT(status.compute_us[2], 0.0F);
     mixer_->signal(SIGTERM);
     EXPECT_EQ(mixer_->wait_for(10s), 0);
