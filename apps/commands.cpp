@@ -67,7 +67,7 @@ int run(const RunCommand& cmd) {
 int mix(const MixCommand& cmd) {
   const auto config = load(cmd.common);
   if (!config) return kExitUsage;
-  const double throttle_low = config->thrust_range() == ThrustRange::kUnipolar ? 0.0 : -1.0;
+  const double throttle_low = thrust_floor(config->thrust_range());
   if (!check_range("throttle", cmd.throttle, throttle_low, 1.0) ||
       !check_range("roll", cmd.roll, -1.0, 1.0) || !check_range("pitch", cmd.pitch, -1.0, 1.0) ||
       !check_range("yaw", cmd.yaw, -1.0, 1.0)) {

@@ -59,6 +59,7 @@ class MatrixAllocator : public Allocator {
   MixingMatrix mixing_;
   EffectivenessMatrix effectiveness_;
   CommandRange range_;
+  AxisMask controlled_;
 };
 
 // The shifts k along a direction d for which every motor of u + k d is in
@@ -76,9 +77,11 @@ ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, Comman
 // Fills saturation flags and the unallocated demand by comparing `target` with
 // what `commands` produce through `effectiveness`. Shared by all strategies so
 // they report alike.
+// Axes outside `controlled` (roll and pitch of a wheeled vehicle) are not
+// commanded at all: a demand there is ignored, not reported as undelivered.
 AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
-                                     CommandRange range);
+                                     CommandRange range, AxisMask controlled);
 
 // Demand differences below this count as delivered (normalized units).
 inline constexpr double kDeliveredTolerance = 1e-6;

@@ -23,6 +23,11 @@ using AxisVector = Eigen::Matrix<double, kNumAxes, 1>;
 // drive both ways (-1..1).
 enum class ThrustRange : std::uint8_t { kUnipolar, kBipolar };
 
+// Lowest thrust (throttle) demand of the range; the highest is always 1.
+constexpr double thrust_floor(ThrustRange range) {
+  return range == ThrustRange::kUnipolar ? 0.0 : -1.0;
+}
+
 constexpr int index(Axis axis) { return static_cast<int>(axis); }
 constexpr std::uint8_t bit(Axis axis) { return static_cast<std::uint8_t>(1U << index(axis)); }
 

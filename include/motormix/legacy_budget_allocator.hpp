@@ -20,17 +20,14 @@ struct LegacyBudgets {
   double yaw = 0.15;
 };
 
-class LegacyBudgetAllocator final : public Allocator {
+class LegacyBudgetAllocator final : public MatrixAllocator {
  public:
   LegacyBudgetAllocator(const MixingMatrix& mixing, LegacyBudgets budgets);
 
   std::string_view name() const override { return "legacy_budget"; }
-  int motors() const override { return static_cast<int>(mixing_.rows()); }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
  private:
-  MixingMatrix mixing_;
-  EffectivenessMatrix effectiveness_;
   LegacyBudgets budgets_;
 };
 

@@ -12,8 +12,7 @@
 namespace motormix::config {
 
 CommandRange command_range(const Config& config) {
-  return config.thrust_range() == ThrustRange::kBipolar ? CommandRange{-1.0, 1.0}
-                                                        : CommandRange{0.0, 1.0};
+  return CommandRange{thrust_floor(config.thrust_range()), 1.0};
 }
 
 Mixer build_mixer(const Config& config) {

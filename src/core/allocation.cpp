@@ -13,7 +13,7 @@ constexpr double kSaturationTolerance = 1e-9;
 
 AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
-                                     CommandRange range) {
+                                     CommandRange range, AxisMask controlled) {
   AllocationResult result;
   for (Eigen::Index i = 0; i < commands.size(); ++i) {
     if (commands[i] >= range.upper - kSaturationTolerance) {
@@ -26,6 +26,7 @@ AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
   const AxisVector produced = effectiveness * commands;
   result.unallocated = target - produced;
   for (int a = 0; a < kNumAxes; ++a) {
+    if (!((controlled >> a) & 1U)) result.unallocated[a] = 0.0;
     if (std::abs(result.unallocated[a]) > kDeliveredTolerance) {
       result.axis_limited |= static_cast<std::uint8_t>(1U << a);
     }
@@ -48,7 +49,10 @@ ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, Comman
 }
 
 MatrixAllocator::MatrixAllocator(const MixingMatrix& mixing, CommandRange range)
-    : mixing_(mixing), effectiveness_(effectiveness_of(mixing)), range_(range) {}
+    : mixing_(mixing),
+      effectiveness_(effectiveness_of(mixing)),
+      range_(range),
+      controlled_(controlled_axes(mixing)) {}
 
 void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands) const {
   commands.noalias() = mixing_ * demand;
@@ -60,7 +64,7 @@ AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& 
     commands[i] = std::isnan(commands[i]) ? range_.lower
                                           : std::clamp(commands[i], range_.lower, range_.upper);
   }
-  return describe_allocation(effectiveness_, target, commands, range_);
+  return describe_allocation(effectiveness_, target, commands, range_, controlled_);
 }
 
 }  // namespace motormix

@@ -5,7 +5,7 @@
 namespace motormix {
 
 LegacyBudgetAllocator::LegacyBudgetAllocator(const MixingMatrix& mixing, LegacyBudgets budgets)
-    : mixing_(mixing), effectiveness_(effectiveness_of(mixing)), budgets_(budgets) {}
+    : MatrixAllocator(mixing, CommandRange{0.0, 1.0}), budgets_(budgets) {}
 
 AllocationResult LegacyBudgetAllocator::allocate(const AxisVector& demand,
                                                  MotorVector& commands) const {
@@ -37,7 +37,7 @@ AllocationResult LegacyBudgetAllocator::allocate(const AxisVector& demand,
   target[index(Axis::kPitch)] *= budgets_.roll_pitch;
   target[index(Axis::kYaw)] *= budgets_.yaw;
   target[index(Axis::kThrust)] *= budgets_.throttle;
-  return describe_allocation(effectiveness_, target, commands, CommandRange{0.0, 1.0});
+  return finish(target, commands);
 }
 
 }  // namespace motormix

@@ -16,7 +16,7 @@ MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out, double dt_s) co
     disarm(out);
     return MixStatus::kNonFiniteDemand;
   }
-  const double thrust_low = thrust_range_ == ThrustRange::kUnipolar ? 0.0 : -1.0;
+  const double thrust_low = thrust_floor(thrust_range_);
   AxisVector clamped;
   clamped << std::clamp(demand[index(Axis::kRoll)], -1.0, 1.0),
       std::clamp(demand[index(Axis::kPitch)], -1.0, 1.0),

@@ -37,7 +37,7 @@ const char* to_string(Rejection rejection) {
 Rejection check_setpoint(const SetpointSample& s, ThrustRange thrust_range,
                          std::int64_t last_utime) {
   if (!std::isfinite(s.throttle) || !std::isfinite(s.yaw)) return Rejection::kNonFinite;
-  const double throttle_low = thrust_range == ThrustRange::kUnipolar ? 0.0 : -1.0;
+  const double throttle_low = thrust_floor(thrust_range);
   if (!in(s.throttle, throttle_low, 1.0) || !in(s.yaw, -1.0, 1.0)) return Rejection::kOutOfRange;
   return check_order(s.utime, last_utime);
 }

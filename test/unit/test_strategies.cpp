@@ -158,6 +158,18 @@ TEST(ShiftStrategy, Seed002DesaturationKeepsTheTurn) {
   EXPECT_NEAR(out.command[1], 1.0, kAllocation);
 }
 
+TEST(ShiftStrategy, WheelsIgnoreRollAndPitch) {
+  const auto c = config::load_config_text("geometry: {preset: differential_drive}\n", "w.yaml");
+  const Mixer mixer = config::build_mixer(c);
+  MixerOutput with;
+  MixerOutput without;
+  mixer.mix(AxisVector(0.5, -0.5, 0.2, 0.3), with);
+  mixer.mix(AxisVector(0.0, 0.0, 0.2, 0.3), without);
+  EXPECT_EQ(with.command, without.command);
+  EXPECT_EQ(with.allocation.axis_limited, 0);  // not commanded, so not "undelivered"
+  EXPECT_EQ(with.allocation.unallocated[index(Axis::kRoll)], 0.0);
+}
+
 TEST(ShiftStrategy, AircraftKeepTorquesAndGiveUpThrust) {
   const auto c =
       config::load_config_text("geometry: {preset: quad_x}\nmixer: {strategy: shift}\n", "q.yaml");
