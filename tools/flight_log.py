@@ -13,40 +13,39 @@ lcm_python.add_types_path()
 import lcm  # noqa: E402
 from motormix import mixer_status_t, motor_pwm_t, pid_t, setpoint_t  # noqa: E402
 
-DEFAULT_CHANNELS = {
-    "setpoint": "pos_deseada",
-    "pid": "pid",
-    "motor_pwm": "motor_pwm",
-    "status": "MIXER_STATUS",
-}
+TYPES = (("setpoint", setpoint_t), ("pid", pid_t), ("pwm", motor_pwm_t), ("status", mixer_status_t))
 
 
 class Flight:
-    """Arrays per channel; times in seconds from the first event of the log."""
+    """Arrays per message type; times in seconds from the first event of the log.
+
+    Messages are told apart by their LCM type fingerprint, not by channel
+    name, so any log works: the bundled flights, `motormix replay` output, or
+    a recording made with lcm-logger under any channel names. Pass
+    `channels={"setpoint": NAME, ...}` to read only those channels.
+    """
 
     def __init__(self, path, channels=None):
-        channels = dict(DEFAULT_CHANNELS, **(channels or {}))
-        decoders = {
-            channels["setpoint"]: ("setpoint", setpoint_t),
-            channels["pid"]: ("pid", pid_t),
-            channels["motor_pwm"]: ("pwm", motor_pwm_t),
-            channels["status"]: ("status", mixer_status_t),
-        }
-        rows = {k: [] for k in ("setpoint", "pid", "pwm", "status")}
+        wanted = {v: k for k, v in (channels or {}).items()}
+        rows = {k: [] for k, _ in TYPES}
         self.undecodable = 0
         t0 = None
         for event in lcm.EventLog(path, "r"):
             if t0 is None:
                 t0 = event.timestamp
-            kind = decoders.get(event.channel)
-            if kind is None:
+            if wanted and event.channel not in wanted:
                 continue
-            try:
-                msg = kind[1].decode(event.data)
-            except Exception:  # a corrupt or foreign message: counted, not fatal
+            for kind, cls in TYPES:
+                if wanted and wanted[event.channel] != kind:
+                    continue
+                try:
+                    msg = cls.decode(event.data)
+                except Exception:  # another type, or corrupt: try the next
+                    continue
+                rows[kind].append(((event.timestamp - t0) / 1e6, msg))
+                break
+            else:
                 self.undecodable += 1
-                continue
-            rows[kind[0]].append(((event.timestamp - t0) / 1e6, msg))
         self.path = path
         self.setpoint_t = np.array([t for t, _ in rows["setpoint"]])
         self.throttle = np.array([m.throttle for _, m in rows["setpoint"]])
