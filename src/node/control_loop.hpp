@@ -52,6 +52,11 @@ struct Counters {
   std::int64_t rejected_future = 0;
   std::int64_t failsafe_events = 0;
   std::int64_t arming_refused = 0;  // armed requests refused by the arming check
+
+  std::int64_t rejected() const {
+    return rejected_decode + rejected_nonfinite + rejected_range + rejected_out_of_order +
+           rejected_future;
+  }
 };
 
 struct CycleResult {

@@ -117,8 +117,7 @@ class Node {
   // flood of bad input cannot flood the log.
   void warn_about_rejections(std::int64_t now_us) {
     const Counters& c = loop_.counters();
-    const std::int64_t total = c.rejected_decode + c.rejected_nonfinite + c.rejected_range +
-                               c.rejected_out_of_order + c.rejected_future;
+    const std::int64_t total = c.rejected();
     if (total == warned_total_ || now_us - last_warning_us_ < 1'000'000) return;
     log_ << "motormix: warning: " << total - warned_total_
          << " input messages rejected since the last warning (totals: undecodable "

@@ -168,8 +168,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   const Counters& c = loop.counters();
   summary.duration_s = static_cast<double>(end - first) / 1e6;
   summary.failsafe_events = c.failsafe_events;
-  summary.rejected = c.rejected_decode + c.rejected_nonfinite + c.rejected_range +
-                     c.rejected_out_of_order + c.rejected_future;
+  summary.rejected = c.rejected();
   return true;
 }
 
