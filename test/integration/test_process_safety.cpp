@@ -245,6 +245,50 @@ TEST_F(ProcessSafety, SigtermInFlightEndsWithADisarmedMessage) {
   for (float v : pwm.back().pwm) EXPECT_EQ(v, 1000.0F);
 }
 
+TEST_F(ProcessSafety, HoldLastKeepsOutputsForABoundedTimeThenDisarms) {
+  start({"inputs.failsafe=hold_last", "inputs.hold_last_ms=300"});
+  const auto timeout = std::chrono::milliseconds(100);
+  const auto hold = std::chrono::milliseconds(300);
+  const auto period = std::chrono::microseconds(static_cast<int>(1e6 / config_.loop_rate_hz));
+  arm();
+  const motor_pwm_t flying = bus_->pwm().back();
+  const Clock::time_point stopped = pilot_->last_sent;
+  const std::size_t before = bus_->pwm_count();
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto& pwm, const auto&) {
+        for (std::size_t i = before; i < pwm.size(); ++i) {
+          if (!pwm[i].armed) return true;
+        }
+        return false;
+      },
+      3s));
+  const auto pwm = bus_->pwm();
+  const auto times = bus_->pwm_times();
+  std::size_t first = before;
+  while (pwm[first].armed) {
+    // Held: the last outputs, unchanged.
+    ASSERT_EQ(pwm[first].pwm, flying.pwm);
+    ++first;
+  }
+  const auto took = times[first] - stopped;
+  EXPECT_GE(took, timeout + hold - 5ms);
+  EXPECT_LE(took, timeout + hold + period + kTransportSlack)
+      << std::chrono::duration_cast<std::chrono::microseconds>(took).count() << " us";
+  mixer_->signal(SIGTERM);
+  EXPECT_EQ(mixer_->wait_for(10s), 0);
+}
+
+// Real-time requests the system refuses (no CAP_SYS_NICE inside the test's
+// namespace, mlockall over RLIMIT_MEMLOCK) are logged as warnings on stderr,
+// and the process carries on flying.
+TEST_F(ProcessSafety, RefusedRealtimeRequestsDoNotStopTheProcess) {
+  start({"realtime.priority=20", "realtime.cpus=[0]", "realtime.lock_memory=true"});
+  arm();
+  EXPECT_TRUE(mixer_->running());
+  mixer_->signal(SIGTERM);
+  EXPECT_EQ(mixer_->wait_for(10s), 0);
+}
+
 // Generous bounds: tight numbers belong to the benchmarks.
 TEST_F(ProcessSafety, LoopKeepsItsRate) {
   for (int rate : {400, 2000}) {
