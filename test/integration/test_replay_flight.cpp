@@ -104,11 +104,14 @@ TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
   const auto budget = std::chrono::milliseconds(static_cast<int>(flight.duration_s * 1000) + 60000);
   ASSERT_EQ(player.wait_for(budget), 0) << "lcm-logplayer did not finish";
 
-  // The last setpoint of the flight is a disarm: wait until an output names it.
+  // Wait until an output names the last setpoint (a disarm) and the last pid
+  // message: then the mixer has handled every input of the flight.
   const std::int64_t last_setpoint = flight.setpoints.rbegin()->first;
+  const std::int64_t last_pid = flight.pids.rbegin()->first;
   ASSERT_TRUE(bus.wait_until(
       [&](const auto& pwm, const auto&) {
-        return !pwm.empty() && pwm.back().setpoint_utime == last_setpoint;
+        return !pwm.empty() && pwm.back().setpoint_utime == last_setpoint &&
+               pwm.back().pid_utime == last_pid;
       },
       10s));
 
