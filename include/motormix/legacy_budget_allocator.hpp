@@ -20,6 +20,12 @@ struct LegacyBudgets {
   double yaw = 0.15;
 };
 
+// What the budgeted strategies aim to produce: the demand scaled by the
+// budgets (their gains), against which what they miss is reported.
+inline AxisVector budgeted_target(const AxisVector& demand, const LegacyBudgets& b) {
+  return demand.cwiseProduct(AxisVector(b.roll_pitch, b.roll_pitch, b.yaw, b.throttle));
+}
+
 class LegacyBudgetAllocator final : public MatrixAllocator {
  public:
   LegacyBudgetAllocator(const MixingMatrix& mixing, LegacyBudgets budgets);

@@ -24,12 +24,7 @@ AllocationResult BudgetAllocator::allocate(const AxisVector& demand, MotorVector
         mixing_(i, index(Axis::kThrust)) * demand[index(Axis::kThrust)] * budgets_.throttle;
     commands[i] = thrust + roll + pitch + yaw;  // clamped to 0..1 by finish()
   }
-  AxisVector target = demand;
-  target[index(Axis::kRoll)] *= budgets_.roll_pitch;
-  target[index(Axis::kPitch)] *= budgets_.roll_pitch;
-  target[index(Axis::kYaw)] *= budgets_.yaw;
-  target[index(Axis::kThrust)] *= budgets_.throttle;
-  return finish(target, commands);
+  return finish(budgeted_target(demand, budgets_), commands);
 }
 
 }  // namespace motormix

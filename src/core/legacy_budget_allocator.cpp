@@ -30,14 +30,7 @@ AllocationResult LegacyBudgetAllocator::allocate(const AxisVector& demand,
     // matters for coefficient tables with entries above 1.
     commands[i] = std::clamp(thrust + roll + pitch + yaw, 0.0, 1.0);
   }
-  // The budgets are this strategy's gains: what it aims to produce is the
-  // budget-scaled demand, and what it misses is reported against that.
-  AxisVector target = demand;
-  target[index(Axis::kRoll)] *= budgets_.roll_pitch;
-  target[index(Axis::kPitch)] *= budgets_.roll_pitch;
-  target[index(Axis::kYaw)] *= budgets_.yaw;
-  target[index(Axis::kThrust)] *= budgets_.throttle;
-  return finish(target, commands);
+  return finish(budgeted_target(demand, budgets_), commands);
 }
 
 }  // namespace motormix

@@ -14,6 +14,7 @@
 
 #include <csignal>
 #include <cstdlib>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -109,6 +110,25 @@ class ProcessSafety : public ::testing::Test {
     return false;
   }
 
+  // Index of the first disarmed output published after output `before`, once
+  // it has arrived (bounded wait); nullopt if none came in time.
+  std::optional<std::size_t> first_disarmed_after(std::size_t before,
+                                                  std::chrono::milliseconds timeout) {
+    std::optional<std::size_t> first;
+    bus_->wait_until(
+        [&](const auto& pwm, const auto&) {
+          for (std::size_t i = before; i < pwm.size(); ++i) {
+            if (!pwm[i].armed) {
+              first = i;
+              return true;
+            }
+          }
+          return false;
+        },
+        timeout);
+    return first;
+  }
+
   void arm() {
     ASSERT_TRUE(fly_until(false, 0.0, [](const motor_pwm_t& m) { return !m.armed; }));
     ASSERT_TRUE(fly_until(true, 0.0, [](const motor_pwm_t& m) { return m.armed; }));
@@ -131,18 +151,11 @@ TEST_F(ProcessSafety, PublisherDropoutFailsSafeWithinTimeoutPlusOnePeriod) {
     arm();
     const Clock::time_point stopped = pilot_->last_sent;
     const std::size_t before = bus_->pwm_count();
-    ASSERT_TRUE(bus_->wait_until(
-        [&](const auto& pwm, const auto&) {
-          for (std::size_t i = before; i < pwm.size(); ++i) {
-            if (!pwm[i].armed) return true;
-          }
-          return false;
-        },
-        2s));
+    const auto found = first_disarmed_after(before, 2s);
+    ASSERT_TRUE(found.has_value());
+    const std::size_t first = *found;
     const auto pwm = bus_->pwm();
     const auto times = bus_->pwm_times();
-    std::size_t first = before;
-    while (pwm[first].armed) ++first;
     const auto took = times[first] - stopped;
     EXPECT_LE(took, timeout + period + kTransportSlack)
         << std::chrono::duration_cast<std::chrono::microseconds>(took).count() << " us";
@@ -254,21 +267,13 @@ TEST_F(ProcessSafety, HoldLastKeepsOutputsForABoundedTimeThenDisarms) {
   const motor_pwm_t flying = bus_->pwm().back();
   const Clock::time_point stopped = pilot_->last_sent;
   const std::size_t before = bus_->pwm_count();
-  ASSERT_TRUE(bus_->wait_until(
-      [&](const auto& pwm, const auto&) {
-        for (std::size_t i = before; i < pwm.size(); ++i) {
-          if (!pwm[i].armed) return true;
-        }
-        return false;
-      },
-      3s));
+  const auto found = first_disarmed_after(before, 3s);
+  ASSERT_TRUE(found.has_value());
+  const std::size_t first = *found;
   const auto pwm = bus_->pwm();
   const auto times = bus_->pwm_times();
-  std::size_t first = before;
-  while (pwm[first].armed) {
-    // Held: the last outputs, unchanged.
-    ASSERT_EQ(pwm[first].pwm, flying.pwm);
-    ++first;
+  for (std::size_t i = before; i < first; ++i) {
+    ASSERT_EQ(pwm[i].pwm, flying.pwm);  // held: the last outputs, unchanged
   }
   const auto took = times[first] - stopped;
   EXPECT_GE(took, timeout + hold - 5ms);
