@@ -1,8 +1,8 @@
 #include "commands.hpp"
 
-#include "config/build_mixer.hpp"
-#include "config/load_config.hpp"
-#include "config/matrix_export.hpp"
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/load_config.hpp>
+#include <motormix/config/matrix_export.hpp>
 #include "node/lcm_node.hpp"
 #include "node/log_replay.hpp"
 

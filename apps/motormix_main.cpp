@@ -1,7 +1,9 @@
 // motormix: one binary, one subcommand per job. Wiring only.
 
 #include "commands.hpp"
-#include "config/matrix_export.hpp"
+
+#include <motormix/version.hpp>
+#include <motormix/config/matrix_export.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -10,7 +12,7 @@
 int main(int argc, char** argv) {
   using namespace motormix::app;
   CLI::App app{"motormix: attitude/thrust commands in, one command per motor out, over LCM"};
-  app.set_version_flag("--version", "motormix 0.1.0");
+  app.set_version_flag("--version", std::string("motormix ") + motormix::kVersion);
   app.require_subcommand(1);
 
   const auto add_common = [](CLI::App* sub, CommonOptions& common) {

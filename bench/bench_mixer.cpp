@@ -2,8 +2,8 @@
 // strategy and vehicle, on a fixed set of seeded demands that includes
 // saturating ones.
 
-#include "config/build_mixer.hpp"
-#include "config/load_config.hpp"
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/load_config.hpp>
 
 #include <benchmark/benchmark.h>
 

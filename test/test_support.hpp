@@ -1,8 +1,8 @@
 #pragma once
 // Shared helpers for the tests: named tolerances and config loading.
 
-#include "config/build_mixer.hpp"
-#include "config/load_config.hpp"
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/load_config.hpp>
 
 #include <string>
 

@@ -5,6 +5,7 @@
 
 #include <motormix/axes.hpp>
 #include <motormix/effectiveness.hpp>
+#include <motormix/geometry.hpp>
 #include <motormix/mixing_matrix.hpp>
 
 #include <optional>
@@ -20,6 +21,10 @@ struct Vehicle {
   std::vector<std::string> motor_details;  // e.g. "front right, CCW"; may be empty
   ThrustRange thrust_range = ThrustRange::kUnipolar;
   AxisMask controlled = kAllAxes;
+
+  // Set when the vehicle was described rotor by rotor (presets included), in
+  // output order: what other stacks' geometry formats are written from.
+  std::vector<Rotor> rotors;
 
   // Exactly one of these is set.
   std::optional<EffectivenessMatrix> effectiveness;

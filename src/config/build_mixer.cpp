@@ -1,4 +1,4 @@
-#include "config/build_mixer.hpp"
+#include <motormix/config/build_mixer.hpp>
 
 #include <motormix/budget_allocator.hpp>
 #include <motormix/clip_allocator.hpp>

@@ -1,11 +1,13 @@
-#include "config/load_config.hpp"
+#include <motormix/config/load_config.hpp>
 
+#include "config/paparazzi_import.hpp"
 #include "config/yaml_reader.hpp"
 
 #include <motormix/presets.hpp>
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace motormix::config {
@@ -19,6 +21,22 @@ constexpr double kMaxOutputValue = 100000.0;
 constexpr double kBudgetSumTolerance = 1e-9;
 // Mixing coefficients beyond this magnitude are almost certainly a typo.
 constexpr double kMaxCoefficient = 1000.0;
+
+// Where the configuration came from: relative file names inside it (e.g.
+// geometry.paparazzi) are taken from its directory, and the text of every
+// file it reads goes into the configuration hash.
+struct LoadContext {
+  std::string base_dir;
+  std::string included_text;
+};
+
+std::optional<std::string> read_text_file(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) return std::nullopt;
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
 
 void apply_override(YAML::Node& root, const std::string& assignment) {
   const auto eq = assignment.find('=');
@@ -122,6 +140,7 @@ Vehicle rotors_vehicle(const YAML::Node& list, const std::string& path) {
   v.name = "rotors";
   v.description = std::to_string(rotors.size()) + " rotors described one by one";
   v.effectiveness = rotor_effectiveness(rotors);
+  v.rotors = rotors;
   for (std::size_t i = 0; i < rotors.size(); ++i)
     v.motor_names.push_back("m" + std::to_string(i + 1));
   return v;
@@ -221,9 +240,41 @@ std::vector<int> read_motor_order(const YAML::Node& node, const std::string& pat
   return order;
 }
 
-void read_geometry(MapReader geometry, Config& config) {
-  const std::vector<std::string> forms = {
-      "preset", "rotors", "effectiveness", "mixing", "differential_drive", "skid_steer"};
+Vehicle paparazzi_vehicle(MapReader& geometry, LoadContext& context) {
+  const std::string path_key = geometry.path_of("paparazzi");
+  const YAML::Node node = geometry.raw("paparazzi");
+  if (!node.IsScalar() || node.Scalar().empty()) {
+    fail(path_key, describe(node), "the path of a Paparazzi airframe file or MIXING section");
+  }
+  std::string file = node.Scalar();
+  if (file.front() != '/' && !context.base_dir.empty()) file = context.base_dir + "/" + file;
+  const std::optional<std::string> text = read_text_file(file);
+  if (!text) fail(path_key, "'" + file + "' (cannot open it)", "a readable file");
+  context.included_text += *text;
+  const MixingMatrix m = parse_paparazzi_mixing(*text, file);
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    for (int a = 0; a < kNumAxes; ++a) {
+      if (std::abs(m(i, a)) > kMaxCoefficient) {
+        fail(path_key, file + ": coefficient/SCALE " + std::to_string(m(i, a)) + " of motor " +
+                           std::to_string(i + 1),
+             "at most " + std::to_string(static_cast<int>(kMaxCoefficient)) + " in magnitude");
+      }
+    }
+  }
+  Vehicle v;
+  v.name = "paparazzi";
+  v.description = "MIXING section of " + file;
+  v.mixing_table = m;
+  v.controlled = controlled_axes(m);
+  for (Eigen::Index i = 0; i < m.rows(); ++i) v.motor_names.push_back("m" + std::to_string(i + 1));
+  return v;
+}
+
+void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
+  const std::vector<std::string> forms = {"preset",     "rotors",
+                                          "effectiveness", "mixing",
+                                          "paparazzi",  "differential_drive",
+                                          "skid_steer"};
   std::vector<std::string> given;
   for (const auto& f : forms) {
     if (geometry.has(f)) given.push_back(f);
@@ -269,6 +320,8 @@ void read_geometry(MapReader geometry, Config& config) {
     config.vehicle = effectiveness_vehicle(geometry.map("effectiveness"));
   } else if (form == "mixing") {
     config.vehicle = table_vehicle(geometry.raw("mixing"), geometry.path_of("mixing"));
+  } else if (form == "paparazzi") {
+    config.vehicle = paparazzi_vehicle(geometry, context);
   } else {
     const bool skid = form == "skid_steer";
     const WheelBase base = read_wheel_base(geometry.map(form), skid ? 2 : 1, skid);
@@ -482,12 +535,12 @@ void read_channels(MapReader channels, Config& config) {
   channels.finish();
 }
 
-Config read_document(const YAML::Node& document) {
+Config read_document(const YAML::Node& document, LoadContext& context) {
   MapReader root(document, "");
   Config config;
   config.name = root.text("name", "motormix");
   if (!root.has("geometry")) fail("geometry", "nothing", "a 'geometry' section (required)");
-  read_geometry(root.map("geometry"), config);
+  read_geometry(root.map("geometry"), config, context);
   read_mixer(root.map("mixer"), config);
   read_output(root.map("output"), config);
   read_inputs(root.map("inputs"), config);
@@ -529,8 +582,10 @@ const char* to_string(Strategy strategy) {
 
 const char* to_string(YawSource source) { return source == YawSource::kPid ? "pid" : "setpoint"; }
 
-Config load_config_text(const std::string& yaml_text, const std::string& source_name,
-                        const std::vector<std::string>& overrides) {
+namespace {
+
+Config load_in_context(const std::string& yaml_text, const std::string& source_name,
+                       const std::vector<std::string>& overrides, LoadContext& context) {
   YAML::Node document;
   try {
     document = YAML::Load(yaml_text);
@@ -540,12 +595,13 @@ Config load_config_text(const std::string& yaml_text, const std::string& source_
   if (!document.IsDefined() || document.IsNull()) document = YAML::Node(YAML::NodeType::Map);
   for (const std::string& o : overrides) apply_override(document, o);
   try {
-    Config config = read_document(document);
-    // FNV-1a over the text and the overrides: tells which configuration a
-    // status message came from.
+    Config config = read_document(document, context);
+    // FNV-1a over the text, the overrides and every file the configuration
+    // reads: tells which configuration a status message came from.
     std::uint64_t h = 1469598103934665603ULL;
     std::string all = yaml_text;
     for (const std::string& o : overrides) all += "\n--set " + o;
+    all += context.included_text;
     for (unsigned char c : all) h = (h ^ c) * 1099511628211ULL;
     config.hash = h;
     return config;
@@ -556,12 +612,21 @@ Config load_config_text(const std::string& yaml_text, const std::string& source_
   }
 }
 
+}  // namespace
+
+Config load_config_text(const std::string& yaml_text, const std::string& source_name,
+                        const std::vector<std::string>& overrides) {
+  LoadContext context;
+  return load_in_context(yaml_text, source_name, overrides, context);
+}
+
 Config load_config_file(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream file(path);
-  if (!file) throw ConfigError(path + ": cannot open config file");
-  std::stringstream text;
-  text << file.rdbuf();
-  return load_config_text(text.str(), path, overrides);
+  const std::optional<std::string> text = read_text_file(path);
+  if (!text) throw ConfigError(path + ": cannot open config file");
+  LoadContext context;
+  const auto slash = path.rfind('/');
+  context.base_dir = slash == std::string::npos ? "" : path.substr(0, slash == 0 ? 1 : slash);
+  return load_in_context(*text, path, overrides, context);
 }
 
 }  // namespace motormix::config

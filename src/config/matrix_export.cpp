@@ -1,4 +1,6 @@
-#include "config/matrix_export.hpp"
+#include <motormix/config/matrix_export.hpp>
+
+#include <motormix/version.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -194,10 +196,108 @@ std::string header(const Config& c) {
   return s.str();
 }
 
+// A value for a parameter file: short, exact enough (1e-6), no "-0".
+std::string param(double v) {
+  if (std::abs(v) < 5e-7) v = 0.0;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// PX4's default CA_ROTORn_CT (thrust at full command, N): a rotor with
+// motormix's relative thrust coefficient 1 gets PX4's default.
+constexpr double kPx4DefaultCt = 6.5;
+
+std::string px4(const Config& c) {
+  const std::vector<Rotor>& rotors = c.vehicle.rotors;
+  if (rotors.empty()) {
+    throw ConfigError("format px4 needs a rotor geometry (a rotor preset or geometry.rotors); " +
+                      c.description() +
+                      " has no rotor positions to write (use --format json or paparazzi for its "
+                      "matrix)");
+  }
+  std::ostringstream s;
+  s << "# PX4 control allocation parameters for " << c.description() << "\n"
+    << "# written by motormix " << kVersion << " (matrix --format px4): body frame FRD, metres;\n"
+    << "# KM > 0 spins counter-clockwise seen from above; CT is thrust at full command,\n"
+    << "# motormix's relative thrust_coefficient x " << kPx4DefaultCt << " (PX4's default).\n"
+    << "# CA_ROTORn is motormix motor m(n+1).\n"
+    << "param set-default CA_AIRFRAME 0\n"
+    << "param set-default CA_ROTOR_COUNT " << rotors.size() << "\n";
+  for (std::size_t i = 0; i < rotors.size(); ++i) {
+    const Rotor& r = rotors[i];
+    const std::string p = "param set-default CA_ROTOR" + std::to_string(i) + "_";
+    s << p << "PX " << param(r.position.x()) << "\n"
+      << p << "PY " << param(r.position.y()) << "\n"
+      << p << "PZ " << param(r.position.z()) << "\n"
+      << p << "CT " << param(r.thrust_coefficient * kPx4DefaultCt) << "\n"
+      << p << "KM " << param(static_cast<double>(r.spin) * r.torque_ratio) << "\n";
+    const Eigen::Vector3d axis = r.axis.normalized();
+    if ((axis - Eigen::Vector3d(0.0, 0.0, -1.0)).norm() > 1e-9) {  // tilted: PX4's default is up
+      s << p << "AX " << param(axis.x()) << "\n"
+        << p << "AY " << param(axis.y()) << "\n"
+        << p << "AZ " << param(axis.z()) << "\n";
+    }
+  }
+  return s.str();
+}
+
+std::string ardupilot(const Config& c) {
+  if (c.thrust_range() != ThrustRange::kUnipolar) {
+    throw ConfigError("format ardupilot writes a multirotor frame; " + c.description() +
+                      " is a ground vehicle");
+  }
+  const int n = c.motors();
+  // Testing order: clockwise from the nose, as ArduPilot numbers its own
+  // frames. The position is read off the matrix (roll ~ -y, pitch ~ x), so
+  // tables without geometry get one too; coaxial motors keep their order.
+  std::vector<std::pair<double, int>> bearing;
+  for (int i = 0; i < n; ++i) {
+    const double x = c.mixing(i, index(Axis::kPitch));
+    const double y = -c.mixing(i, index(Axis::kRoll));
+    double deg = std::atan2(y, x) * 180.0 / 3.14159265358979323846;
+    if (deg < -1e-9) deg += 360.0;
+    bearing.emplace_back(std::max(deg, 0.0), i);
+  }
+  std::stable_sort(bearing.begin(), bearing.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first - 1e-6;
+  });
+  std::vector<int> testing_order(static_cast<std::size_t>(n));
+  for (std::size_t k = 0; k < bearing.size(); ++k) {
+    testing_order[static_cast<std::size_t>(bearing[k].second)] = static_cast<int>(k) + 1;
+  }
+  const auto thrust = c.mixing.col(index(Axis::kThrust));
+  const bool uniform_thrust = (thrust.array() - thrust.mean()).abs().maxCoeff() < 1e-9;
+
+  std::ostringstream s;
+  s << "-- ArduPilot scripted motor matrix for " << c.description() << "\n"
+    << "-- written by motormix " << kVersion << " (matrix --format ardupilot).\n"
+    << "-- Needs FRAME_CLASS = 15 (Scripting Matrix) and SCR_ENABLE = 1; copy to APM/scripts/.\n"
+    << "-- add_motor_raw(motor, roll, pitch, yaw, testing order): motor 0 is motormix m1;\n"
+    << "-- ArduPilot normalizes the factors itself.\n";
+  if (!uniform_thrust) {
+    s << "-- Note: the motors do not share the thrust equally in this matrix; these calls\n"
+      << "-- carry roll, pitch and yaw only, and ArduPilot gives every motor equal thrust.\n";
+  }
+  for (int i = 0; i < n; ++i) {
+    s << "MotorsMatrix:add_motor_raw(" << i << ", " << param(c.mixing(i, index(Axis::kRoll)))
+      << ", " << param(c.mixing(i, index(Axis::kPitch))) << ", "
+      << param(c.mixing(i, index(Axis::kYaw))) << ", "
+      << testing_order[static_cast<std::size_t>(i)] << ")  -- "
+      << c.motor_names()[static_cast<std::size_t>(i)];
+    const std::string d = detail(c, i);
+    if (!d.empty()) s << ": " << d;
+    s << "\n";
+  }
+  s << "assert(MotorsMatrix:init(" << n << "), \"Failed to init MotorsMatrix\")\n"
+    << "motors:set_frame_string(\"motormix " << c.vehicle.name << "\")\n";
+  return s.str();
+}
+
 }  // namespace
 
 std::vector<std::string> matrix_format_names() {
-  return {"table", "json", "yaml", "paparazzi", "header"};
+  return {"table", "json", "yaml", "paparazzi", "header", "px4", "ardupilot"};
 }
 
 MatrixFormat matrix_format_from(const std::string& name) {
@@ -205,6 +305,8 @@ MatrixFormat matrix_format_from(const std::string& name) {
   if (name == "yaml") return MatrixFormat::kYaml;
   if (name == "paparazzi") return MatrixFormat::kPaparazzi;
   if (name == "header") return MatrixFormat::kHeader;
+  if (name == "px4") return MatrixFormat::kPx4;
+  if (name == "ardupilot") return MatrixFormat::kArdupilot;
   return MatrixFormat::kTable;
 }
 
@@ -235,6 +337,10 @@ std::string export_matrix(const Config& config, MatrixFormat format) {
       return paparazzi(config);
     case MatrixFormat::kHeader:
       return header(config);
+    case MatrixFormat::kPx4:
+      return px4(config);
+    case MatrixFormat::kArdupilot:
+      return ardupilot(config);
   }
   return "";
 }

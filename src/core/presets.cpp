@@ -42,6 +42,7 @@ Vehicle rotor_vehicle(std::string name, std::string description, const std::vect
                               spin_name(rotors[i].spin));
   }
   v.effectiveness = rotor_effectiveness(rotors);
+  v.rotors = rotors;
   return v;
 }
 
@@ -240,6 +241,7 @@ std::optional<Vehicle> find_preset(std::string_view name, const PresetOptions& o
   if (options.reverse_spin) {
     if (v.effectiveness) v.effectiveness->row(index(Axis::kYaw)) *= -1.0;
     if (v.mixing_table) v.mixing_table->col(index(Axis::kYaw)) *= -1.0;
+    for (Rotor& r : v.rotors) r.spin = r.spin == Spin::kCw ? Spin::kCcw : Spin::kCw;
     for (std::string& d : v.motor_details) {
       const auto cw = d.rfind(", CW");
       const auto ccw = d.rfind(", CCW");
@@ -260,6 +262,11 @@ std::optional<Vehicle> find_preset(std::string_view name, const PresetOptions& o
       v.effectiveness = e;
     }
     if (v.mixing_table) v.mixing_table = reorder_rows(*v.mixing_table, order);
+    if (!v.rotors.empty()) {
+      std::vector<Rotor> rotors;
+      for (int o : order) rotors.push_back(v.rotors[static_cast<std::size_t>(o - 1)]);
+      v.rotors = rotors;
+    }
     std::vector<std::string> names;
     std::vector<std::string> details;
     for (int o : order) {

@@ -21,14 +21,13 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
   mix_linear(demand, commands);
   ShiftInterval k = feasible_shifts(commands, direction_, range_);
   if (k.empty()) {
-    // The spread alone does not fit: shrink the part that is not along the
-    // shift direction about the mean, just enough, then shift.
+    // The spread alone does not fit: shrink the deviations from the mean just
+    // enough, then shift. The width of the spread is the width of the
+    // commands themselves, so no copy of them is needed.
     const double mean = commands.mean();
-    MotorVector spread = commands - MotorVector::Constant(commands.size(), mean);
-    const double width = spread.maxCoeff() - spread.minCoeff();
+    const double width = commands.maxCoeff() - commands.minCoeff();
     const double room = range_.upper - range_.lower;
-    if (width > room) spread *= room / width;
-    commands = MotorVector::Constant(commands.size(), mean) + spread;
+    if (width > room) commands = (commands.array() - mean) * (room / width) + mean;
     k = feasible_shifts(commands, direction_, range_);
   }
   // The smallest shift that lands inside (0 when already inside).

@@ -19,7 +19,7 @@
 //   and otherwise ignored: the previous valid message stays in force and
 //   keeps ageing toward its timeout.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 #include "node/input_samples.hpp"
 #include "node/message_checks.hpp"
 

@@ -1,7 +1,7 @@
 #include "node/lcm_node.hpp"
 
-#include "config/build_mixer.hpp"
-#include "config/matrix_export.hpp"
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/matrix_export.hpp>
 #include "node/control_loop.hpp"
 #include "node/messages.hpp"
 #include "node/window_stats.hpp"

@@ -3,7 +3,7 @@
 // signal handling and publishing. One thread: poll() over the LCM socket, a
 // timerfd and a signalfd. No exception leaves an LCM callback.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 
 #include <atomic>
 #include <iosfwd>

@@ -1,6 +1,6 @@
 #include "node/log_replay.hpp"
 
-#include "config/build_mixer.hpp"
+#include <motormix/config/build_mixer.hpp>
 #include "node/control_loop.hpp"
 #include "node/messages.hpp"
 

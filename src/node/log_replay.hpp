@@ -6,7 +6,7 @@
 // event plus the produced motor_pwm_t and mixer_status_t. Deterministic: the
 // same log and configuration give the same bytes.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 
 #include <array>
 #include <cstdint>

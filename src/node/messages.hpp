@@ -3,7 +3,7 @@
 // offline replay so both publish exactly the same thing. Filling reuses the
 // messages' storage (sized once at set-up): no allocation per cycle.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 #include "node/control_loop.hpp"
 
 #include <motormix/mixer_status_t.hpp>

@@ -2,7 +2,7 @@
 // pseudo-inverse H-hexa example, the quad + and X tables, the wheel formulas;
 // and properties over seeded random geometries.
 
-#include "config/matrix_export.hpp"
+#include <motormix/config/matrix_export.hpp>
 #include "test_support.hpp"
 
 #include <motormix/effectiveness.hpp>

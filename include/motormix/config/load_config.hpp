@@ -2,7 +2,7 @@
 // YAML -> validated Config. Fails at start-up with a ConfigError that names
 // the key path, the value and the allowed range; never later.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 
 #include <string>
 #include <vector>

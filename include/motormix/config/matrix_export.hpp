@@ -1,20 +1,24 @@
 #pragma once
 // The mixing matrix of a configuration, written out for people and for other
 // tools: a readable table, JSON, a config fragment that freezes it, the
-// MIXING section of a Paparazzi airframe file, and a C header for firmware.
+// MIXING section of a Paparazzi airframe file, a C header for firmware, PX4's
+// control-allocation parameters and an ArduPilot scripted frame.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 
 #include <string>
 #include <vector>
 
 namespace motormix::config {
 
-enum class MatrixFormat { kTable, kJson, kYaml, kPaparazzi, kHeader };
+enum class MatrixFormat { kTable, kJson, kYaml, kPaparazzi, kHeader, kPx4, kArdupilot };
 
 std::vector<std::string> matrix_format_names();
 MatrixFormat matrix_format_from(const std::string& name);  // name from matrix_format_names()
 
+// kPx4 (PX4's CA_* parameters) needs the rotor geometry and kArdupilot (a
+// scripted MotorsMatrix frame) an aircraft: for other vehicles they throw
+// ConfigError saying why.
 std::string export_matrix(const Config& config, MatrixFormat format);
 
 // Per axis, the largest pure demand the configuration can deliver: torques

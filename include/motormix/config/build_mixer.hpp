@@ -1,7 +1,7 @@
 #pragma once
 // Turns a validated Config into the core's Mixer. Set-up time only.
 
-#include "config/config.hpp"
+#include <motormix/config/config.hpp>
 
 #include <motormix/mixer.hpp>
 

@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# Installs a motormix build into a scratch prefix and uses it the way another
+# project would: the install tree's contents, find_package(motormix) from a
+# consumer project and from the embedding example (both copied out of the
+# source tree first), the same through pkg-config, the Python message modules,
+# and the installed binary. Then moves the prefix and builds again: the
+# package must be relocatable.
+#   check_install.sh BUILD_DIR SOURCE_DIR WORK_DIR
+set -euo pipefail
+build="$1" src="$2" work="$3"
+rm -rf "$work"
+mkdir -p "$work"
+prefix="$work/prefix"
+fail() { echo "check_install: FAIL: $*" >&2; exit 1; }
+step() { echo "--- $*"; }
+
+step "cmake --install into $prefix"
+cmake --install "$build" --prefix "$prefix" > "$work/install.log"
+
+libdir=$(sed -n 's/^libdir=\${prefix}\///p' "$(find "$prefix" -name motormix.pc | head -1)")
+[ -n "$libdir" ] || fail "no motormix.pc installed"
+for f in bin/motormix \
+    include/motormix/mixer.hpp include/motormix/embedded_mixer.hpp include/motormix/version.hpp \
+    include/motormix/config/config.hpp include/motormix/motor_pwm_t.hpp \
+    include/motormix/setpoint_t.hpp include/motormix/pid_t.hpp include/motormix/mixer_status_t.hpp \
+    "$libdir/cmake/motormix/motormixConfig.cmake" "$libdir/cmake/motormix/motormixConfigVersion.cmake" \
+    "$libdir/cmake/motormix/motormixTargets.cmake" "$libdir/pkgconfig/motormix.pc" \
+    lib/python3/dist-packages/motormix/__init__.py lib/python3/dist-packages/motormix/motor_pwm_t.py \
+    share/motormix/lcmtypes/motor_pwm_t.lcm share/motormix/config/quad_x.yaml \
+    share/motormix/examples/embedding/embed.cpp share/doc/motormix/README.md \
+    share/doc/motormix/CHANGELOG.md; do
+  [ -e "$prefix/$f" ] || fail "missing from the install tree: $f"
+done
+ls "$prefix/$libdir"/libmotormix_core.* "$prefix/$libdir"/libmotormix_config.* >/dev/null \
+  || fail "libraries missing from $prefix/$libdir"
+# Public headers must stand alone: nothing from the source tree, no yaml-cpp or pugixml.
+if grep -rlE 'yaml-cpp|pugixml|"config/|"node/' "$prefix/include/motormix"; then
+  fail "installed headers reach into private code or private dependencies (above)"
+fi
+if grep -rl "$src" "$prefix/$libdir/cmake" "$prefix/$libdir/pkgconfig"; then
+  fail "the CMake package or motormix.pc names the source tree (above)"
+fi
+
+step "installed binary"
+"$prefix/bin/motormix" --version | tee "$work/version.txt"
+version=$(awk '{print $2}' "$work/version.txt")
+grep -q "^Version: $version\$" "$prefix/$libdir/pkgconfig/motormix.pc" \
+  || fail "motormix.pc does not carry version $version"
+"$prefix/bin/motormix" run --check --config "$prefix/share/motormix/config/quad_x.yaml" > /dev/null
+
+consumer_build() {  # NAME SOURCE_DIR PREFIX
+  local name="$1" from="$2" pfx="$3"
+  rm -rf "$work/$name"
+  cp -r "$from" "$work/$name"
+  cmake -S "$work/$name" -B "$work/$name/build" -DCMAKE_PREFIX_PATH="$pfx" \
+    -DCMAKE_BUILD_TYPE=Release > "$work/$name.configure.log" \
+    || { cat "$work/$name.configure.log"; fail "$name: configure against $pfx"; }
+  cmake --build "$work/$name/build" > "$work/$name.build.log" 2>&1 \
+    || { cat "$work/$name.build.log"; fail "$name: build against $pfx"; }
+}
+
+step "find_package(motormix): motormix::core + motormix::lcmtypes"
+consumer_build consumer "$src/test/package/consumer" "$prefix"
+"$work/consumer/build/core_and_types"
+
+step "find_package(motormix): the README's embedding example (motormix::config)"
+consumer_build embedding "$src/examples/embedding" "$prefix"
+"$work/embedding/build/embed" "$prefix/share/motormix/config/quad_x.yaml" | tee "$work/embed.txt"
+[ "$(grep -c ' command ' "$work/embed.txt")" = 4 ] || fail "embed: expected 4 motor lines"
+grep -q 'not delivered: ' "$work/embed.txt" || fail "embed: no saturation report"
+if "$work/embedding/build/embed" "$work/no-such.yaml" 2> "$work/embed.err"; then
+  fail "embed: a missing config file did not fail"
+fi
+grep -q 'cannot open' "$work/embed.err" || fail "embed: unclear error for a missing file"
+
+pc_build() {  # PREFIX
+  local pc_dir
+  pc_dir=$(dirname "$(find "$1" -name motormix.pc | head -1)")
+  export PKG_CONFIG_PATH="$pc_dir"
+  local flags
+  flags=$(pkg-config --cflags --libs motormix) || fail "pkg-config motormix failed under $1"
+  # shellcheck disable=SC2086
+  c++ -std=c++17 -O1 "$src/test/package/consumer/core_and_types.cpp" -o "$work/pc_core_and_types" $flags \
+    || fail "pkg-config build of the consumer"
+  # shellcheck disable=SC2086
+  c++ -std=c++17 -O1 "$src/examples/embedding/embed.cpp" -o "$work/pc_embed" $flags \
+    || fail "pkg-config build of the embedding example"
+  "$work/pc_core_and_types"
+  "$work/pc_embed" "$1/share/motormix/config/hexa_x.yaml" > /dev/null
+}
+step "pkg-config motormix"
+pc_build "$prefix"
+
+step "Python message modules (from motormix import motor_pwm_t)"
+PYTHONPATH="$prefix/lib/python3/dist-packages" python3 - <<'PY'
+from motormix import motor_pwm_t, setpoint_t, pid_t, mixer_status_t
+m = motor_pwm_t()
+m.utime, m.num_motors, m.command, m.pwm, m.direction, m.armed = 5, 2, [0.5, 1.0], [1500.0, 2000.0], [0, 0], True
+back = motor_pwm_t.decode(m.encode())
+assert back.pwm == [1500.0, 2000.0] and back.armed, back.pwm
+print("python types ok:", [t.__name__ for t in (motor_pwm_t, setpoint_t, pid_t, mixer_status_t)])
+PY
+
+step "relocated prefix"
+mv "$prefix" "$work/moved"
+consumer_build consumer-moved "$src/test/package/consumer" "$work/moved"
+"$work/consumer-moved/build/core_and_types"
+pc_build "$work/moved"
+
+echo "check_install: all checks passed"
