@@ -4,7 +4,9 @@ and armed state over time. With --compare, overlays the motor commands of a
 second log (e.g. the same flight through another strategy)."""
 
 import argparse
+import json
 import os
+import subprocess
 import sys
 
 import matplotlib
@@ -16,7 +18,20 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from flight_log import Flight  # noqa: E402
 
 
-def plot(f, output, compare=None, title=None):
+def motor_labels(motormix, config, count):
+    """Legend labels that name each motor as `motormix matrix` does: number or
+    name, then where it is ("m1 front right, CCW"). Without a config: m1, m2, ..."""
+    if not config:
+        return [f"m{i + 1}" for i in range(count)]
+    out = subprocess.run([motormix, "matrix", "--config", config, "--format", "json"],
+                         check=True, capture_output=True, text=True).stdout
+    matrix = json.loads(out)
+    names, details = matrix["names"], matrix.get("details") or [""] * len(matrix["names"])
+    return [f"{n} {d}".strip() for n, d in zip(names, details)]
+
+
+def plot(f, output, compare=None, title=None, labels=None):
+    labels = labels or [f"m{i + 1}" for i in range(f.motors)]
     fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True,
                              gridspec_kw={"height_ratios": [2, 2, 2, 0.7]})
     ax = axes[0]
@@ -30,16 +45,16 @@ def plot(f, output, compare=None, title=None):
 
     ax = axes[1]
     for i in range(f.motors):
-        ax.plot(f.pwm_t, f.command[:, i], lw=0.9, label=f"motor {i}")
+        ax.plot(f.pwm_t, f.command[:, i], lw=0.9, label=labels[i])
     if compare is not None:
         for i in range(compare.motors):
-            ax.plot(compare.pwm_t, compare.command[:, i], lw=0.9, ls="--", label=f"motor {i} (b)")
+            ax.plot(compare.pwm_t, compare.command[:, i], lw=0.9, ls="--", label=f"{labels[i]} (b)")
     ax.set_ylabel("command (0..1)")
     ax.legend(loc="upper right", ncol=4, fontsize=8)
 
     ax = axes[2]
     for i in range(f.motors):
-        ax.plot(f.pwm_t, f.pwm[:, i], lw=0.9, label=f"motor {i}")
+        ax.plot(f.pwm_t, f.pwm[:, i], lw=0.9, label=labels[i])
     ax.set_ylabel("PWM (us)")
     ax.legend(loc="upper right", ncol=4, fontsize=8)
 
@@ -63,8 +78,12 @@ def main():
     ap.add_argument("-o", "--output", required=True, help="PNG file to write")
     ap.add_argument("--compare", help="a second log whose motor commands are overlaid")
     ap.add_argument("--title")
+    ap.add_argument("--config", help="the mixer's configuration: legends name the motors (m1 front right, CCW)")
+    ap.add_argument("--motormix", default="motormix", help="motormix binary used to read --config")
     args = ap.parse_args()
-    plot(Flight(args.log), args.output, Flight(args.compare) if args.compare else None, args.title)
+    flight = Flight(args.log)
+    labels = motor_labels(args.motormix, args.config, flight.motors)
+    plot(flight, args.output, Flight(args.compare) if args.compare else None, args.title, labels)
     print(f"plot written to {args.output}")
 
 

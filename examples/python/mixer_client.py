@@ -35,11 +35,15 @@ def main():
 
     bus = lcm.LCM(args.lcm_url) if args.lcm_url else lcm.LCM()
     printed = 0
+    demand_since = None  # utime of the first message carrying the demand
 
     def on_pwm(_channel, data):
         nonlocal printed
         msg = motor_pwm_t.decode(data)
-        if msg.armed and printed < args.count:
+        # Every output names the setpoint it came from: print only those mixed
+        # from the demand, not from the arming sequence.
+        from_demand = demand_since is not None and msg.setpoint_utime >= demand_since
+        if msg.armed and from_demand and printed < args.count:
             printed += 1
             motors = "  ".join(f"m{i + 1} {pwm:7.1f}" for i, pwm in enumerate(msg.pwm))
             print(f"armed  {motors}", flush=True)
@@ -47,7 +51,10 @@ def main():
     bus.subscribe(args.pwm_channel, on_pwm)
 
     def publish(armed, throttle, roll=0.0, pitch=0.0, yaw=0.0):
+        nonlocal demand_since
         now = int(time.time() * 1e6)
+        if demand_since is None and armed and throttle != 0.0:
+            demand_since = now
         sp = setpoint_t()
         sp.utime, sp.throttle, sp.yaw, sp.armed = now, throttle, yaw, armed
         pid = pid_t()

@@ -111,6 +111,8 @@ std::string json(const Config& c) {
   nlohmann::json j;
   j["motors"] = c.motors();
   j["names"] = c.motor_names();
+  j["details"] = nlohmann::json::array();
+  for (int i = 0; i < c.motors(); ++i) j["details"].push_back(detail(c, i));
   j["axes"] = {"roll", "pitch", "yaw", "thrust"};
   j["normalization"] = to_string(c.normalization);
   j["rank"] = rank_of(c.mixing);

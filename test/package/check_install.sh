@@ -97,7 +97,7 @@ from motormix import motor_pwm_t, setpoint_t, pid_t, mixer_status_t
 m = motor_pwm_t()
 m.utime, m.num_motors, m.command, m.pwm, m.direction, m.armed = 5, 2, [0.5, 1.0], [1500.0, 2000.0], [0, 0], True
 back = motor_pwm_t.decode(m.encode())
-assert back.pwm == [1500.0, 2000.0] and back.armed, back.pwm
+assert list(back.pwm) == [1500.0, 2000.0] and back.armed, back.pwm
 print("python types ok:", [t.__name__ for t in (motor_pwm_t, setpoint_t, pid_t, mixer_status_t)])
 PY
 

@@ -7,8 +7,12 @@
 
 #include <sys/wait.h>
 
+#include <motormix/presets.hpp>
+
 #include <array>
 #include <cstdio>
+#include <filesystem>
+#include <set>
 
 namespace motormix::test {
 namespace {
@@ -68,6 +72,35 @@ TEST(Cli, HelpAndVersion) {
   const Result v = run("--version");
   EXPECT_EQ(v.exit_code, 0);
   EXPECT_NE(v.out.find("motormix"), std::string::npos);
+}
+
+// config/ holds a commented example for every preset, and each passes
+// `run --check` as shipped.
+TEST(Cli, EveryBundledConfigChecksAndEveryPresetHasOne) {
+  std::set<std::string> covered;
+  for (const auto& entry : std::filesystem::directory_iterator(source_path("config"))) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string file = entry.path().string();
+    SCOPED_TRACE(file);
+    EXPECT_EQ(run("run --check --config " + file).exit_code, 0);
+    covered.insert(config::load_config_file(file).vehicle.name);
+  }
+  for (const std::string& preset : preset_names()) {
+    EXPECT_EQ(covered.count(preset), 1U) << "no config/*.yaml for preset " << preset;
+  }
+}
+
+TEST(Cli, MatrixFormatsOfOtherStacks) {
+  const Result px4 = run("matrix --preset hexa_x --format px4");
+  EXPECT_EQ(px4.exit_code, 0);
+  EXPECT_NE(px4.out.find("param set-default CA_ROTOR_COUNT 6"), std::string::npos);
+  const Result ap = run("matrix --preset quad_x --format ardupilot");
+  EXPECT_EQ(ap.exit_code, 0);
+  EXPECT_NE(ap.out.find("MotorsMatrix:init(4)"), std::string::npos);
+  // A table has no rotor positions: a usage error, not an empty file.
+  const Result table = run("matrix --preset team_quad --format px4");
+  EXPECT_EQ(table.exit_code, 2);
+  EXPECT_TRUE(table.out.empty());
 }
 
 }  // namespace

@@ -1,0 +1,15 @@
+# Runs RUN ARGS... when PYTHON exists and imports lcm; otherwise prints why
+# the test is skipped (ctest matches "SKIPPED:").
+if(NOT EXISTS "${PYTHON}")
+  message("SKIPPED: no Python with LCM's bindings at ${PYTHON} (run scripts/python-env)")
+  return()
+endif()
+execute_process(COMMAND "${PYTHON}" -c "import lcm" RESULT_VARIABLE no_lcm OUTPUT_QUIET ERROR_QUIET)
+if(no_lcm)
+  message("SKIPPED: ${PYTHON} cannot import lcm (run scripts/python-env)")
+  return()
+endif()
+execute_process(COMMAND "${RUN}" ${ARGS} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "python example check failed (${rc})")
+endif()
