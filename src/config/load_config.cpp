@@ -255,8 +255,9 @@ Vehicle paparazzi_vehicle(MapReader& geometry, LoadContext& context) {
   for (Eigen::Index i = 0; i < m.rows(); ++i) {
     for (int a = 0; a < kNumAxes; ++a) {
       if (std::abs(m(i, a)) > kMaxCoefficient) {
-        fail(path_key, file + ": coefficient/SCALE " + std::to_string(m(i, a)) + " of motor " +
-                           std::to_string(i + 1),
+        fail(path_key,
+             file + ": coefficient/SCALE " + std::to_string(m(i, a)) + " of motor " +
+                 std::to_string(i + 1),
              "at most " + std::to_string(static_cast<int>(kMaxCoefficient)) + " in magnitude");
       }
     }
@@ -271,9 +272,8 @@ Vehicle paparazzi_vehicle(MapReader& geometry, LoadContext& context) {
 }
 
 void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
-  const std::vector<std::string> forms = {"preset",     "rotors",
-                                          "effectiveness", "mixing",
-                                          "paparazzi",  "differential_drive",
+  const std::vector<std::string> forms = {"preset",    "rotors",    "effectiveness",
+                                          "mixing",    "paparazzi", "differential_drive",
                                           "skid_steer"};
   std::vector<std::string> given;
   for (const auto& f : forms) {

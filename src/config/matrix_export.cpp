@@ -261,9 +261,8 @@ std::string ardupilot(const Config& c) {
     if (deg < -1e-9) deg += 360.0;
     bearing.emplace_back(std::max(deg, 0.0), i);
   }
-  std::stable_sort(bearing.begin(), bearing.end(), [](const auto& a, const auto& b) {
-    return a.first < b.first - 1e-6;
-  });
+  std::stable_sort(bearing.begin(), bearing.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first - 1e-6; });
   std::vector<int> testing_order(static_cast<std::size_t>(n));
   for (std::size_t k = 0; k < bearing.size(); ++k) {
     testing_order[static_cast<std::size_t>(bearing[k].second)] = static_cast<int>(k) + 1;
@@ -284,9 +283,8 @@ std::string ardupilot(const Config& c) {
   for (int i = 0; i < n; ++i) {
     s << "MotorsMatrix:add_motor_raw(" << i << ", " << param(c.mixing(i, index(Axis::kRoll)))
       << ", " << param(c.mixing(i, index(Axis::kPitch))) << ", "
-      << param(c.mixing(i, index(Axis::kYaw))) << ", "
-      << testing_order[static_cast<std::size_t>(i)] << ")  -- "
-      << c.motor_names()[static_cast<std::size_t>(i)];
+      << param(c.mixing(i, index(Axis::kYaw))) << ", " << testing_order[static_cast<std::size_t>(i)]
+      << ")  -- " << c.motor_names()[static_cast<std::size_t>(i)];
     const std::string d = detail(c, i);
     if (!d.empty()) s << ": " << d;
     s << "\n";

@@ -103,12 +103,12 @@ MixingMatrix parse_paparazzi_mixing(const std::string& xml_text, const std::stri
     if (it != defines.end()) {
       columns[static_cast<std::size_t>(a)] = parse_list(it->second, source, names[a]);
     } else if (a != index(Axis::kThrust)) {
-      refuse(source, std::string(names[a]) + " is missing" +
-                         (defines.count("TYPE") ? " (a frame given only by TYPE '" +
-                                                      defines["TYPE"] +
-                                                      "' is not read: give the coefficient lists, "
-                                                      "or use a motormix preset)"
-                                                : ""));
+      refuse(source,
+             std::string(names[a]) + " is missing" +
+                 (defines.count("TYPE") ? " (a frame given only by TYPE '" + defines["TYPE"] +
+                                              "' is not read: give the coefficient lists, "
+                                              "or use a motormix preset)"
+                                        : ""));
     }
   }
   const std::size_t n = columns[0].size();

@@ -67,8 +67,9 @@ void expect_px4(const std::string& preset, double arm, const std::vector<Px4Roto
 
 // PX4's generic quadrotor X airframe: rotors at (+-0.15, +-0.15), KM +0.05 for CCW.
 TEST(Px4Export, QuadXMatchesPx4Airframe) {
-  expect_px4("quad_x", 0.15 * std::sqrt(2.0),
-             {{0.15, 0.15, 0.05}, {-0.15, -0.15, 0.05}, {0.15, -0.15, -0.05}, {-0.15, 0.15, -0.05}});
+  expect_px4(
+      "quad_x", 0.15 * std::sqrt(2.0),
+      {{0.15, 0.15, 0.05}, {-0.15, -0.15, 0.05}, {0.15, -0.15, -0.05}, {-0.15, 0.15, -0.05}});
 }
 
 // PX4's "Hex X with control allocation" airframe (arm 0.275 m).
@@ -100,7 +101,8 @@ TEST(Px4Export, TiltedRotorsCarryTheirAxisAndTablesAreRefused) {
       config::export_matrix(preset_config(table), config::MatrixFormat::kPx4);
       ADD_FAILURE() << table << " exported to px4";
     } catch (const config::ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("needs a rotor geometry"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("needs a rotor geometry"), std::string::npos)
+          << e.what();
     }
   }
 }
@@ -129,7 +131,8 @@ void expect_ardupilot(const std::string& preset, const std::vector<ApMotor>& fra
     ours_order.push_back(std::stoi(m[5]));
   }
   ASSERT_EQ(ours.size(), frame.size());
-  EXPECT_NE(text.find("MotorsMatrix:init(" + std::to_string(frame.size()) + ")"), std::string::npos);
+  EXPECT_NE(text.find("MotorsMatrix:init(" + std::to_string(frame.size()) + ")"),
+            std::string::npos);
 
   std::vector<std::array<double, 3>> ap;
   for (const ApMotor& m : frame) {
@@ -158,13 +161,14 @@ TEST(ArduPilotExport, QuadXMatchesApMotorsMatrix) {
 }
 
 TEST(ArduPilotExport, HexaXMatchesApMotorsMatrix) {
-  expect_ardupilot("hexa_x",
-                   {{90, -1, 2}, {-90, 1, 5}, {-30, -1, 6}, {150, 1, 3}, {30, 1, 1}, {-150, -1, 4}});
+  expect_ardupilot(
+      "hexa_x", {{90, -1, 2}, {-90, 1, 5}, {-30, -1, 6}, {150, 1, 3}, {30, 1, 1}, {-150, -1, 4}});
 }
 
 TEST(ArduPilotExport, GroundVehiclesAreRefused) {
-  EXPECT_THROW(config::export_matrix(preset_config("skid_steer_4"), config::MatrixFormat::kArdupilot),
-               config::ConfigError);
+  EXPECT_THROW(
+      config::export_matrix(preset_config("skid_steer_4"), config::MatrixFormat::kArdupilot),
+      config::ConfigError);
 }
 
 // Every preset through `--format paparazzi` and back through
@@ -219,8 +223,9 @@ TEST(PaparazziImport, DamagedSectionsAreRefusedWithTheReason) {
       EXPECT_NE(std::string(e.what()).find("bad.xml"), std::string::npos) << e.what();
     }
   };
-  const std::string rp = "<define name=\"ROLL_COEF\" value=\"{1,-1}\"/>"
-                         "<define name=\"PITCH_COEF\" value=\"{1,-1}\"/>";
+  const std::string rp =
+      "<define name=\"ROLL_COEF\" value=\"{1,-1}\"/>"
+      "<define name=\"PITCH_COEF\" value=\"{1,-1}\"/>";
   refused(rp, "YAW_COEF is missing");
   refused("<define name=\"TYPE\" value=\"QUAD_X\"/>", "TYPE 'QUAD_X' is not read");
   refused(rp + "<define name=\"YAW_COEF\" value=\"{1}\"/>", "YAW_COEF has 1 entries");
