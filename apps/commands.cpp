@@ -110,6 +110,7 @@ int replay(const ReplayCommand& cmd) {
   node::ReplayOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
   options.cycle_on_every_input = cmd.every_input;
+  options.max_gap_s = cmd.max_gap_s;
   node::ReplaySummary s;
   if (!node::replay_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
     return kExitRuntime;
@@ -125,8 +126,11 @@ int replay(const ReplayCommand& cmd) {
             << " s, yaw " << s.limited_s[2] << " s, thrust " << s.limited_s[3]
             << " s (armed time with that axis limited)\n"
             << "failsafe events " << s.failsafe_events << "; rejected inputs " << s.rejected
-            << "\n";
-  return kExitOk;
+            << "\n"
+            << "log damage      " << s.discontinuities << " time discontinuities ("
+            << s.skipped_events << " events skipped), " << s.skipped.size()
+            << " damaged stretches skipped\n";
+  return s.damaged() ? kExitDamagedLog : kExitOk;
 }
 
 int matrix(const MatrixCommand& cmd) {

@@ -1,6 +1,7 @@
 #pragma once
 // The subcommands of the motormix binary. Each returns the process exit code:
-// 0 ok, 1 runtime error, 2 usage or configuration error.
+// 0 ok, 1 runtime error, 2 usage or configuration error, 3 (replay) damaged
+// input log.
 
 #include <string>
 #include <vector>
@@ -10,6 +11,9 @@ namespace motormix::app {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitRuntime = 1;
 inline constexpr int kExitUsage = 2;
+// replay: the output was written from every valid event, but the input log
+// had damaged stretches that were skipped (listed on stderr).
+inline constexpr int kExitDamagedLog = 3;
 
 struct CommonOptions {
   std::string config_path;
@@ -47,6 +51,7 @@ struct ReplayCommand {
   std::string in_log;
   std::string out_log;
   bool every_input = false;
+  double max_gap_s = 10.0;
 };
 int replay(const ReplayCommand& cmd);
 

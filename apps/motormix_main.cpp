@@ -67,6 +67,11 @@ int main(int argc, char** argv) {
       ->required();
   replay_app->add_flag("--every-input", replay_cmd.every_input,
                        "also run a cycle right after every input event (golden files)");
+  replay_app
+      ->add_option("--max-gap", replay_cmd.max_gap_s,
+                   "seconds between consecutive events beyond which time is discontinuous "
+                   "(no cycles are run across; default 10)")
+      ->check(CLI::Range(0.001, 86400.0));
 
   try {
     app.parse(argc, argv);

@@ -2,12 +2,14 @@
 
 #include <motormix/config/build_mixer.hpp>
 #include "node/control_loop.hpp"
+#include "node/log_reader.hpp"
 #include "node/messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <ostream>
 #include <vector>
 
@@ -42,6 +44,21 @@ class Writer {
   std::int64_t eventnum_ = 0;
 };
 
+Counters add(const Counters& a, const Counters& b) {
+  Counters s;
+  s.cycles = a.cycles + b.cycles;
+  s.setpoint_received = a.setpoint_received + b.setpoint_received;
+  s.pid_received = a.pid_received + b.pid_received;
+  s.rejected_decode = a.rejected_decode + b.rejected_decode;
+  s.rejected_nonfinite = a.rejected_nonfinite + b.rejected_nonfinite;
+  s.rejected_range = a.rejected_range + b.rejected_range;
+  s.rejected_out_of_order = a.rejected_out_of_order + b.rejected_out_of_order;
+  s.rejected_future = a.rejected_future + b.rejected_future;
+  s.failsafe_events = a.failsafe_events + b.failsafe_events;
+  s.arming_refused = a.arming_refused + b.arming_refused;
+  return s;
+}
+
 void draw_progress(std::ostream& log, double fraction) {
   constexpr int kWidth = 40;
   const int filled = static_cast<int>(std::lround(fraction * kWidth));
@@ -55,34 +72,25 @@ void draw_progress(std::ostream& log, double fraction) {
 bool replay_log(const config::Config& config, const std::string& in_path,
                 const std::string& out_path, const ReplayOptions& options, ReplaySummary& summary,
                 std::ostream& log) {
-  // First pass: the time span, for the progress bar and the summary.
-  std::int64_t first = 0;
-  std::int64_t last = 0;
-  {
-    lcm::LogFile scan(in_path, "r");
-    if (!scan.good()) {
-      log << "motormix replay: cannot read " << in_path << "\n";
-      return false;
-    }
-    bool any = false;
-    while (const lcm::LogEvent* ev = scan.readNextEvent()) {
-      if (!any) first = ev->timestamp;
-      last = std::max(last, ev->timestamp);
-      any = true;
-    }
-    if (!any) {
-      log << "motormix replay: " << in_path << " holds no events\n";
-      return false;
-    }
+  LogReader in(in_path);
+  if (!in.good()) {
+    log << "motormix replay: cannot read " << in_path << "\n";
+    return false;
   }
-  lcm::LogFile in(in_path, "r");
+  const LogEventView* first_event = in.peek();
+  if (!first_event) {
+    log << "motormix replay: " << in_path << " holds no valid events";
+    if (in.skipped_bytes() > 0) log << " (" << in.skipped_bytes() << " bytes of damaged data)";
+    log << "\n";
+    summary.skipped = in.skipped();
+    return false;
+  }
   Writer out(out_path);
   if (!out.good()) {
     log << "motormix replay: cannot write " << out_path << "\n";
     return false;
   }
 
-  ControlLoop loop(config, config::build_mixer(config));
   motor_pwm_t pwm;
   size_pwm_message(pwm, config.motors());
   mixer_status_t status{};
@@ -92,13 +100,27 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   const double tail_s = options.tail_s >= 0.0 ? options.tail_s
                                               : 2.0 * std::max(config.inputs.setpoint_timeout_s,
                                                                config.inputs.pid_timeout_s);
-  const std::int64_t end = last + static_cast<std::int64_t>(tail_s * 1e6);
-  std::int64_t next_tick = first + period_us;
-  std::int64_t next_status = first;
-  int last_drawn = -1;
+  const auto tail_us = static_cast<std::int64_t>(tail_s * 1e6);
+  const auto max_gap_us = static_cast<std::int64_t>(options.max_gap_s * 1e6);
+
+  // The log is replayed in segments of continuous time. A segment starts as a
+  // freshly started mixer would (disarmed until the controller arms it), and
+  // no loop cycle is ever synthesized across the gap between two segments.
+  std::optional<ControlLoop> loop;
+  Counters totals;
+  std::int64_t segment_first = 0;
+  std::int64_t next_tick = 0;
+  std::int64_t next_status = 0;
+  const auto start_segment = [&](std::int64_t t) {
+    if (loop) totals = add(totals, loop->counters());
+    loop.emplace(config, config::build_mixer(config));
+    segment_first = t;
+    next_tick = t + period_us;
+    next_status = t;
+  };
 
   const auto cycle_at = [&](std::int64_t t) {
-    const CycleResult& r = loop.cycle(t);
+    const CycleResult& r = loop->cycle(t);
     fill_pwm_message(pwm, r, t);
     out.write(config.channels.motor_pwm, t, pwm);
     ++summary.outputs;
@@ -111,8 +133,8 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       }
     }
     if (t >= next_status) {
-      fill_status_message(status, r, loop.counters(), LoopTiming{}, config.hash, config.motors(),
-                          t);
+      fill_status_message(status, r, add(totals, loop->counters()), LoopTiming{}, config.hash,
+                          config.motors(), t);
       out.write(config.channels.status, t, status);
       next_status = t + status_period_us;
     }
@@ -123,28 +145,59 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       next_tick += period_us;
     }
   };
+  const auto end_segment = [&](std::int64_t last) {
+    run_ticks_until(last + tail_us);
+    summary.duration_s += static_cast<double>(last + tail_us - segment_first) / 1e6;
+  };
 
-  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+  start_segment(first_event->timestamp);
+  std::int64_t previous = first_event->timestamp;
+  int last_drawn = -1;
+  while (const LogEventView* ev = in.next()) {
+    const std::int64_t jump = ev->timestamp - previous;
+    if (jump < 0 || jump > max_gap_us) {
+      ++summary.discontinuities;
+      // One event whose timestamp is off while the next one carries on the
+      // timeline is a damaged timestamp: skip that event alone.
+      const LogEventView* after = in.peek();
+      const bool outlier =
+          after && after->timestamp >= previous && after->timestamp - previous <= max_gap_us;
+      log << "motormix replay: warning: event " << ev->eventnum << " (byte " << ev->offset
+          << ", channel " << ev->channel << ") jumps " << static_cast<double>(jump) / 1e6
+          << " s in time; "
+          << (outlier ? "skipped, the next event carries on the timeline"
+                      : "a new segment starts there (no cycles across the gap, the mixer "
+                        "restarts disarmed)")
+          << "\n";
+      if (outlier) {
+        ++summary.skipped_events;
+        continue;
+      }
+      end_segment(previous);
+      start_segment(ev->timestamp);
+    }
+    previous = ev->timestamp;
     run_ticks_until(ev->timestamp);
     const bool is_setpoint = ev->channel == config.channels.setpoint;
     const bool is_pid = ev->channel == config.channels.pid;
-    out.raw(ev->channel, ev->timestamp, ev->data, ev->datalen);
+    const int size = static_cast<int>(ev->data.size());
+    out.raw(ev->channel, ev->timestamp, ev->data.data(), size);
     if (is_setpoint || is_pid) {
       ++summary.input_events;
       bool accepted = false;
       if (is_setpoint) {
-        SetpointSample s;
-        if (decode_setpoint(ev->data, ev->datalen, s)) {
-          loop.on_setpoint(s, ev->timestamp, ev->timestamp);
+        SetpointSample sp;
+        if (decode_setpoint(ev->data.data(), size, sp)) {
+          loop->on_setpoint(sp, ev->timestamp, ev->timestamp);
         } else {
-          loop.on_undecodable();
+          loop->on_undecodable();
         }
       } else {
         PidSample p;
-        if (decode_pid(ev->data, ev->datalen, p)) {
-          accepted = loop.on_pid(p, ev->timestamp, ev->timestamp) == Rejection::kNone;
+        if (decode_pid(ev->data.data(), size, p)) {
+          accepted = loop->on_pid(p, ev->timestamp, ev->timestamp) == Rejection::kNone;
         } else {
-          loop.on_undecodable();
+          loop->on_undecodable();
         }
       }
       if (options.cycle_on_every_input ||
@@ -154,21 +207,25 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     } else {
       ++summary.other_events;
     }
-    if (options.progress && last > first) {
-      const int percent = static_cast<int>(100 * (ev->timestamp - first) / (last - first));
+    if (options.progress && in.size() > 0) {
+      const int percent = static_cast<int>(100 * ev->offset / in.size());
       if (percent != last_drawn) {
         draw_progress(log, percent / 100.0);
         last_drawn = percent;
       }
     }
   }
-  run_ticks_until(end);
+  end_segment(previous);
   if (options.progress) log << "\n";
 
-  const Counters& c = loop.counters();
-  summary.duration_s = static_cast<double>(end - first) / 1e6;
-  summary.failsafe_events = c.failsafe_events;
-  summary.rejected = c.rejected();
+  totals = add(totals, loop->counters());
+  summary.failsafe_events = totals.failsafe_events;
+  summary.rejected = totals.rejected();
+  summary.skipped = in.skipped();
+  for (const SkippedRange& r : summary.skipped) {
+    log << "motormix replay: warning: " << in_path << " is damaged: bytes " << r.begin << ".."
+        << r.end << " (" << r.end - r.begin << " bytes) hold no valid event and were skipped\n";
+  }
   return true;
 }
 

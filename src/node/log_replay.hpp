@@ -1,17 +1,26 @@
 #pragma once
 // `motormix replay`: the control loop run offline over an LCM event log, with
-// the log's own timestamps as the clock. The loop ticks at the configured
+// the log's own timestamps as the clock. Damaged logs are replayed as far as
+// they can be: broken stretches are skipped and reported (see log_reader.hpp),
+// and a timestamp that jumps back, or forward by more than max_gap_s, is a
+// discontinuity: one such event between two that agree is skipped as a
+// damaged timestamp; otherwise a new segment starts there, as a freshly
+// started mixer (disarmed until armed again). No cycle is ever synthesized
+// across a gap, so the output holds at most loop_rate x (time covered by
+// segments, each plus the tail) cycles, plus the input events. The loop ticks at the configured
 // rate from the first event; inputs are handled at their timestamps, exactly
 // as the live node would see them arrive. The output log holds every input
 // event plus the produced motor_pwm_t and mixer_status_t. Deterministic: the
 // same log and configuration give the same bytes.
 
 #include <motormix/config/config.hpp>
+#include "node/log_reader.hpp"
 
 #include <array>
 #include <cstdint>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 namespace motormix::node {
 
@@ -24,7 +33,11 @@ struct ReplaySummary {
   std::array<double, 4>
       limited_s{};  // per axis (roll, pitch, yaw, thrust): armed time not fully delivered
   std::int64_t failsafe_events = 0;
-  std::int64_t rejected = 0;  // all rejection counters together
+  std::int64_t rejected = 0;         // all rejection counters together
+  std::int64_t discontinuities = 0;  // timestamps that jumped back or beyond max_gap_s
+  std::int64_t skipped_events = 0;   // of those, single events skipped as damaged timestamps
+  std::vector<SkippedRange> skipped;  // byte ranges of the input that held no valid event
+  bool damaged() const { return !skipped.empty(); }
 };
 
 struct ReplayOptions {
@@ -34,6 +47,9 @@ struct ReplayOptions {
   // the result for every combination of inputs that is ever in force (what
   // the golden files of the regression suite are made of).
   bool cycle_on_every_input = false;
+  // Largest forward step between consecutive events that is still time
+  // passing; beyond it (or any step back) is a discontinuity.
+  double max_gap_s = 10.0;
 };
 
 // Returns false (with a message on `log`) if a log cannot be read or written.

@@ -1,0 +1,121 @@
+#include "node/log_reader.hpp"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <array>
+
+namespace motormix::node {
+
+namespace {
+
+constexpr std::uint32_t kSyncWord = 0xEDA1DA01U;
+constexpr std::uint64_t kHeaderSize = 4 + 8 + 8 + 4 + 4;
+// While searching for the next event after damage, read this much at a time.
+constexpr std::size_t kScanChunk = 64 * 1024;
+
+std::uint64_t big_endian(const std::uint8_t* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+}  // namespace
+
+LogReader::LogReader(const std::string& path) {
+  struct stat st {};
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  file_ = std::fopen(path.c_str(), "rb");
+  size_ = static_cast<std::uint64_t>(st.st_size);
+}
+
+LogReader::~LogReader() {
+  if (file_) std::fclose(file_);
+}
+
+std::uint64_t LogReader::skipped_bytes() const {
+  std::uint64_t total = 0;
+  for (const SkippedRange& r : skipped_) total += r.end - r.begin;
+  return total;
+}
+
+bool LogReader::read_at(std::uint64_t offset, LogEventView& ev) {
+  if (offset + kHeaderSize > size_) return false;
+  std::array<std::uint8_t, kHeaderSize> h{};
+  // Events are read in order: seek only after damage (a seek drops stdio's buffer).
+  const bool there = std::ftell(file_) == static_cast<long>(offset);
+  if ((!there && std::fseek(file_, static_cast<long>(offset), SEEK_SET) != 0) ||
+      std::fread(h.data(), 1, h.size(), file_) != h.size()) {
+    return false;
+  }
+  if (big_endian(h.data(), 4) != kSyncWord) return false;
+  const auto channel_len = static_cast<std::int32_t>(big_endian(h.data() + 20, 4));
+  const auto data_len = static_cast<std::int32_t>(big_endian(h.data() + 24, 4));
+  if (channel_len < 1 || channel_len > kMaxChannelLength || data_len < 0 ||
+      data_len > kMaxDataLength ||
+      offset + kHeaderSize + static_cast<std::uint64_t>(channel_len) +
+              static_cast<std::uint64_t>(data_len) >
+          size_) {
+    return false;
+  }
+  ev.channel.resize(static_cast<std::size_t>(channel_len));
+  ev.data.resize(static_cast<std::size_t>(data_len));
+  if (std::fread(ev.channel.data(), 1, ev.channel.size(), file_) != ev.channel.size() ||
+      std::fread(ev.data.data(), 1, ev.data.size(), file_) != ev.data.size()) {
+    return false;
+  }
+  // Channel names are printable: a "header" found inside message data rarely is.
+  if (!std::all_of(ev.channel.begin(), ev.channel.end(),
+                   [](char c) { return c > ' ' && c < 0x7f; })) {
+    return false;
+  }
+  ev.eventnum = static_cast<std::int64_t>(big_endian(h.data() + 4, 8));
+  ev.timestamp = static_cast<std::int64_t>(big_endian(h.data() + 12, 8));
+  ev.offset = offset;
+  return true;
+}
+
+bool LogReader::fill(LogEventView& ev) {
+  if (!file_ || position_ >= size_) return false;
+  if (read_at(position_, ev)) {
+    position_ = ev.offset + kHeaderSize + ev.channel.size() + ev.data.size();
+    return true;
+  }
+  // Damage at position_: find the next offset where a valid event starts.
+  const std::uint64_t damage = position_;
+  std::vector<std::uint8_t> chunk(kScanChunk + 3);
+  for (std::uint64_t base = damage + 1; base < size_; base += kScanChunk) {
+    const std::size_t want = static_cast<std::size_t>(
+        std::min<std::uint64_t>(kScanChunk + 3, size_ - base));
+    if (std::fseek(file_, static_cast<long>(base), SEEK_SET) != 0) break;
+    const std::size_t got = std::fread(chunk.data(), 1, want, file_);
+    for (std::size_t i = 0; i + 4 <= got; ++i) {
+      if (big_endian(chunk.data() + i, 4) != kSyncWord) continue;
+      if (read_at(base + i, ev)) {
+        skipped_.push_back({damage, base + i});
+        position_ = ev.offset + kHeaderSize + ev.channel.size() + ev.data.size();
+        return true;
+      }
+    }
+  }
+  skipped_.push_back({damage, size_});
+  position_ = size_;
+  return false;
+}
+
+const LogEventView* LogReader::peek() {
+  if (!have_lookahead_) {
+    lookahead_end_ = !fill(lookahead_);
+    have_lookahead_ = true;
+  }
+  return lookahead_end_ ? nullptr : &lookahead_;
+}
+
+const LogEventView* LogReader::next() {
+  if (!peek()) return nullptr;
+  std::swap(current_, lookahead_);
+  have_lookahead_ = false;
+  return &current_;
+}
+
+}  // namespace motormix::node

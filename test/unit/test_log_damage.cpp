@@ -1,0 +1,202 @@
+// Damaged logs through `replay`: broken structure is skipped and reported,
+// jumps in time never make the loop run across them, and the output stays
+// bounded by the input.
+
+#include "node/log_reader.hpp"
+#include "node/log_replay.hpp"
+#include "test_support.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <sstream>
+
+namespace motormix::test {
+namespace {
+
+using node::LogReader;
+using node::ReplayOptions;
+using node::ReplaySummary;
+
+const std::string kFlight = "test/data/flights/team_quad.lcmlog";
+
+std::vector<char> read_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+std::string write_bytes(const std::string& name, const std::vector<char>& bytes) {
+  const std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return path;
+}
+
+void put_be64(std::vector<char>& bytes, std::uint64_t at, std::int64_t value) {
+  for (int i = 0; i < 8; ++i) {
+    bytes[at + static_cast<std::uint64_t>(i)] =
+        static_cast<char>((static_cast<std::uint64_t>(value) >> (56 - 8 * i)) & 0xFF);
+  }
+}
+
+std::vector<node::LogEventView> events_of(const std::string& path) {
+  LogReader r(path);
+  std::vector<node::LogEventView> out;
+  while (const auto* ev = r.next()) out.push_back(*ev);
+  return out;
+}
+
+struct Replayed {
+  bool ok = false;
+  ReplaySummary summary;
+  std::string log;
+  std::uintmax_t bytes = 0;
+};
+
+Replayed replay(const std::string& in) {
+  const auto config = team_quad_config();
+  Replayed r;
+  std::ostringstream log;
+  const std::string out = in + ".out.lcmlog";
+  r.ok = node::replay_log(config, in, out, ReplayOptions{}, r.summary, log);
+  r.log = log.str();
+  std::ifstream f(out, std::ios::binary | std::ios::ate);
+  r.bytes = f ? static_cast<std::uintmax_t>(f.tellg()) : 0;
+  return r;
+}
+
+// The reader sees exactly what LCM's own reader sees in an intact log.
+TEST(LogReader, AgreesWithLcmOnAnIntactLog) {
+  const auto ours = events_of(source_path(kFlight));
+  lcm::LogFile theirs(source_path(kFlight), "r");
+  std::size_t n = 0;
+  while (const lcm::LogEvent* ev = theirs.readNextEvent()) {
+    ASSERT_LT(n, ours.size());
+    EXPECT_EQ(ours[n].timestamp, ev->timestamp);
+    EXPECT_EQ(ours[n].channel, ev->channel);
+    ASSERT_EQ(ours[n].data.size(), static_cast<std::size_t>(ev->datalen));
+    EXPECT_EQ(0, std::memcmp(ours[n].data.data(), ev->data, ours[n].data.size()));
+    ++n;
+  }
+  EXPECT_EQ(n, ours.size());
+  LogReader again(source_path(kFlight));
+  while (again.next()) {
+  }
+  EXPECT_TRUE(again.skipped().empty());
+}
+
+// Three flipped bytes put one timestamp days ahead: that event is skipped,
+// the replay goes on, and no cycle runs across the jump.
+TEST(LogDamage, OneTimestampFarInTheFutureIsSkipped) {
+  auto bytes = read_bytes(source_path(kFlight));
+  const auto events = events_of(source_path(kFlight));
+  const auto& victim = events[events.size() / 2];
+  for (int i = 0; i < 3; ++i) bytes[victim.offset + 12 + 2 + static_cast<std::uint64_t>(i)] ^= 0x5A;
+  const Replayed intact = replay(write_bytes("intact.lcmlog", read_bytes(source_path(kFlight))));
+  const Replayed r = replay(write_bytes("future.lcmlog", bytes));
+  ASSERT_TRUE(r.ok) << r.log;
+  EXPECT_FALSE(r.summary.damaged());
+  EXPECT_EQ(r.summary.discontinuities, 1);
+  EXPECT_EQ(r.summary.skipped_events, 1);
+  EXPECT_NE(r.log.find("byte " + std::to_string(victim.offset)), std::string::npos) << r.log;
+  EXPECT_EQ(r.summary.outputs, intact.summary.outputs);
+  EXPECT_LE(r.bytes, intact.bytes);
+  EXPECT_NEAR(r.summary.duration_s, intact.summary.duration_s, 1e-9);
+}
+
+// The whole second half shifted by a day (a logger paused) or back by a day:
+// a new segment, the mixer restarts disarmed, and the output covers only the
+// time actually in the log.
+TEST(LogDamage, JumpsForwardAndBackStartNewSegmentsWithoutCyclesAcross) {
+  const auto events = events_of(source_path(kFlight));
+  const Replayed intact = replay(write_bytes("intact2.lcmlog", read_bytes(source_path(kFlight))));
+  for (const std::int64_t shift : {86400LL * 1000000LL, -86400LL * 1000000LL}) {
+    auto bytes = read_bytes(source_path(kFlight));
+    for (std::size_t i = events.size() / 2; i < events.size(); ++i) {
+      put_be64(bytes, events[i].offset + 12, events[i].timestamp + shift);
+    }
+    const Replayed r = replay(write_bytes("shifted.lcmlog", bytes));
+    ASSERT_TRUE(r.ok) << r.log;
+    EXPECT_EQ(r.summary.discontinuities, 1) << r.log;
+    EXPECT_EQ(r.summary.skipped_events, 0);
+    EXPECT_NE(r.log.find("new segment"), std::string::npos);
+    // At most one extra tail of cycles (the first segment's) beyond the intact replay.
+    const auto config = team_quad_config();
+    const double tail_cycles = 2.0 * 0.1 * config.loop_rate_hz + 2;
+    EXPECT_LE(static_cast<double>(r.summary.outputs),
+              static_cast<double>(intact.summary.outputs) + tail_cycles);
+    EXPECT_EQ(r.summary.input_events, intact.summary.input_events);
+  }
+}
+
+// A broken event header in the middle: LCM's reader stops there; ours skips
+// that event, carries on, and says which bytes it skipped.
+TEST(LogDamage, BrokenHeaderIsSkippedAndReported) {
+  auto bytes = read_bytes(source_path(kFlight));
+  const auto events = events_of(source_path(kFlight));
+  const auto& victim = events[events.size() / 3];
+  bytes[victim.offset] = 0x00;  // sync word broken
+  const Replayed r = replay(write_bytes("broken.lcmlog", bytes));
+  ASSERT_TRUE(r.ok) << r.log;
+  ASSERT_TRUE(r.summary.damaged());
+  ASSERT_EQ(r.summary.skipped.size(), 1U);
+  EXPECT_EQ(r.summary.skipped[0].begin, victim.offset);
+  EXPECT_EQ(r.summary.skipped[0].end, events[events.size() / 3 + 1].offset);
+  EXPECT_NE(r.log.find("is damaged: bytes " + std::to_string(victim.offset)), std::string::npos);
+  const Replayed intact = replay(write_bytes("intact3.lcmlog", read_bytes(source_path(kFlight))));
+  EXPECT_EQ(r.summary.input_events + r.summary.other_events + 1,
+            intact.summary.input_events + intact.summary.other_events);
+}
+
+TEST(LogDamage, TruncatedLastEventAndGarbage) {
+  auto bytes = read_bytes(source_path(kFlight));
+  const auto events = events_of(source_path(kFlight));
+  bytes.resize(static_cast<std::size_t>(events.back().offset) + 20);
+  const Replayed cut = replay(write_bytes("cut.lcmlog", bytes));
+  ASSERT_TRUE(cut.ok) << cut.log;
+  ASSERT_EQ(cut.summary.skipped.size(), 1U);
+  EXPECT_EQ(cut.summary.skipped[0].begin, events.back().offset);
+  EXPECT_EQ(cut.summary.skipped[0].end, bytes.size());
+
+  std::mt19937 rng(7);
+  std::vector<char> noise(200000);
+  for (char& c : noise) c = static_cast<char>(rng());
+  const Replayed garbage = replay(write_bytes("garbage.lcmlog", noise));
+  EXPECT_FALSE(garbage.ok);
+  EXPECT_NE(garbage.log.find("holds no valid events"), std::string::npos) << garbage.log;
+  const Replayed empty = replay(write_bytes("empty.lcmlog", {}));
+  EXPECT_FALSE(empty.ok);
+}
+
+// Random damage anywhere (seeded): replay never crashes, and the output is
+// bounded as documented: one cycle per loop period of the time its segments
+// cover, and those never span more than the intact log plus, per
+// discontinuity, one allowed gap and one tail.
+TEST(LogDamage, RandomCorruptionStaysBounded) {
+  const auto original = read_bytes(source_path(kFlight));
+  const Replayed intact = replay(write_bytes("intact4.lcmlog", original));
+  std::mt19937_64 rng(20261124);
+  const auto config = team_quad_config();
+  const double tail_s = 2.0 * 0.1;
+  const double max_gap_s = ReplayOptions{}.max_gap_s;
+  for (int trial = 0; trial < 40; ++trial) {
+    auto bytes = original;
+    const int flips = 1 + static_cast<int>(rng() % 20);
+    for (int f = 0; f < flips; ++f) bytes[rng() % bytes.size()] = static_cast<char>(rng());
+    const Replayed r = replay(write_bytes("random.lcmlog", bytes));
+    if (!r.ok) continue;
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    const double segments = static_cast<double>(r.summary.discontinuities + 1);
+    EXPECT_LE(static_cast<double>(r.summary.outputs),
+              config.loop_rate_hz * r.summary.duration_s + segments);
+    EXPECT_LE(r.summary.duration_s, intact.summary.duration_s + segments * (max_gap_s + tail_s));
+  }
+}
+
+}  // namespace
+}  // namespace motormix::test
