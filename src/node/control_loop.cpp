@@ -1,5 +1,6 @@
 #include "node/control_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <utility>
@@ -39,6 +40,8 @@ const char* to_string(FailsafeReason reason) {
       return "setpoint stale";
     case FailsafeReason::kPidStale:
       return "pid stale";
+    case FailsafeReason::kLoopStalled:
+      return "loop stalled";
     case FailsafeReason::kInvalidInput:
       return "invalid input";
   }
@@ -142,9 +145,13 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   result_.setpoint_utime = setpoint_received_us_ == kNever ? 0 : setpoint_.utime;
   result_.pid_utime = pid_received_us_ == kNever ? 0 : pid_.utime;
 
+  const bool stalled = last_cycle_us_ != kNever &&
+                       now_us - last_cycle_us_ > std::min(setpoint_timeout_us_, pid_timeout_us_);
   switch (result_.state) {
     case LoopState::kArmed:
-      if (!setpoint_fresh) {
+      if (stalled) {
+        enter_failsafe(FailsafeReason::kLoopStalled, now_us);
+      } else if (!setpoint_fresh) {
         enter_failsafe(FailsafeReason::kSetpointStale, now_us);
       } else if (!pid_fresh) {
         enter_failsafe(FailsafeReason::kPidStale, now_us);

@@ -15,6 +15,10 @@
 //   (default), the last valid inputs for at most hold_last_ms and then
 //   disarmed, or idle (armed, zero demand). Leaving failsafe needs fresh
 //   inputs and a new disarmed -> armed transition.
+// - A cycle that comes later after the previous one than the shorter input
+//   timeout (the process was frozen or starved) is a failsafe too while
+//   armed: for that long nobody watched the inputs, and the messages that
+//   arrived meanwhile may not all have been read yet.
 // - Rejected messages (non-finite, out of range, out of order) are counted
 //   and otherwise ignored: the previous valid message stays in force and
 //   keeps ageing toward its timeout.
@@ -36,6 +40,7 @@ enum class FailsafeReason : std::int8_t {
   kSetpointStale = 1,
   kPidStale = 2,
   kInvalidInput = 3,
+  kLoopStalled = 4,  // the mixer itself ran no cycle for longer than an input timeout
 };
 
 const char* to_string(LoopState state);

@@ -21,6 +21,7 @@
 #include <sys/timerfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -92,6 +93,7 @@ class Node {
     for (int i = 0; i < kMaxMessagesPerDrain; ++i) {
       if (lcm_.handleTimeout(0) <= 0) break;
     }
+    drained_us_ = monotonic_us();
   }
 
   // One control cycle; `woke_us` is when the loop woke up for it.
@@ -147,6 +149,19 @@ class Node {
   }
 
  private:
+  // When a message arrived, on the monotonic clock. A message can wait in the
+  // socket while this process is frozen (SIGSTOP, a debugger, a starved
+  // CPU): it is as old as the kernel's receive time (LCM's recv_utime, wall
+  // clock) says, not as fresh as the moment it is handled. The wait counted
+  // is at most the time since the previous drain, so a step of the wall clock
+  // (NTP) cannot age a message that cannot have waited.
+  std::int64_t received_us(const lcm::ReceiveBuffer* rbuf, std::int64_t now_us,
+                           std::int64_t wall_now_us) const {
+    const std::int64_t waited = std::clamp<std::int64_t>(
+        wall_now_us - rbuf->recv_utime, 0, std::max<std::int64_t>(0, now_us - drained_us_));
+    return now_us - waited;
+  }
+
   // No exception may leave an LCM callback: decoding reports failure as a
   // value, and nothing else here throws.
   void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
@@ -155,7 +170,8 @@ class Node {
       loop_.on_undecodable();
       return;
     }
-    loop_.on_setpoint(sample, monotonic_us(), wall_us());
+    const std::int64_t wall = wall_us();
+    loop_.on_setpoint(sample, received_us(rbuf, monotonic_us(), wall), wall);
   }
 
   void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
@@ -164,7 +180,10 @@ class Node {
       loop_.on_undecodable();
       return;
     }
-    if (loop_.on_pid(sample, monotonic_us(), wall_us()) == Rejection::kNone) new_pid_ = true;
+    const std::int64_t wall = wall_us();
+    if (loop_.on_pid(sample, received_us(rbuf, monotonic_us(), wall), wall) == Rejection::kNone) {
+      new_pid_ = true;
+    }
   }
 
   void publish_pwm(const CycleResult& r) {
@@ -202,6 +221,7 @@ class Node {
   std::int64_t overruns_ = 0;
   std::int64_t warned_total_ = 0;
   std::int64_t last_warning_us_ = 0;
+  std::int64_t drained_us_ = monotonic_us();  // end of the previous drain, monotonic
   bool new_pid_ = false;
   WindowStats period_stats_;
   WindowStats compute_stats_;
@@ -273,7 +293,12 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
 
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) {
+    // No retry loop: a supervisor (systemd's Restart=) decides when to try
+    // again, and a configuration or network error is reported once.
     log << "motormix: cannot open LCM" << (options.lcm_url.empty() ? "" : " at " + options.lcm_url)
+        << ". For UDP multicast the host needs an interface up and a multicast route "
+           "(on a host with only loopback: ip link set lo up; ip route add 224.0.0.0/4 dev lo); "
+           "see Troubleshooting in the README"
         << std::endl;
     return 1;
   }

@@ -109,10 +109,36 @@ TEST_F(ControlLoopTest, StaleSetpointFailsSafeAtTheTimeout) {
 
 TEST_F(ControlLoopTest, StalePidFailsSafe) {
   arm(0);
+  for (std::int64_t t = 10 * kMs; t < 150 * kMs; t += 10 * kMs) {  // the loop ticking
+    setpoint(t, true);
+    loop_.cycle(t);
+  }
   setpoint(150 * kMs, true);
   const auto& r = loop_.cycle(150 * kMs);
   EXPECT_EQ(r.state, LoopState::kFailsafe);
   EXPECT_EQ(r.reason, FailsafeReason::kPidStale);
+  EXPECT_EQ(loop_.counters().failsafe_events, 1);
+}
+
+// A cycle later than the shorter input timeout after the previous one (the
+// process was frozen) fails safe even when the inputs handled just before it
+// look fresh; a cycle exactly at the timeout does not.
+TEST_F(ControlLoopTest, StalledLoopFailsSafeEvenWithFreshInputs) {
+  arm(0);
+  setpoint(100 * kMs, true);
+  pid(100 * kMs);
+  EXPECT_EQ(loop_.cycle(100 * kMs).state, LoopState::kArmed);  // a gap of exactly the timeout
+  setpoint(201 * kMs, true);
+  pid(201 * kMs);
+  const auto& r = loop_.cycle(201 * kMs);
+  EXPECT_EQ(r.state, LoopState::kFailsafe);
+  EXPECT_EQ(r.reason, FailsafeReason::kLoopStalled);
+  expect_disarmed_outputs(r);
+  // Leaving it is the usual way: disarmed, then armed again.
+  setpoint(202 * kMs, false);
+  EXPECT_EQ(loop_.cycle(202 * kMs).state, LoopState::kDisarmed);
+  setpoint(203 * kMs, true);
+  EXPECT_EQ(loop_.cycle(203 * kMs).state, LoopState::kArmed);
 }
 
 TEST_F(ControlLoopTest, RecoveryNeedsReArming) {

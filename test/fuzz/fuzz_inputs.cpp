@@ -1,0 +1,72 @@
+// One channel's message decoder and input checks on arbitrary bytes, driving
+// the control loop. Built twice: MOTORMIX_FUZZ_SETPOINT decodes every chunk as
+// a setpoint_t (pid messages are well-formed, from the input too), otherwise
+// as a pid_t. Chunks: one length byte, then that many bytes. After every
+// chunk a control cycle runs 2.5 ms later, and its outputs must be in range.
+
+#include "fuzz_checks.hpp"
+#include "node/control_loop.hpp"
+#include "node/messages.hpp"
+
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/load_config.hpp>
+
+#include <cstdint>
+#include <cstring>
+
+namespace {
+
+const motormix::config::Config& fuzz_config() {
+  // Real-time limits loose enough that the fuzzer reaches the armed state.
+  static const motormix::config::Config c = motormix::config::load_config_text(
+      "geometry: {preset: hexa_x}\nmixer: {strategy: prioritized}\n"
+      "output: {min: 1000, max: 2000, disarmed: 900, idle: 0.05, slew_per_s: 40000}\n"
+      "inputs: {yaw_source: pid, failsafe: hold_last}\n",
+      "fuzz");
+  return c;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace motormix;
+  node::ControlLoop loop(fuzz_config(), config::build_mixer(fuzz_config()));
+  std::int64_t now = 1'000'000;
+  const std::int64_t wall_offset = 1'764'000'000'000'000;
+  std::size_t at = 0;
+  while (at < size) {
+    const std::size_t len = std::min<std::size_t>(data[at], size - at - 1);
+    const std::uint8_t* msg = data + at + 1;
+    at += 1 + len;
+#ifdef MOTORMIX_FUZZ_SETPOINT
+    node::SetpointSample s;
+    if (node::decode_setpoint(msg, static_cast<int>(len), s)) {
+      loop.on_setpoint(s, now, now + wall_offset);
+    } else {
+      loop.on_undecodable();
+    }
+    node::PidSample p;
+    p.utime = now + wall_offset;
+    p.roll = len > 0 ? (msg[0] - 128) / 128.0 : 0.0;
+    loop.on_pid(p, now, now + wall_offset);
+#else
+    node::PidSample p;
+    if (node::decode_pid(msg, static_cast<int>(len), p)) {
+      loop.on_pid(p, now, now + wall_offset);
+    } else {
+      loop.on_undecodable();
+    }
+    node::SetpointSample s;
+    s.utime = now + wall_offset;
+    s.armed = len > 0 && (msg[0] & 1U);
+    s.throttle = len > 1 ? msg[1] / 255.0 : 0.0;
+    loop.on_setpoint(s, now, now + wall_offset);
+#endif
+    now += len > 2 && msg[2] == 0xFF ? 200'000 : 2'500;  // sometimes long enough to go stale
+    const node::CycleResult& r = loop.cycle(now);
+    motormix::fuzz::check_outputs(loop.mixer(), r.mix);
+    const node::Counters& c = loop.counters();
+    if (c.rejected() < 0 || c.cycles <= 0) std::abort();
+  }
+  return 0;
+}

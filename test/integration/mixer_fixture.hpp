@@ -1,0 +1,147 @@
+#pragma once
+// A `motormix run` child on the private bus, a pilot that publishes inputs
+// like a flight controller, and a recorder of everything the mixer
+// publishes. Every wait is on messages, with a bounded timeout; every loop is
+// bounded in count.
+
+#include "integration/bus_recorder.hpp"
+#include "integration/process.hpp"
+#include "test_support.hpp"
+
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace motormix::test {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+// Two loopback hops and scheduling on a loaded two-core machine (or under the
+// sanitizers) on top of the mixer's own promise of timeout + one period.
+constexpr auto kTransportSlack = 40ms;
+
+inline std::int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+inline bool in_private_bus() {
+  const char* flag = std::getenv("MOTORMIX_PRIVATE_BUS");
+  return flag != nullptr && std::string(flag) == "1";
+}
+
+// The test side of the bus: publishes inputs like a flight controller would.
+class Pilot {
+ public:
+  explicit Pilot(const config::Config& c) : c_(c) {}
+  bool good() { return lcm_.good(); }
+
+  void send(bool armed, double throttle, double roll = 0.0) {
+    setpoint_t sp{};
+    sp.utime = wall_us();
+    sp.throttle = static_cast<float>(throttle);
+    sp.armed = armed;
+    lcm_.publish(c_.channels.setpoint, &sp);
+    pid_t pid{};
+    pid.utime = sp.utime;
+    pid.roll = static_cast<float>(roll);
+    lcm_.publish(c_.channels.pid, &pid);
+    last_utime = sp.utime;
+    last_sent = Clock::now();
+  }
+  void raw(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+  template <typename Message>
+  void message(const std::string& channel, const Message& m) {
+    lcm_.publish(channel, &m);
+  }
+
+  std::int64_t last_utime = 0;
+  Clock::time_point last_sent;
+
+ private:
+  const config::Config& c_;
+  lcm::LCM lcm_;
+};
+
+class MixerProcessTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(in_private_bus()) << "run through scripts/private-bus"; }
+
+  void start(const std::vector<std::string>& overrides = {},
+             const std::string& config_file = "config/team_quad.yaml") {
+    config_ = config::load_config_file(source_path(config_file), overrides);
+    bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
+    pilot_ = std::make_unique<Pilot>(config_);
+    std::vector<std::string> argv = {MOTORMIX_BINARY, "run", "--config",
+                                     source_path(config_file)};
+    for (const auto& o : overrides) {
+      argv.push_back("--set");
+      argv.push_back(o);
+    }
+    mixer_ = std::make_unique<ChildProcess>(argv);
+    ASSERT_TRUE(bus_->wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
+  }
+
+  // Publishes at 200 Hz (bounded count) until an output names the last input
+  // and satisfies `want`.
+  bool fly_until(bool armed, double throttle, const std::function<bool(const motor_pwm_t&)>& want,
+                 int max_sends = 400) {
+    for (int k = 0; k < max_sends; ++k) {
+      pilot_->send(armed, throttle);
+      const std::int64_t sent = pilot_->last_utime;
+      if (bus_->wait_until(
+              [&](const auto& pwm, const auto&) {
+                return !pwm.empty() && pwm.back().setpoint_utime == sent && want(pwm.back());
+              },
+              5ms)) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // Index of the first disarmed output published after output `before`, once
+  // it has arrived (bounded wait); nullopt if none came in time.
+  std::optional<std::size_t> first_disarmed_after(std::size_t before,
+                                                  std::chrono::milliseconds timeout) {
+    std::optional<std::size_t> first;
+    bus_->wait_until(
+        [&](const auto& pwm, const auto&) {
+          for (std::size_t i = before; i < pwm.size(); ++i) {
+            if (!pwm[i].armed) {
+              first = i;
+              return true;
+            }
+          }
+          return false;
+        },
+        timeout);
+    return first;
+  }
+
+  void arm() {
+    ASSERT_TRUE(fly_until(false, 0.0, [](const motor_pwm_t& m) { return !m.armed; }));
+    ASSERT_TRUE(fly_until(true, 0.0, [](const motor_pwm_t& m) { return m.armed; }));
+    ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  }
+
+  config::Config config_;
+  std::unique_ptr<BusRecorder> bus_;
+  std::unique_ptr<Pilot> pilot_;
+  std::unique_ptr<ChildProcess> mixer_;
+};
+
+}  // namespace motormix::test

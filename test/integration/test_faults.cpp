@@ -1,0 +1,272 @@
+// Faults around a running `motormix run` on a private bus: the mixer frozen
+// and resumed, a publisher frozen and resumed (lcm-logplayer under SIGSTOP),
+// duplicated, reordered and delayed messages, publisher clocks that jump,
+// floods of undecodable and oversized messages, and no multicast route at
+// start-up. In every case: outputs finite and in range, the failsafe right,
+// counters that match what was injected, a disarmed last message on exit.
+
+#include "integration/mixer_fixture.hpp"
+
+#include <sys/wait.h>
+
+#include <array>
+#include <csignal>
+#include <cstdio>
+#include <random>
+#include <thread>
+
+namespace motormix::test {
+namespace {
+
+class Faults : public MixerProcessTest {
+ protected:
+  // Every output so far: finite, in range when armed, the disarmed value otherwise.
+  void expect_outputs_in_range() {
+    for (const auto& m : bus_->pwm()) {
+      for (float v : m.pwm) {
+        ASSERT_TRUE(std::isfinite(v));
+        ASSERT_TRUE(m.armed ? (v >= 1150.0F && v <= 1924.0F) : v == 1000.0F) << v;
+      }
+    }
+  }
+  void stop_and_expect_disarmed_exit() {
+    mixer_->signal(SIGTERM);
+    ASSERT_EQ(mixer_->wait_for(10s), 0);
+    ASSERT_TRUE(bus_->wait_until(
+        [](const auto&, const auto& s) {
+          return !s.empty() && s.back().state == mixer_status_t::STATE_DISARMED;
+        },
+        5s));
+    EXPECT_FALSE(bus_->pwm().back().armed);
+  }
+  // Waits until no more outputs arrive from a frozen mixer (in flight ones landed).
+  std::size_t settled_count() {
+    std::size_t n = bus_->pwm_count();
+    for (int k = 0; k < 50; ++k) {
+      std::this_thread::sleep_for(10ms);
+      const std::size_t now = bus_->pwm_count();
+      if (now == n) return n;
+      n = now;
+    }
+    return n;
+  }
+};
+
+// The pilot dies while the mixer is frozen. On waking, what waited in the
+// socket is as old as it is: the first output after the freeze is already
+// the failsafe, not another timeout of armed outputs.
+TEST_F(Faults, MixerFrozenWakesWithStaleInputsAndFailsSafeAtOnce) {
+  start();
+  arm();
+  mixer_->signal(SIGSTOP);
+  const std::size_t frozen_at = settled_count();
+  for (int k = 0; k < 10; ++k) {  // 50 ms more of a live pilot, then nothing
+    pilot_->send(true, 0.5);
+    std::this_thread::sleep_for(5ms);
+  }
+  std::this_thread::sleep_for(400ms);
+  mixer_->signal(SIGCONT);
+  ASSERT_TRUE(bus_->wait_until([&](const auto& pwm, const auto&) { return pwm.size() > frozen_at + 5; },
+                               5s));
+  const auto pwm = bus_->pwm();
+  for (std::size_t i = frozen_at; i < pwm.size(); ++i) {
+    ASSERT_FALSE(pwm[i].armed) << "output " << i - frozen_at << " after waking was armed";
+  }
+  ASSERT_TRUE(bus_->wait_until(
+      [](const auto&, const auto& s) {
+        return !s.empty() && s.back().state == mixer_status_t::STATE_FAILSAFE &&
+               s.back().overruns >= 100;  // ~0.45 s of missed periods at 400 Hz, counted
+      },
+      5s));
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
+// The pilot flies on while the mixer is frozen. A freeze shorter than the
+// input timeout goes unnoticed. A longer one is a failsafe (reason: loop
+// stalled) even though the pilot is alive: for that long nobody watched the
+// inputs, and a downstream ESC bridge will have timed out too. Re-arming
+// works as usual.
+TEST_F(Faults, MixerFrozenWhileThePilotFliesOn) {
+  start();
+  arm();
+  ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return !s.empty(); }, 2s));
+  const std::int64_t events_before = bus_->status().back().failsafe_events;
+  const auto freeze = [&](std::chrono::milliseconds how_long) {
+    mixer_->signal(SIGSTOP);
+    const std::size_t frozen_at = settled_count();
+    const auto until = Clock::now() + how_long;
+    for (int k = 0; k < 1000 && Clock::now() < until; ++k) {  // the pilot at 200 Hz
+      pilot_->send(true, 0.5);
+      std::this_thread::sleep_for(5ms);
+    }
+    mixer_->signal(SIGCONT);
+    return frozen_at;
+  };
+
+  const std::size_t short_freeze = freeze(40ms);
+  ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  auto pwm = bus_->pwm();
+  for (std::size_t i = short_freeze; i < pwm.size(); ++i) EXPECT_TRUE(pwm[i].armed);
+  ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return s.size() >= 2; }, 2s));
+  EXPECT_EQ(bus_->status().back().failsafe_events, events_before);
+
+  const std::size_t long_freeze = freeze(300ms);
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto& p, const auto& s) {
+        return p.size() > long_freeze + 5 && !s.empty() &&
+               s.back().failsafe_reason == mixer_status_t::REASON_LOOP_STALLED;
+      },
+      5s));
+  pwm = bus_->pwm();
+  for (std::size_t i = long_freeze; i < pwm.size(); ++i) {
+    ASSERT_FALSE(pwm[i].armed) << "output " << i - long_freeze << " after a long freeze was armed";
+  }
+  EXPECT_EQ(bus_->status().back().failsafe_events, events_before + 1);
+  arm();
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
+// A publisher process frozen mid-flight and resumed: lcm-logplayer plays the
+// team quad flight; frozen for 300 ms, the mixer fails safe within its
+// timeout, and when the player resumes (still saying "armed") the motors stay
+// disarmed: no restart without a new arming transition.
+TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
+  start();
+  ChildProcess player({"lcm-logplayer", source_path("test/data/flights/team_quad.lcmlog")});
+  ASSERT_TRUE(bus_->wait_until(
+      [](const auto& pwm, const auto&) {
+        int armed = 0;
+        for (const auto& m : pwm) armed += m.armed;
+        return armed > 800;  // two seconds into the armed flight
+      },
+      15s));
+  player.signal(SIGSTOP);
+  const Clock::time_point stopped = Clock::now();
+  const std::size_t before = bus_->pwm_count();
+  const auto first = first_disarmed_after(before, 2s);
+  ASSERT_TRUE(first.has_value());
+  const auto took = bus_->pwm_times()[*first] - stopped;
+  EXPECT_LE(took, 100ms + 2500us + kTransportSlack + 20ms);
+  std::this_thread::sleep_for(300ms);
+  player.signal(SIGCONT);
+  ASSERT_TRUE(player.wait_for(30s).has_value());
+  const auto pwm = bus_->pwm();
+  for (std::size_t i = *first; i < pwm.size(); ++i) ASSERT_FALSE(pwm[i].armed);
+  ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return !s.empty(); }, 2s));
+  EXPECT_EQ(bus_->status().back().failsafe_events, 1);
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
+// Duplicates are harmless, messages older than the one in force are counted
+// and dropped, and a publisher whose clock jumps ahead is refused until its
+// clock is right again (and then the motors need a new arming transition).
+TEST_F(Faults, DuplicatesReorderingAndClockJumpsAreCountedAndFailSafe) {
+  start();
+  arm();
+  // Duplicates and reordering: each message twice, then an older one.
+  setpoint_t sp{};
+  sp.throttle = 0.5F;
+  sp.armed = true;
+  pid_t pid{};
+  constexpr int kReordered = 20;
+  for (int k = 0; k < kReordered; ++k) {
+    const std::int64_t now = wall_us();
+    sp.utime = now;
+    pid.utime = now;
+    pilot_->message(config_.channels.setpoint, sp);
+    pilot_->message(config_.channels.setpoint, sp);
+    pilot_->message(config_.channels.pid, pid);
+    pid.utime = now - 2000;  // older than the one in force
+    pilot_->message(config_.channels.pid, pid);
+    std::this_thread::sleep_for(2ms);
+  }
+  ASSERT_TRUE(bus_->wait_until(
+      [](const auto&, const auto& s) { return !s.empty() && s.back().rejected_stale_order >= kReordered; },
+      3s));
+  ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  const std::int64_t failsafes = bus_->status().back().failsafe_events;
+
+  // The publisher's clock jumps an hour ahead: refused as from the future.
+  constexpr int kFuture = 30;
+  for (int k = 0; k < kFuture; ++k) {
+    sp.utime = wall_us() + 3'600'000'000LL;
+    pilot_->message(config_.channels.setpoint, sp);
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto&, const auto& s) {
+        return !s.empty() && s.back().rejected_future >= kFuture &&
+               s.back().state == mixer_status_t::STATE_FAILSAFE &&
+               s.back().failsafe_events == failsafes + 1;
+      },
+      3s));
+  // Back to the right time: accepted (a large step back is a restarted
+  // publisher), but the motors stay disarmed until re-armed.
+  for (int k = 0; k < 20; ++k) {
+    ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t&) { return true; }));
+    ASSERT_FALSE(bus_->pwm().back().armed);
+  }
+  arm();
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
+// Floods on both input channels: random bytes, and messages far larger than
+// any input, at 2 kHz while the pilot flies. The loop keeps publishing, every
+// injected message is counted, nothing leaves the range.
+TEST_F(Faults, FloodsOfUndecodableAndOversizedMessagesAreCounted) {
+  start();
+  arm();
+  std::mt19937 rng(1234);
+  constexpr int kFlood = 1000;
+  const std::size_t outputs_before = bus_->pwm_count();
+  const auto t0 = Clock::now();
+  for (int k = 0; k < kFlood; ++k) {
+    const std::size_t size = k % 10 == 0 ? 60000 : 1 + rng() % 100;  // every tenth: 60 kB
+    std::vector<std::uint8_t> junk(size);
+    for (auto& b : junk) b = static_cast<std::uint8_t>(rng());
+    pilot_->raw(k % 2 ? config_.channels.setpoint : config_.channels.pid, junk);
+    if (k % 4 == 0) pilot_->send(true, 0.5);
+    std::this_thread::sleep_for(500us);
+  }
+  const double flood_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  ASSERT_TRUE(bus_->wait_until(
+      [](const auto&, const auto& s) { return !s.empty() && s.back().rejected_decode >= kFlood; },
+      5s))
+      << "counted " << bus_->status().back().rejected_decode << " of " << kFlood;
+  EXPECT_EQ(bus_->status().back().rejected_decode, kFlood);
+  // The loop kept its outputs flowing through the flood (generous: 60 %).
+  const double outputs = static_cast<double>(bus_->pwm_count() - outputs_before);
+  EXPECT_GE(outputs, 0.6 * flood_s * config_.loop_rate_hz);
+  ASSERT_TRUE(mixer_->running());
+  ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
+// Without a multicast route the bus cannot open: one clear message naming the
+// fix, exit status 1 within a second, no retry loop.
+TEST_F(Faults, NoMulticastRouteIsAClearErrorNotABusyLoop) {
+  ASSERT_EQ(std::system("ip route del 224.0.0.0/4 dev lo"), 0);
+  const auto t0 = Clock::now();
+  const std::string cmd = std::string(MOTORMIX_BINARY) + " run --config " +
+                          source_path("config/team_quad.yaml") + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  std::array<char, 512> buf{};
+  while (fgets(buf.data(), static_cast<int>(buf.size()), pipe)) out += buf.data();
+  const int status = pclose(pipe);
+  const auto took = Clock::now() - t0;
+  EXPECT_EQ(std::system("ip route add 224.0.0.0/4 dev lo"), 0);
+  EXPECT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_LT(took, 5s);
+  EXPECT_NE(out.find("ip route add 224.0.0.0/4 dev lo"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace motormix::test
