@@ -19,6 +19,7 @@ class ChildProcess {
   ChildProcess& operator=(const ChildProcess&) = delete;
 
   bool started() const { return pid_ > 0; }
+  ::pid_t pid() const { return pid_; }
   bool running();
   void signal(int signo);
   // Exit code if the child exited within `timeout`; nullopt otherwise (or if

@@ -1,0 +1,154 @@
+// Twenty motormix processes on one private bus, each with its own channels
+// and its own publisher at 400 Hz, for a bounded time. Each vehicle's outputs
+// must follow from its own inputs only (every output names the inputs it was
+// computed from, and each publisher's utimes carry its vehicle number), the
+// loops keep their rate within a stated bound, and the CPU of each process is
+// reported.
+
+#include "integration/bus_recorder.hpp"
+#include "integration/process.hpp"
+#include "test_support.hpp"
+
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+#include <unistd.h>
+
+namespace motormix::test {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kVehicles = 20;
+constexpr auto kFlight = 8s;
+// Stated bound: every loop delivers at least this share of its cycles while
+// twenty of them, their publishers and this recorder share two cores.
+constexpr double kMinDeliveredShare = 0.85;
+
+std::int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// CPU seconds (user + system) a process has used so far.
+double cpu_seconds(::pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  std::getline(stat, line);
+  std::istringstream fields(line.substr(line.rfind(')') + 2));
+  std::string skip;
+  for (int i = 0; i < 11; ++i) fields >> skip;  // fields 3..13
+  double utime = 0, stime = 0;
+  fields >> utime >> stime;
+  return (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+std::string channel(const char* kind, int v) { return std::string(kind) + "_" + std::to_string(v); }
+
+TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
+  const char* flag = std::getenv("MOTORMIX_PRIVATE_BUS");
+  ASSERT_TRUE(flag && std::string(flag) == "1") << "run through scripts/private-bus";
+  std::vector<std::unique_ptr<BusRecorder>> buses;
+  std::vector<std::unique_ptr<ChildProcess>> mixers;
+  for (int v = 0; v < kVehicles; ++v) {
+    buses.push_back(std::make_unique<BusRecorder>(channel("PWM", v), channel("STATUS", v)));
+    mixers.push_back(std::make_unique<ChildProcess>(std::vector<std::string>{
+        MOTORMIX_BINARY, "run", "--config", source_path("config/team_quad.yaml"), "--set",
+        "channels.setpoint=" + channel("SETPOINT", v), "--set", "channels.pid=" + channel("PID", v),
+        "--set", "channels.motor_pwm=" + channel("PWM", v), "--set",
+        "channels.status=" + channel("STATUS", v)}));
+  }
+  for (int v = 0; v < kVehicles; ++v) {
+    ASSERT_TRUE(buses[v]->wait_until([](const auto& p, const auto&) { return !p.empty(); }, 20s))
+        << "vehicle " << v << " never published";
+  }
+
+  // One publisher per vehicle at 400 Hz: utimes = k * 1000 + vehicle, so any
+  // output names the vehicle whose inputs it used. Armed after a disarmed
+  // second, at a throttle and roll of its own.
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> pilots;
+  for (int v = 0; v < kVehicles; ++v) {
+    pilots.emplace_back([v, &stop] {
+      lcm::LCM lcm;
+      const auto start = Clock::now();
+      auto next = start;
+      for (std::int64_t k = 0; !stop && k < 400 * 60; ++k) {  // bounded: at most a minute
+        const std::int64_t utime = (wall_us() / 1000) * 1000 + v;
+        setpoint_t sp{};
+        sp.utime = utime;
+        sp.armed = Clock::now() - start > 300ms;
+        sp.throttle = sp.armed && Clock::now() - start > 600ms ? 0.3F + 0.02F * static_cast<float>(v) : 0.0F;
+        pid_t pid{};
+        pid.utime = utime;
+        pid.roll = -0.5F + 0.05F * static_cast<float>(v);
+        lcm.publish(channel("SETPOINT", v), &sp);
+        lcm.publish(channel("PID", v), &pid);
+        next += 2500us;
+        std::this_thread::sleep_until(next);
+      }
+    });
+  }
+
+  std::this_thread::sleep_for(1s);  // armed and flying
+  std::vector<std::size_t> count0;
+  std::vector<double> cpu0;
+  for (int v = 0; v < kVehicles; ++v) {
+    count0.push_back(buses[v]->pwm_count());
+    cpu0.push_back(cpu_seconds(mixers[v]->pid()));
+  }
+  const auto t0 = Clock::now();
+  std::this_thread::sleep_for(kFlight);
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::vector<double> cpu_share;
+  std::vector<double> delivered;
+  for (int v = 0; v < kVehicles; ++v) {
+    cpu_share.push_back((cpu_seconds(mixers[v]->pid()) - cpu0[v]) / seconds);
+    delivered.push_back(static_cast<double>(buses[v]->pwm_count() - count0[v]) / (400.0 * seconds));
+  }
+  stop = true;
+  for (auto& t : pilots) t.join();
+
+  double cpu_total = 0;
+  for (int v = 0; v < kVehicles; ++v) {
+    SCOPED_TRACE("vehicle " + std::to_string(v));
+    cpu_total += cpu_share[v];
+    std::printf("vehicle %2d: %.1f %% of its cycles delivered, CPU %.2f %% of a core\n", v,
+                100.0 * delivered[v], 100.0 * cpu_share[v]);
+    EXPECT_GE(delivered[v], kMinDeliveredShare);
+    EXPECT_LE(delivered[v], 1.05);
+    int armed = 0;
+    for (const auto& m : buses[v]->pwm()) {
+      if (m.setpoint_utime != 0) {
+        ASSERT_EQ(m.setpoint_utime % 1000, v) << "cross-talk on setpoint";
+      }
+      if (m.pid_utime != 0) {
+        ASSERT_EQ(m.pid_utime % 1000, v) << "cross-talk on pid";
+      }
+      for (float p : m.pwm) ASSERT_TRUE(m.armed ? p >= 1150.0F && p <= 1924.0F : p == 1000.0F);
+      armed += m.armed;
+    }
+    EXPECT_GT(armed, 400 * 4);
+    EXPECT_EQ(buses[v]->undecodable(), 0);
+  }
+  std::printf("20 mixers at 400 Hz: %.1f %% of one core in all (%.2f %% each on average)\n",
+              100.0 * cpu_total, 100.0 * cpu_total / kVehicles);
+  for (auto& m : mixers) m->signal(SIGTERM);
+  for (auto& m : mixers) EXPECT_EQ(m->wait_for(10s), 0);
+}
+
+}  // namespace
+}  // namespace motormix::test
