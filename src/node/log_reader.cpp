@@ -85,8 +85,8 @@ bool LogReader::fill(LogEventView& ev) {
   const std::uint64_t damage = position_;
   std::vector<std::uint8_t> chunk(kScanChunk + 3);
   for (std::uint64_t base = damage + 1; base < size_; base += kScanChunk) {
-    const std::size_t want = static_cast<std::size_t>(
-        std::min<std::uint64_t>(kScanChunk + 3, size_ - base));
+    const std::size_t want =
+        static_cast<std::size_t>(std::min<std::uint64_t>(kScanChunk + 3, size_ - base));
     if (std::fseek(file_, static_cast<long>(base), SEEK_SET) != 0) break;
     const std::size_t got = std::fread(chunk.data(), 1, want, file_);
     for (std::size_t i = 0; i + 4 <= got; ++i) {

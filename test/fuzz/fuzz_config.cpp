@@ -20,8 +20,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     MixerOutput out;
     const double inf = std::numeric_limits<double>::infinity();
     const AxisVector demands[] = {
-        {0, 0, 0, 0}, {1, 1, 1, 1}, {-1, -1, -1, 1}, {1, -1, 1, 0}, {0.3, -0.2, 0.9, 0.5},
-        {5, -5, 5, 5}, {inf, 0, 0, 0.5}, {std::numeric_limits<double>::quiet_NaN(), 0, 0, 0.5}};
+        {0, 0, 0, 0},          {1, 1, 1, 1},
+        {-1, -1, -1, 1},       {1, -1, 1, 0},
+        {0.3, -0.2, 0.9, 0.5}, {5, -5, 5, 5},
+        {inf, 0, 0, 0.5},      {std::numeric_limits<double>::quiet_NaN(), 0, 0, 0.5}};
     for (const AxisVector& d : demands) {
       mixer.mix(d, out, 0.0025);
       motormix::fuzz::check_outputs(mixer, out);

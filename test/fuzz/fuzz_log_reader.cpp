@@ -50,7 +50,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::ostringstream log;
   if (node::replay_log(config, in_path, out_path, node::ReplayOptions{}, s, log)) {
     const double segments = static_cast<double>(s.discontinuities + 1);
-    if (static_cast<double>(s.outputs) > config.loop_rate_hz * s.duration_s + segments) std::abort();
+    if (static_cast<double>(s.outputs) > config.loop_rate_hz * s.duration_s + segments)
+      std::abort();
   }
   return 0;
 }

@@ -43,16 +43,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace motormix;
   FuzzedDataProvider in(data, size);
   const int motors = in.ConsumeIntegralInRange<int>(1, kMaxMotors);
-  static const char* strategies[] = {"legacy_budget", "budget", "shift", "clip", "prioritized",
-                                     "optimal"};
+  static const char* strategies[] = {"legacy_budget", "budget",      "shift",
+                                     "clip",          "prioritized", "optimal"};
   static const char* airmodes[] = {"off", "roll_pitch", "roll_pitch_yaw"};
   const bool wheels = in.ConsumeBool();
   std::string yaml = "geometry:\n  mixing:\n";
   for (int i = 0; i < motors; ++i) {
     yaml += "    - [";
     for (int a = 0; a < kNumAxes; ++a) {
-      const double v = in.ConsumeBool() ? in.ConsumeFloatingPointInRange<double>(-2.0, 2.0)
-                                        : static_cast<double>(in.ConsumeIntegralInRange<int>(-1, 1));
+      const double v = in.ConsumeBool()
+                           ? in.ConsumeFloatingPointInRange<double>(-2.0, 2.0)
+                           : static_cast<double>(in.ConsumeIntegralInRange<int>(-1, 1));
       yaml += (a ? ", " : "") + number(v);
     }
     yaml += "]\n";

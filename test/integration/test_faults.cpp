@@ -66,8 +66,8 @@ TEST_F(Faults, MixerFrozenWakesWithStaleInputsAndFailsSafeAtOnce) {
   }
   std::this_thread::sleep_for(400ms);
   mixer_->signal(SIGCONT);
-  ASSERT_TRUE(bus_->wait_until([&](const auto& pwm, const auto&) { return pwm.size() > frozen_at + 5; },
-                               5s));
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto& pwm, const auto&) { return pwm.size() > frozen_at + 5; }, 5s));
   const auto pwm = bus_->pwm();
   for (std::size_t i = frozen_at; i < pwm.size(); ++i) {
     ASSERT_FALSE(pwm[i].armed) << "output " << i - frozen_at << " after waking was armed";
@@ -184,7 +184,9 @@ TEST_F(Faults, DuplicatesReorderingAndClockJumpsAreCountedAndFailSafe) {
     std::this_thread::sleep_for(2ms);
   }
   ASSERT_TRUE(bus_->wait_until(
-      [](const auto&, const auto& s) { return !s.empty() && s.back().rejected_stale_order >= kReordered; },
+      [](const auto&, const auto& s) {
+        return !s.empty() && s.back().rejected_stale_order >= kReordered;
+      },
       3s));
   ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
   const std::int64_t failsafes = bus_->status().back().failsafe_events;

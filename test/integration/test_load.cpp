@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -23,7 +24,6 @@
 #include <memory>
 #include <sstream>
 #include <thread>
-#include <unistd.h>
 
 namespace motormix::test {
 namespace {
@@ -91,7 +91,8 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
         setpoint_t sp{};
         sp.utime = utime;
         sp.armed = Clock::now() - start > 300ms;
-        sp.throttle = sp.armed && Clock::now() - start > 600ms ? 0.3F + 0.02F * static_cast<float>(v) : 0.0F;
+        sp.throttle =
+            sp.armed && Clock::now() - start > 600ms ? 0.3F + 0.02F * static_cast<float>(v) : 0.0F;
         pid_t pid{};
         pid.utime = utime;
         pid.roll = -0.5F + 0.05F * static_cast<float>(v);
