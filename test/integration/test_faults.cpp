@@ -160,6 +160,42 @@ TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
   stop_and_expect_disarmed_exit();
 }
 
+// A burst: lcm-logplayer plays the 14 s flight at 50 times its speed (about
+// 25 000 messages a second). Nothing is lost or rejected: every message of
+// the log is counted as accepted, and the outputs stay in range.
+TEST_F(Faults, BurstAtFiftyTimesSpeedLosesNothing) {
+  start();
+  int setpoints = 0, pids = 0;
+  {
+    lcm::LogFile log(source_path("test/data/flights/team_quad.lcmlog"), "r");
+    while (const lcm::LogEvent* ev = log.readNextEvent()) {
+      setpoints += ev->channel == config_.channels.setpoint;
+      pids += ev->channel == config_.channels.pid;
+    }
+  }
+  ChildProcess player(
+      {"lcm-logplayer", "-s", "50", source_path("test/data/flights/team_quad.lcmlog")});
+  ASSERT_EQ(player.wait_for(30s), 0);
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto&, const auto& s) {
+        return !s.empty() && s.back().setpoint_received + s.back().pid_received >= setpoints + pids;
+      },
+      5s))
+      << "accepted " << bus_->status().back().setpoint_received << " setpoints of " << setpoints
+      << ", " << bus_->status().back().pid_received << " pid of " << pids;
+  const auto& last = bus_->status().back();
+  EXPECT_EQ(last.setpoint_received, setpoints);
+  EXPECT_EQ(last.pid_received, pids);
+  EXPECT_EQ(last.rejected_decode + last.rejected_range + last.rejected_nonfinite +
+                last.rejected_stale_order + last.rejected_future,
+            0);
+  int armed = 0;
+  for (const auto& m : bus_->pwm()) armed += m.armed;
+  EXPECT_GT(armed, 0) << "the burst never armed the mixer";
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
 // Duplicates are harmless, messages older than the one in force are counted
 // and dropped, and a publisher whose clock jumps ahead is refused until its
 // clock is right again (and then the motors need a new arming transition).
