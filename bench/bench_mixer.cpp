@@ -52,6 +52,43 @@ void BM_Octo(benchmark::State& state, const char* strategy) {
 BENCHMARK_CAPTURE(BM_Octo, prioritized, "prioritized");
 BENCHMARK_CAPTURE(BM_Octo, optimal, "optimal");
 
+// The allocation step alone, as the prioritized strategy's cost is compared
+// with other stacks': saturating demands in every axis (roll, pitch, yaw in
+// -1..1, thrust 0..1) on the normalized matrix of PX4's normalization.
+void allocate_loop(benchmark::State& state, const std::string& preset, const std::string& mixer) {
+  const auto config = motormix::config::load_config_text(
+      "geometry: {preset: " + preset + ", normalization: px4}\nmixer: " + mixer + "\n", "bench");
+  const motormix::Mixer built = motormix::config::build_mixer(config);
+  const motormix::Allocator& allocator = built.allocator();
+  const auto inputs = demands();
+  motormix::MotorVector commands;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    auto result = allocator.allocate(inputs[i++ & 1023U], commands);
+    benchmark::DoNotOptimize(result);
+    benchmark::DoNotOptimize(commands.data());
+  }
+}
+
+void BM_Allocate(benchmark::State& state, const char* preset, const char* mixer) {
+  allocate_loop(state, preset, mixer);
+}
+#define MOTORMIX_ALLOCATE_BENCH(preset, label, mixer) \
+  BENCHMARK_CAPTURE(BM_Allocate, preset##_##label, #preset, mixer)
+#define MOTORMIX_ALLOCATE_PRESET(preset)                                                         \
+  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_off,                                               \
+                          "{strategy: prioritized, prioritized: {airmode: off}}");               \
+  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_rp,                                                \
+                          "{strategy: prioritized, prioritized: {airmode: roll_pitch}}");        \
+  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_rpy,                                               \
+                          "{strategy: prioritized, prioritized: {airmode: roll_pitch_yaw}}");    \
+  MOTORMIX_ALLOCATE_BENCH(preset, clip, "{strategy: clip}");                                     \
+  MOTORMIX_ALLOCATE_BENCH(preset, shift, "{strategy: shift}");                                   \
+  MOTORMIX_ALLOCATE_BENCH(preset, optimal, "{strategy: optimal}")
+MOTORMIX_ALLOCATE_PRESET(quad_x);
+MOTORMIX_ALLOCATE_PRESET(hexa_x);
+MOTORMIX_ALLOCATE_PRESET(octo_x);
+
 }  // namespace
 
 BENCHMARK_MAIN();

@@ -43,6 +43,11 @@ class PrioritizedAllocator final : public MatrixAllocator {
                   Direction direction = Direction::kBoth) const;
   void mix_yaw(double yaw, MotorVector& u, AxisVector& effective) const;
   void repair(AxisVector& effective, MotorVector& u) const;
+  // Largest s in [0, 1] for which base + s * part can be shifted along the
+  // thrust column into range (only downward unless may_raise); -1 when not
+  // even s = 0 fits. Closed form: each repair step is one-dimensional.
+  double largest_fitting_scale(const MotorVector& base, const MotorVector& part,
+                               bool may_raise) const;
   const MotorVector& column(Axis axis) const;
 
   Airmode airmode_;

@@ -1,6 +1,7 @@
 #include <motormix/prioritized_allocator.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -78,50 +79,79 @@ void PrioritizedAllocator::mix_yaw(double yaw, MotorVector& u, AxisVector& effec
   desaturate(u, effective, Axis::kThrust, range_, Direction::kDecreaseOnly);
 }
 
-namespace {
-
-// Bisection iterations for the largest scale that still fits: 2^-50 of full.
-constexpr int kBisections = 50;
-
-}  // namespace
+double PrioritizedAllocator::largest_fitting_scale(const MotorVector& base, const MotorVector& part,
+                                                  bool may_raise) const {
+  // Motor i stays in range after a thrust shift k when
+  //   lower <= base_i + s part_i + k thrust_i <= upper.
+  // Motors with thrust_i > 0 give bounds on k that are linear in s:
+  //   L_i(s) = (lower - base_i - s part_i) / thrust_i <= k <= U_i(s) = (upper - ...) / thrust_i.
+  // A k exists iff every L_i(s) <= every U_j(s) (and L_i(s) <= 0 when thrust
+  // may not rise); motors that thrust does not move must fit on their own.
+  // Each condition is a half-line a s <= c, so the scales that fit form an
+  // interval, and its top is the answer: exact, with no search.
+  double lo = 0.0;
+  double hi = 1.0;
+  const auto keep = [&](double a, double c) {  // a s <= c
+    if (a > 0.0) {
+      hi = std::min(hi, c / a);
+    } else if (a < 0.0) {
+      lo = std::max(lo, c / a);
+    } else if (c < 0.0) {
+      hi = -1.0;  // no scale at all
+    }
+  };
+  const Eigen::Index n = base.size();
+  std::array<double, kMaxMotors> rate{};     // part_i / thrust_i
+  std::array<double, kMaxMotors> low_at0{};  // L_i(0)
+  std::array<double, kMaxMotors> up_at0{};   // U_i(0)
+  int moving = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (thrust_[i] <= 0.0) {
+      keep(part[i], range_.upper - base[i]);
+      keep(-part[i], base[i] - range_.lower);
+      continue;
+    }
+    const double inv = 1.0 / thrust_[i];
+    rate[static_cast<std::size_t>(moving)] = part[i] * inv;
+    low_at0[static_cast<std::size_t>(moving)] = (range_.lower - base[i]) * inv;
+    up_at0[static_cast<std::size_t>(moving)] = (range_.upper - base[i]) * inv;
+    ++moving;
+  }
+  for (int i = 0; i < moving; ++i) {
+    const auto a = static_cast<std::size_t>(i);
+    if (!may_raise) keep(-rate[a], -low_at0[a]);  // L_i(s) <= 0
+    for (int j = 0; j < moving; ++j) {            // L_i(s) <= U_j(s)
+      const auto b = static_cast<std::size_t>(j);
+      keep(rate[b] - rate[a], up_at0[b] - low_at0[a]);
+    }
+  }
+  return lo <= hi ? hi : -1.0;
+}
 
 void PrioritizedAllocator::repair(AxisVector& effective, MotorVector& u) const {
   const bool may_raise = airmode_ != Airmode::kOff;
-  // Fits after the best allowed thrust shift? Returns the shift, or NaN.
-  const auto fit = [&](const MotorVector& candidate) {
-    ShiftInterval k = feasible_shifts(candidate, thrust_, range_);
-    if (!may_raise) k.hi = std::min(k.hi, 0.0);
-    if (k.empty()) return std::numeric_limits<double>::quiet_NaN();
-    return k.smallest();
-  };
-  const auto mix_with = [&](double yaw_scale, double rp_scale) {
-    MotorVector candidate = thrust_ * effective[index(Axis::kThrust)] +
-                            yaw_ * (yaw_scale * effective[index(Axis::kYaw)]) +
-                            roll_ * (rp_scale * effective[index(Axis::kRoll)]) +
-                            pitch_ * (rp_scale * effective[index(Axis::kPitch)]);
-    return candidate;
-  };
-  // Largest scale in [0, 1] of one part for which the mix fits (the spread is
-  // convex in the scale, so the fitting scales form an interval from 0).
-  const auto largest = [&](auto&& candidate_at) {
-    if (!std::isnan(fit(candidate_at(1.0)))) return 1.0;
-    if (std::isnan(fit(candidate_at(0.0)))) return 0.0;
-    double ok = 0.0;
-    double bad = 1.0;
-    for (int i = 0; i < kBisections; ++i) {
-      const double mid = 0.5 * (ok + bad);
-      (std::isnan(fit(candidate_at(mid))) ? bad : ok) = mid;
-    }
-    return ok;
-  };
-  double yaw_scale = largest([&](double s) { return mix_with(s, 1.0); });
+  const double roll = effective[index(Axis::kRoll)];
+  const double pitch = effective[index(Axis::kPitch)];
+  const double yaw = effective[index(Axis::kYaw)];
+  const MotorVector thrust_part = thrust_ * effective[index(Axis::kThrust)];
+  const MotorVector rp_part = roll_ * roll + pitch_ * pitch;
+  // Yaw gives way first: the largest share of it that fits with all of roll
+  // and pitch. Only when none fits do roll and pitch give way, without yaw.
+  double yaw_scale = largest_fitting_scale(thrust_part + rp_part, yaw_ * yaw, may_raise);
   double rp_scale = 1.0;
-  if (yaw_scale == 0.0 && std::isnan(fit(mix_with(0.0, 1.0)))) {
-    rp_scale = largest([&](double s) { return mix_with(0.0, s); });
+  if (yaw_scale < 0.0) {
+    yaw_scale = 0.0;
+    rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, rp_part, may_raise));
   }
-  u = mix_with(yaw_scale, rp_scale);
-  const double shift = fit(u);
-  if (!std::isnan(shift)) {
+  u = thrust_part + yaw_scale * (yaw_ * yaw) + rp_scale * rp_part;
+  ShiftInterval k = feasible_shifts(u, thrust_, range_);
+  if (!may_raise) k.hi = std::min(k.hi, 0.0);
+  // At the largest scale some motor sits exactly on its limit: rounding may
+  // leave the interval a few ulps wide of empty.
+  constexpr double kRounding = 1e-12;
+  if (k.empty() && k.lo - k.hi < kRounding) k.lo = k.hi = 0.5 * (k.lo + k.hi);
+  if (!k.empty()) {
+    const double shift = k.smallest();
     u += shift * thrust_;
     effective[index(Axis::kThrust)] += shift;
   }
