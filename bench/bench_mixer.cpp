@@ -5,6 +5,8 @@
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
 
+#include "reference/px4_sequential_desaturation.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -85,6 +87,34 @@ void BM_Allocate(benchmark::State& state, const char* preset, const char* mixer)
   MOTORMIX_ALLOCATE_BENCH(preset, clip, "{strategy: clip}");                                     \
   MOTORMIX_ALLOCATE_BENCH(preset, shift, "{strategy: shift}");                                   \
   MOTORMIX_ALLOCATE_BENCH(preset, optimal, "{strategy: optimal}")
+// The PX4-style baseline (test/reference, float as PX4 runs it, clip and
+// allocated-control report included) on the same matrix and demands.
+void BM_Px4Baseline(benchmark::State& state, const char* preset, motormix::reference::Px4Airmode mode) {
+  const auto config = motormix::config::load_config_text(
+      std::string("geometry: {preset: ") + preset + ", normalization: px4}\n", "bench");
+  motormix::reference::Px4SequentialDesaturation px4(config.mixing, mode);
+  std::vector<std::array<float, 4>> inputs;
+  for (const auto& d : demands()) {
+    inputs.push_back({static_cast<float>(d[0]), static_cast<float>(d[1]), static_cast<float>(d[2]),
+                      static_cast<float>(d[3])});
+  }
+  std::size_t i = 0;
+  for (auto _ : state) {
+    px4.allocate(inputs[i++ & 1023U]);
+    benchmark::DoNotOptimize(px4.allocated().data());
+  }
+}
+#define MOTORMIX_PX4_PRESET(preset)                                                       \
+  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_off, #preset,                                \
+                    motormix::reference::Px4Airmode::kDisabled);                          \
+  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rp, #preset,                                 \
+                    motormix::reference::Px4Airmode::kRollPitch);                         \
+  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rpy, #preset,                                \
+                    motormix::reference::Px4Airmode::kRollPitchYaw)
+MOTORMIX_PX4_PRESET(quad_x);
+MOTORMIX_PX4_PRESET(hexa_x);
+MOTORMIX_PX4_PRESET(octo_x);
+
 MOTORMIX_ALLOCATE_PRESET(quad_x);
 MOTORMIX_ALLOCATE_PRESET(hexa_x);
 MOTORMIX_ALLOCATE_PRESET(octo_x);

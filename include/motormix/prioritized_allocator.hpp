@@ -19,7 +19,10 @@
 // of the priorities exactly: thrust moves first (only downward without
 // airmode), then yaw is scaled down, and roll and pitch only when yaw alone
 // cannot make room. Nothing is clipped that a lower priority could have paid
-// for.
+// for. The plain clip of the sequence's result (what PX4 does) is kept
+// instead when it delivers the demand better in that same priority order
+// (it can: scaling keeps the torque's direction, clipping need not), so the
+// result is never worse than sequential desaturation with a clip.
 
 #include <motormix/allocation.hpp>
 
@@ -48,6 +51,10 @@ class PrioritizedAllocator final : public MatrixAllocator {
   // even s = 0 fits. Closed form: each repair step is one-dimensional.
   double largest_fitting_scale(const MotorVector& base, const MotorVector& part,
                                bool may_raise) const;
+  // Whether commands `a` deliver `demand` better than `b` in priority order:
+  // roll/pitch error (Euclidean), then thrust, then yaw; ties go to `b`.
+  bool closer_in_priority_order(const AxisVector& demand, const MotorVector& a,
+                                const MotorVector& b) const;
   const MotorVector& column(Axis axis) const;
 
   Airmode airmode_;

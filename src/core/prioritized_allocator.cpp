@@ -160,6 +160,26 @@ void PrioritizedAllocator::repair(AxisVector& effective, MotorVector& u) const {
   effective[index(Axis::kPitch)] *= rp_scale;
 }
 
+bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& demand, const MotorVector& a,
+                                                   const MotorVector& b) const {
+  const AxisVector error_a = demand - effectiveness_ * a;
+  const AxisVector error_b = demand - effectiveness_ * b;
+  const auto masked = [&](const AxisVector& e, Axis axis) {
+    return (controlled_ & bit(axis)) ? e[index(axis)] : 0.0;
+  };
+  const double rp_a = std::hypot(masked(error_a, Axis::kRoll), masked(error_a, Axis::kPitch));
+  const double rp_b = std::hypot(masked(error_b, Axis::kRoll), masked(error_b, Axis::kPitch));
+  const std::array<std::pair<double, double>, 3> in_order = {
+      std::pair{rp_a, rp_b},
+      std::pair{std::abs(masked(error_a, Axis::kThrust)), std::abs(masked(error_b, Axis::kThrust))},
+      std::pair{std::abs(masked(error_a, Axis::kYaw)), std::abs(masked(error_b, Axis::kYaw))}};
+  for (const auto& [x, y] : in_order) {
+    if (x < y - kDeliveredTolerance) return true;
+    if (x > y + kDeliveredTolerance) return false;
+  }
+  return false;  // a tie keeps the repair
+}
+
 AllocationResult PrioritizedAllocator::allocate(const AxisVector& demand,
                                                 MotorVector& commands) const {
   mix_linear(demand, commands);
@@ -192,7 +212,17 @@ AllocationResult PrioritizedAllocator::allocate(const AxisVector& demand,
   }
   const bool out_of_range =
       commands.minCoeff() < range_.lower - 1e-12 || commands.maxCoeff() > range_.upper + 1e-12;
-  if (out_of_range) repair(effective, commands);
+  if (out_of_range) {
+    // Two ways to bring the sequence's result into range: the repair (scale
+    // yaw, then roll and pitch, along their demanded directions, with the
+    // best thrust shift), or clipping each motor as sequential desaturation
+    // does elsewhere. Clipping can change the direction of the delivered
+    // torque yet land closer to the demand. Keep whichever delivers the
+    // demand better in priority order: roll and pitch, then thrust, then yaw.
+    MotorVector clipped = commands.cwiseMax(range_.lower).cwiseMin(range_.upper);
+    repair(effective, commands);
+    if (closer_in_priority_order(demand, clipped, commands)) commands = clipped;
+  }
   return finish(demand, commands);
 }
 
