@@ -50,6 +50,7 @@ int compare(const Errors& a, const Errors& b) {
 
 struct Tally {
   long same = 0, better = 0, worse = 0, identical_outputs = 0;
+  long better_linear_fits = 0;  // better where the plain linear mix was in range
 };
 
 class Px4Comparison : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
@@ -82,7 +83,11 @@ TEST_P(Px4Comparison, NeverWorseInPriorityOrder) {
     bool same_outputs = true;
     for (int i = 0; i < px4.motors(); ++i) same_outputs &= std::abs(u[i] - px4.actuator(i)) < 1e-9;
     t.identical_outputs += same_outputs;
-    if (order < 0) ++t.better;
+    if (order < 0) {
+      ++t.better;
+      const MotorVector linear = c.mixing * d;
+      t.better_linear_fits += linear.minCoeff() >= 0.0 && linear.maxCoeff() <= 1.0;
+    }
     if (order == 0) ++t.same;
     if (order > 0) {
       ++t.worse;
@@ -96,9 +101,9 @@ TEST_P(Px4Comparison, NeverWorseInPriorityOrder) {
     }
   }
   const auto share = [](long part) { return 100.0 * static_cast<double>(part) / static_cast<double>(cases()); };
-  std::printf("| %s | %s | %ld | %.2f %% | %.2f %% | %.2f %% | %ld |\n", preset.c_str(),
-              airmode.c_str(), cases(), share(t.identical_outputs), share(t.same), share(t.better),
-              t.worse);
+  std::printf("| %s | %s | %ld | %.2f %% | %.2f %% | %.2f %% (linear mix fits: %.2f %%) | %ld |\n",
+              preset.c_str(), airmode.c_str(), cases(), share(t.identical_outputs), share(t.same),
+              share(t.better), share(t.better_linear_fits), t.worse);
   EXPECT_EQ(t.worse, 0);
 }
 
