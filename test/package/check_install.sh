@@ -85,8 +85,10 @@ pc_build() {  # PREFIX
   # shellcheck disable=SC2086
   c++ -std=c++17 -O1 "$src/examples/embedding/embed.cpp" -o "$work/pc_embed" $flags \
     || fail "pkg-config build of the embedding example"
-  "$work/pc_core_and_types"
-  "$work/pc_embed" "$1/share/motormix/config/hexa_x.yaml" > /dev/null
+  # A prefix outside the linker's path: what a user of pkg-config does for
+  # shared libraries (static ones need nothing).
+  LD_LIBRARY_PATH="$pc_dir/.." "$work/pc_core_and_types"
+  LD_LIBRARY_PATH="$pc_dir/.." "$work/pc_embed" "$1/share/motormix/config/hexa_x.yaml" > /dev/null
 }
 step "pkg-config motormix"
 pc_build "$prefix"
