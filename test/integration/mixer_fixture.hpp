@@ -14,6 +14,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <functional>
 #include <memory>
@@ -129,6 +131,29 @@ class MixerProcessTest : public ::testing::Test {
         },
         timeout);
     return first;
+  }
+
+  // Every output so far: finite, in range when armed, the disarmed value otherwise.
+  void expect_outputs_in_range() {
+    for (const auto& m : bus_->pwm()) {
+      for (float v : m.pwm) {
+        ASSERT_TRUE(std::isfinite(v));
+        // The team quad's range and disarmed value (config/team_quad.yaml).
+        ASSERT_TRUE(m.armed ? (v >= 1150.0F && v <= 1924.0F) : v == 1000.0F) << v;
+      }
+    }
+  }
+  // SIGTERM: exit 0, and the last word on the bus is disarmed.
+  void stop_and_expect_disarmed_exit() {
+    mixer_->signal(SIGTERM);
+    ASSERT_EQ(mixer_->wait_for(10s), 0);
+    // Its final status follows its final outputs: once it is here, so are they.
+    ASSERT_TRUE(bus_->wait_until(
+        [](const auto&, const auto& s) {
+          return !s.empty() && s.back().state == mixer_status_t::STATE_DISARMED;
+        },
+        5s));
+    EXPECT_FALSE(bus_->pwm().back().armed);
   }
 
   void arm() {

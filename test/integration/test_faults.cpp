@@ -20,25 +20,6 @@ namespace {
 
 class Faults : public MixerProcessTest {
  protected:
-  // Every output so far: finite, in range when armed, the disarmed value otherwise.
-  void expect_outputs_in_range() {
-    for (const auto& m : bus_->pwm()) {
-      for (float v : m.pwm) {
-        ASSERT_TRUE(std::isfinite(v));
-        ASSERT_TRUE(m.armed ? (v >= 1150.0F && v <= 1924.0F) : v == 1000.0F) << v;
-      }
-    }
-  }
-  void stop_and_expect_disarmed_exit() {
-    mixer_->signal(SIGTERM);
-    ASSERT_EQ(mixer_->wait_for(10s), 0);
-    ASSERT_TRUE(bus_->wait_until(
-        [](const auto&, const auto& s) {
-          return !s.empty() && s.back().state == mixer_status_t::STATE_DISARMED;
-        },
-        5s));
-    EXPECT_FALSE(bus_->pwm().back().armed);
-  }
   // Waits until no more outputs arrive from a frozen mixer (in flight ones landed).
   std::size_t settled_count() {
     std::size_t n = bus_->pwm_count();

@@ -104,12 +104,7 @@ TEST_F(ProcessSafety, GarbageIsCountedNeverFatalNeverOutOfRange) {
   EXPECT_TRUE(counted);
   ASSERT_TRUE(mixer_->running()) << "garbage killed the mixer";
   ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
-  for (const auto& m : bus_->pwm()) {
-    for (float v : m.pwm) {
-      ASSERT_TRUE(std::isfinite(v));
-      ASSERT_TRUE(m.armed ? (v >= 1150.0F && v <= 1924.0F) : v == 1000.0F) << v;
-    }
-  }
+  expect_outputs_in_range();
   mixer_->signal(SIGTERM);
   EXPECT_EQ(mixer_->wait_for(10s), 0);
 }
@@ -118,17 +113,8 @@ TEST_F(ProcessSafety, SigtermInFlightEndsWithADisarmedMessage) {
   start({"inputs.setpoint_timeout_ms=2000", "inputs.pid_timeout_ms=2000"});
   arm();
   ASSERT_TRUE(bus_->pwm().back().armed);
-  mixer_->signal(SIGTERM);
-  ASSERT_EQ(mixer_->wait_for(10s), 0);
-  // Its final status follows its final outputs: once it is here, so are they.
-  ASSERT_TRUE(bus_->wait_until(
-      [](const auto&, const auto& status) {
-        return !status.empty() && status.back().state == mixer_status_t::STATE_DISARMED;
-      },
-      5s));
-  const auto pwm = bus_->pwm();
-  EXPECT_FALSE(pwm.back().armed);
-  for (float v : pwm.back().pwm) EXPECT_EQ(v, 1000.0F);
+  stop_and_expect_disarmed_exit();
+  for (float v : bus_->pwm().back().pwm) EXPECT_EQ(v, 1000.0F);
 }
 
 TEST_F(ProcessSafety, HoldLastKeepsOutputsForABoundedTimeThenDisarms) {
