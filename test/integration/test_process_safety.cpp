@@ -114,7 +114,8 @@ TEST_F(ProcessSafety, SigtermInFlightEndsWithADisarmedMessage) {
   arm();
   ASSERT_TRUE(bus_->pwm().back().armed);
   stop_and_expect_disarmed_exit();
-  for (float v : bus_->pwm().back().pwm) EXPECT_EQ(v, 1000.0F);
+  const auto pwm = bus_->pwm();  // a copy: the loop below must not outlive it
+  for (float v : pwm.back().pwm) EXPECT_EQ(v, 1000.0F);
 }
 
 TEST_F(ProcessSafety, HoldLastKeepsOutputsForABoundedTimeThenDisarms) {
