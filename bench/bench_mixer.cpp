@@ -111,6 +111,23 @@ void BM_Px4Baseline(benchmark::State& state, const char* preset, motormix::refer
                     motormix::reference::Px4Airmode::kRollPitch);                         \
   BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rpy, #preset,                                \
                     motormix::reference::Px4Airmode::kRollPitchYaw)
+// The floor: a bare fixed-size matrix-vector product of the same size
+// (motors x 4 times 4), what a mixer without limits or report would cost.
+template <int N>
+void BM_BareProduct(benchmark::State& state) {
+  Eigen::Matrix<double, N, 4> m = Eigen::Matrix<double, N, 4>::Random();
+  const auto inputs = demands();
+  Eigen::Matrix<double, N, 1> u;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    u.noalias() = m * inputs[i++ & 1023U];
+    benchmark::DoNotOptimize(u.data());
+  }
+}
+BENCHMARK_TEMPLATE(BM_BareProduct, 4);
+BENCHMARK_TEMPLATE(BM_BareProduct, 6);
+BENCHMARK_TEMPLATE(BM_BareProduct, 8);
+
 MOTORMIX_PX4_PRESET(quad_x);
 MOTORMIX_PX4_PRESET(hexa_x);
 MOTORMIX_PX4_PRESET(octo_x);

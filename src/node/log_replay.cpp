@@ -44,6 +44,10 @@ class Writer {
   std::int64_t eventnum_ = 0;
 };
 
+// Year 5138: no log is from later than this, and sums of such times with any
+// gap or tail stay far from the int64 limit.
+constexpr std::int64_t kLatestTimestampUs = 100'000'000'000'000'000;
+
 Counters add(const Counters& a, const Counters& b) {
   Counters s;
   s.cycles = a.cycles + b.cycles;
@@ -77,6 +81,18 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     log << "motormix replay: cannot read " << in_path << "\n";
     return false;
   }
+  // Timestamps are microseconds since 1970; outside [0, kLatestTimestampUs]
+  // one is damaged, and keeping every timestamp in that range keeps all the
+  // time arithmetic below far from overflow.
+  const auto plausible = [](std::int64_t t) { return t >= 0 && t <= kLatestTimestampUs; };
+  const auto skip_implausible = [&](const LogEventView& ev) {
+    ++summary.discontinuities;
+    ++summary.skipped_events;
+    log << "motormix replay: warning: event " << ev.eventnum << " (byte " << ev.offset
+        << ", channel " << ev.channel << ") has timestamp " << ev.timestamp
+        << ", outside any plausible time; skipped\n";
+  };
+  while (in.peek() && !plausible(in.peek()->timestamp)) skip_implausible(*in.next());
   const LogEventView* first_event = in.peek();
   if (!first_event) {
     log << "motormix replay: " << in_path << " holds no valid events";
@@ -154,14 +170,18 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   std::int64_t previous = first_event->timestamp;
   int last_drawn = -1;
   while (const LogEventView* ev = in.next()) {
+    if (!plausible(ev->timestamp)) {
+      skip_implausible(*ev);
+      continue;
+    }
     const std::int64_t jump = ev->timestamp - previous;
     if (jump < 0 || jump > max_gap_us) {
       ++summary.discontinuities;
       // One event whose timestamp is off while the next one carries on the
       // timeline is a damaged timestamp: skip that event alone.
       const LogEventView* after = in.peek();
-      const bool outlier =
-          after && after->timestamp >= previous && after->timestamp - previous <= max_gap_us;
+      const bool outlier = after && plausible(after->timestamp) &&
+                           after->timestamp >= previous && after->timestamp - previous <= max_gap_us;
       log << "motormix replay: warning: event " << ev->eventnum << " (byte " << ev->offset
           << ", channel " << ev->channel << ") jumps " << static_cast<double>(jump) / 1e6
           << " s in time; "

@@ -5,7 +5,8 @@
 // and a timestamp that jumps back, or forward by more than max_gap_s, is a
 // discontinuity: one such event between two that agree is skipped as a
 // damaged timestamp; otherwise a new segment starts there, as a freshly
-// started mixer (disarmed until armed again). No cycle is ever synthesized
+// started mixer (disarmed until armed again). An event whose timestamp is
+// negative or after year 5138 is skipped as damaged. No cycle is ever synthesized
 // across a gap, so the output holds at most loop_rate x (time covered by
 // segments, each plus the tail) cycles, plus the input events. The loop ticks at the configured
 // rate from the first event; inputs are handled at their timestamps, exactly

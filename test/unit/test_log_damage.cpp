@@ -14,6 +14,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -108,6 +109,23 @@ TEST(LogDamage, OneTimestampFarInTheFutureIsSkipped) {
   EXPECT_EQ(r.summary.outputs, intact.summary.outputs);
   EXPECT_LE(r.bytes, intact.bytes);
   EXPECT_NEAR(r.summary.duration_s, intact.summary.duration_s, 1e-9);
+}
+
+// Timestamps at the ends of the int64 range (found by fuzzing: the time
+// arithmetic overflowed) are skipped as damaged.
+TEST(LogDamage, ExtremeTimestampsAreSkipped) {
+  auto bytes = read_bytes(source_path(kFlight));
+  const auto events = events_of(source_path(kFlight));
+  put_be64(bytes, events[0].offset + 12, std::numeric_limits<std::int64_t>::min());
+  put_be64(bytes, events[10].offset + 12, std::numeric_limits<std::int64_t>::max());
+  put_be64(bytes, events[11].offset + 12, -5);
+  const Replayed intact = replay(write_bytes("intact5.lcmlog", read_bytes(source_path(kFlight))));
+  const Replayed r = replay(write_bytes("extreme.lcmlog", bytes));
+  ASSERT_TRUE(r.ok) << r.log;
+  EXPECT_EQ(r.summary.skipped_events, 3);
+  EXPECT_EQ(r.summary.input_events, intact.summary.input_events - 3);
+  EXPECT_NE(r.log.find("outside any plausible time"), std::string::npos) << r.log;
+  EXPECT_LE(r.summary.outputs, intact.summary.outputs);
 }
 
 // The whole second half shifted by a day (a logger paused) or back by a day:

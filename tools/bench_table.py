@@ -1,0 +1,37 @@
+#!/usr/bin/env python3
+"""Turns motormix_bench's JSON (--benchmark_format=json, repetitions with
+aggregates) into the Markdown comparison table of BENCHMARKS.md: per vehicle
+and strategy, motormix's allocation next to the bare matrix-vector product of
+the same size and, for `prioritized`, the PX4-style sequential desaturation,
+with ratios. Uses the median CPU time of the repetitions."""
+import json
+import sys
+
+MOTORS = {"quad_x": 4, "hexa_x": 6, "octo_x": 8}
+PX4_MODE = {"prioritized_off": "off", "prioritized_rp": "rp", "prioritized_rpy": "rpy"}
+
+
+def main():
+    data = json.load(open(sys.argv[1]))
+    median = {}
+    for b in data["benchmarks"]:
+        if b.get("aggregate_name") == "median":
+            median[b["run_name"]] = b["cpu_time"]
+    print("| vehicle | strategy | motormix ns | bare product ns | ratio | PX4-style ns | ratio |")
+    print("|---|---|---|---|---|---|---|")
+    for preset, n in MOTORS.items():
+        bare = median.get(f"BM_BareProduct<{n}>")
+        for name, t in sorted(median.items()):
+            prefix = f"BM_Allocate/{preset}_"
+            if not name.startswith(prefix):
+                continue
+            strategy = name[len(prefix):]
+            px4 = median.get(f"BM_Px4Baseline/{preset}_{PX4_MODE[strategy]}") if strategy in PX4_MODE else None
+            cells = [preset, strategy, f"{t:.1f}",
+                     f"{bare:.1f}" if bare else "-", f"{t / bare:.1f}x" if bare else "-",
+                     f"{px4:.1f}" if px4 else "-", f"{t / px4:.2f}x" if px4 else "-"]
+            print("| " + " | ".join(cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
