@@ -4,12 +4,12 @@
 # executions and coverage reached (scripts/robustness collects them).
 #   run_fuzzer.sh BINARY SECONDS MAX_LEN WORK_DIR SEED_DIR...
 set -euo pipefail
-bin="$1" seconds="$2" max_len="$3" work="$4"
+bin="$(realpath "$1")" seconds="$2" max_len="$3" work="$4"
 shift 4
 name=$(basename "$bin")
 mkdir -p "$work/corpus"
 inputs=()
-for d in "$@"; do [ -d "$d" ] && inputs+=("$d"); done
+for d in "$@"; do [ -d "$d" ] && inputs+=("$(realpath "$d")"); done
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 export TMPDIR="$work"
