@@ -20,7 +20,11 @@ namespace motormix::test {
 
 class BusRecorder {
  public:
-  BusRecorder(const std::string& pwm_channel, const std::string& status_channel) {
+  // keep_pwm = false: count motor_pwm_t messages and keep only the last one
+  // (long runs: the soak would otherwise hold hundreds of thousands).
+  BusRecorder(const std::string& pwm_channel, const std::string& status_channel,
+              bool keep_pwm = true)
+      : keep_pwm_(keep_pwm) {
     lcm_.subscribe(pwm_channel, &BusRecorder::on_pwm, this)->setQueueCapacity(100000);
     lcm_.subscribe(status_channel, &BusRecorder::on_status, this)->setQueueCapacity(100000);
     thread_ = std::thread([this] {
@@ -58,7 +62,11 @@ class BusRecorder {
   }
   std::size_t pwm_count() {
     std::lock_guard<std::mutex> lock(mutex_);
-    return pwm_.size();
+    return pwm_seen_;
+  }
+  motor_pwm_t last_pwm() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return last_pwm_;
   }
   int undecodable() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -69,27 +77,39 @@ class BusRecorder {
   // Untyped subscriptions, decoded here: undecodable messages are counted
   // as failures of the test, not skipped by LCM with a line on stderr.
   template <typename Message>
-  void store(const lcm::ReceiveBuffer* rbuf, std::vector<Message>& into,
-             std::vector<std::chrono::steady_clock::time_point>* times) {
-    Message msg{};
-    const bool ok = msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
-                    static_cast<int>(rbuf->data_size);
+  static bool decode(const lcm::ReceiveBuffer* rbuf, Message& msg) {
+    return msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
+           static_cast<int>(rbuf->data_size);
+  }
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    motor_pwm_t msg{};
+    const bool ok = decode(rbuf, msg);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!ok) {
+      ++undecodable_;
+    } else {
+      ++pwm_seen_;
+      last_pwm_ = msg;
+      if (keep_pwm_) {
+        pwm_.push_back(msg);
+        pwm_times_.push_back(std::chrono::steady_clock::now());
+      }
+    }
+    changed_.notify_all();
+  }
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    mixer_status_t msg{};
+    const bool ok = decode(rbuf, msg);
     std::lock_guard<std::mutex> lock(mutex_);
     if (ok) {
-      into.push_back(msg);
-      if (times) times->push_back(std::chrono::steady_clock::now());
+      status_.push_back(msg);
     } else {
       ++undecodable_;
     }
     changed_.notify_all();
   }
-  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    store(rbuf, pwm_, &pwm_times_);
-  }
-  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    store(rbuf, status_, nullptr);
-  }
 
+  const bool keep_pwm_;
   lcm::LCM lcm_;
   std::atomic<bool> stop_{false};
   std::mutex mutex_;
@@ -97,6 +117,8 @@ class BusRecorder {
   std::vector<motor_pwm_t> pwm_;
   std::vector<mixer_status_t> status_;
   std::vector<std::chrono::steady_clock::time_point> pwm_times_;  // arrival of each pwm_ entry
+  std::size_t pwm_seen_ = 0;
+  motor_pwm_t last_pwm_{};
   int undecodable_ = 0;
   std::thread thread_;
 };

@@ -93,13 +93,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   const double status_hz = 10.0;
-  motormix::test::BusRecorder bus("SOAK_PWM", "SOAK_STATUS");
+  motormix::test::BusRecorder bus("SOAK_PWM", "SOAK_STATUS", /*keep_pwm=*/false);
   motormix::test::ChildProcess mixer(
       {motormix, "run", "--config", config, "--set", "loop_rate_hz=" + std::to_string(rate),
        "--set", "status_rate_hz=10", "--set", "channels.setpoint=SOAK_SETPOINT", "--set",
        "channels.pid=SOAK_PID", "--set", "channels.motor_pwm=SOAK_PWM", "--set",
        "channels.status=SOAK_STATUS", "--set", "inputs.arm_max_throttle=0.1"});
-  if (!bus.wait_until([](const auto& p, const auto&) { return !p.empty(); }, 10s)) {
+  const auto started = Clock::now() + 10s;
+  while (bus.pwm_count() == 0 && Clock::now() < started) std::this_thread::sleep_for(10ms);
+  if (bus.pwm_count() == 0) {
     std::fprintf(stderr, "soak: motormix did not start\n");
     return 1;
   }
@@ -202,7 +204,7 @@ int main(int argc, char** argv) {
   const double drift = median(last_p99) - median(first_p99);
   const bool rss_ok = rss_growth <= 1024;
   const bool jitter_ok = drift <= 0.25 * 1e6 / rate;  // p99 no worse by a quarter period
-  const bool exit_ok = exit_code && *exit_code == 0 && !bus.pwm().back().armed;
+  const bool exit_ok = exit_code && *exit_code == 0 && !bus.last_pwm().armed;
 
   std::printf("| soak: %d Hz for %.0f s | result |\n|---|---|\n", rate, flown);
   std::printf("| RSS after %.0f s warm-up | %ld..%ld kB (growth %ld kB, bound 1024) %s |\n", warm,

@@ -69,7 +69,12 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
         MOTORMIX_BINARY, "run", "--config", source_path("config/team_quad.yaml"), "--set",
         "channels.setpoint=" + channel("SETPOINT", v), "--set", "channels.pid=" + channel("PID", v),
         "--set", "channels.motor_pwm=" + channel("PWM", v), "--set",
-        "channels.status=" + channel("STATUS", v)}));
+        "channels.status=" + channel("STATUS", v),
+        // Throughput and cross-talk are measured here, not failsafe timing
+        // (tested alone elsewhere): with sixty busy threads on two cores a
+        // publisher or a loop can sleep past 100 ms, and a failsafe would end
+        // that vehicle's flight.
+        "--set", "inputs.setpoint_timeout_ms=500", "--set", "inputs.pid_timeout_ms=500"}));
   }
   for (int v = 0; v < kVehicles; ++v) {
     ASSERT_TRUE(buses[v]->wait_until([](const auto& p, const auto&) { return !p.empty(); }, 20s))
