@@ -164,7 +164,8 @@ TEST_F(Faults, BurstAtFiftyTimesSpeedLosesNothing) {
       5s))
       << "accepted " << bus_->status().back().setpoint_received << " setpoints of " << setpoints
       << ", " << bus_->status().back().pid_received << " pid of " << pids;
-  const auto& last = bus_->status().back();
+  const auto status = bus_->status();  // a copy: `last` must not outlive it
+  const auto& last = status.back();
   EXPECT_EQ(last.setpoint_received, setpoints);
   EXPECT_EQ(last.pid_received, pids);
   EXPECT_EQ(last.rejected_decode + last.rejected_range + last.rejected_nonfinite +
