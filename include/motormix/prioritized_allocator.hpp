@@ -51,10 +51,10 @@ class PrioritizedAllocator final : public MatrixAllocator {
   // even s = 0 fits. Closed form: each repair step is one-dimensional.
   double largest_fitting_scale(const MotorVector& base, const MotorVector& part,
                                bool may_raise) const;
-  // Whether commands `a` deliver `demand` better than `b` in priority order:
-  // roll/pitch error (Euclidean), then thrust, then yaw; ties go to `b`.
-  bool closer_in_priority_order(const AxisVector& demand, const MotorVector& a,
-                                const MotorVector& b) const;
+  // Whether the undelivered demand `error_a` (as reported, axes the vehicle is
+  // not commanded in already zero) is smaller than `error_b` in priority
+  // order: roll/pitch (Euclidean), then thrust, then yaw; ties go to `b`.
+  static bool closer_in_priority_order(const AxisVector& error_a, const AxisVector& error_b);
   const MotorVector& column(Axis axis) const;
 
   Airmode airmode_;

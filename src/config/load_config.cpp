@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 namespace motormix::config {
 
@@ -180,6 +181,18 @@ Vehicle effectiveness_vehicle(MapReader rows) {
   return v;
 }
 
+// A vehicle given by its mixing table: commanded in the axes the table uses,
+// motors named m1, m2, ...
+Vehicle mixing_table_vehicle(const MixingMatrix& m, std::string name, std::string description) {
+  Vehicle v;
+  v.name = std::move(name);
+  v.description = std::move(description);
+  v.mixing_table = m;
+  v.controlled = controlled_axes(m);
+  for (Eigen::Index i = 0; i < m.rows(); ++i) v.motor_names.push_back("m" + std::to_string(i + 1));
+  return v;
+}
+
 Vehicle table_vehicle(const YAML::Node& rows, const std::string& path) {
   if (!rows.IsSequence() || rows.size() < 1 || rows.size() > kMaxMotors) {
     fail(path, describe(rows),
@@ -198,14 +211,7 @@ Vehicle table_vehicle(const YAML::Node& rows, const std::string& path) {
                     -kMaxCoefficient, kMaxCoefficient);
     }
   }
-  Vehicle v;
-  v.name = "mixing";
-  v.description = "explicit mixing table";
-  v.mixing_table = m;
-  v.controlled = controlled_axes(m);
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    v.motor_names.push_back("m" + std::to_string(i + 1));
-  return v;
+  return mixing_table_vehicle(m, "mixing", "explicit mixing table");
 }
 
 WheelBase read_wheel_base(MapReader wheels, int default_per_side, bool per_side_allowed) {
@@ -262,13 +268,7 @@ Vehicle paparazzi_vehicle(MapReader& geometry, LoadContext& context) {
       }
     }
   }
-  Vehicle v;
-  v.name = "paparazzi";
-  v.description = "MIXING section of " + file;
-  v.mixing_table = m;
-  v.controlled = controlled_axes(m);
-  for (Eigen::Index i = 0; i < m.rows(); ++i) v.motor_names.push_back("m" + std::to_string(i + 1));
-  return v;
+  return mixing_table_vehicle(m, "paparazzi", "MIXING section of " + file);
 }
 
 void read_geometry(MapReader geometry, Config& config, LoadContext& context) {

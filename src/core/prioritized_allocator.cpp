@@ -80,7 +80,7 @@ void PrioritizedAllocator::mix_yaw(double yaw, MotorVector& u, AxisVector& effec
 }
 
 double PrioritizedAllocator::largest_fitting_scale(const MotorVector& base, const MotorVector& part,
-                                                  bool may_raise) const {
+                                                   bool may_raise) const {
   // Motor i stays in range after a thrust shift k when
   //   lower <= base_i + s part_i + k thrust_i <= upper.
   // Motors with thrust_i > 0 give bounds on k that are linear in s:
@@ -160,19 +160,13 @@ void PrioritizedAllocator::repair(AxisVector& effective, MotorVector& u) const {
   effective[index(Axis::kPitch)] *= rp_scale;
 }
 
-bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& demand, const MotorVector& a,
-                                                   const MotorVector& b) const {
-  const AxisVector error_a = demand - effectiveness_ * a;
-  const AxisVector error_b = demand - effectiveness_ * b;
-  const auto masked = [&](const AxisVector& e, Axis axis) {
-    return (controlled_ & bit(axis)) ? e[index(axis)] : 0.0;
-  };
-  const double rp_a = std::hypot(masked(error_a, Axis::kRoll), masked(error_a, Axis::kPitch));
-  const double rp_b = std::hypot(masked(error_b, Axis::kRoll), masked(error_b, Axis::kPitch));
+bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
+                                                    const AxisVector& error_b) {
   const std::array<std::pair<double, double>, 3> in_order = {
-      std::pair{rp_a, rp_b},
-      std::pair{std::abs(masked(error_a, Axis::kThrust)), std::abs(masked(error_b, Axis::kThrust))},
-      std::pair{std::abs(masked(error_a, Axis::kYaw)), std::abs(masked(error_b, Axis::kYaw))}};
+      std::pair{std::hypot(error_a[index(Axis::kRoll)], error_a[index(Axis::kPitch)]),
+                std::hypot(error_b[index(Axis::kRoll)], error_b[index(Axis::kPitch)])},
+      std::pair{std::abs(error_a[index(Axis::kThrust)]), std::abs(error_b[index(Axis::kThrust)])},
+      std::pair{std::abs(error_a[index(Axis::kYaw)]), std::abs(error_b[index(Axis::kYaw)])}};
   for (const auto& [x, y] : in_order) {
     if (x < y - kDeliveredTolerance) return true;
     if (x > y + kDeliveredTolerance) return false;
@@ -221,7 +215,13 @@ AllocationResult PrioritizedAllocator::allocate(const AxisVector& demand,
     // demand better in priority order: roll and pitch, then thrust, then yaw.
     MotorVector clipped = commands.cwiseMax(range_.lower).cwiseMin(range_.upper);
     repair(effective, commands);
-    if (closer_in_priority_order(demand, clipped, commands)) commands = clipped;
+    const AllocationResult repaired = finish(demand, commands);
+    const AllocationResult clip = finish(demand, clipped);
+    if (closer_in_priority_order(clip.unallocated, repaired.unallocated)) {
+      commands = clipped;
+      return clip;
+    }
+    return repaired;
   }
   return finish(demand, commands);
 }
