@@ -41,11 +41,27 @@ class Allocator {
   virtual AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const = 0;
 };
 
+// What a matrix strategy works from: the mixing matrix it applies, the
+// effectiveness it reports against, and the axes it answers for. From a
+// mixing matrix alone (the healthy vehicle) the effectiveness is the matrix's
+// pseudo-inverse and the axes are its non-zero columns; after a motor failure
+// they are the healthy vehicle's effectiveness without the failed motors and
+// the healthy axes, so whatever the failure costs is reported (see
+// motor_failure.hpp).
+struct MixingBasis {
+  MixingBasis(const MixingMatrix& mixing);  // implicit on purpose: the healthy case
+  MixingBasis(const MixingMatrix& mixing, const EffectivenessMatrix& effectiveness,
+              AxisMask controlled);
+  MixingMatrix mixing;
+  EffectivenessMatrix effectiveness;
+  AxisMask controlled;
+};
+
 // Shared state of the strategies that work from a mixing matrix: the matrix,
 // its normalized effectiveness (for reporting) and the command range.
 class MatrixAllocator : public Allocator {
  public:
-  MatrixAllocator(const MixingMatrix& mixing, CommandRange range);
+  MatrixAllocator(const MixingBasis& basis, CommandRange range);
   int motors() const override { return static_cast<int>(mixing_.rows()); }
   const MixingMatrix& mixing() const { return mixing_; }
   CommandRange range() const { return range_; }

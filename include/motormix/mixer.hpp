@@ -6,11 +6,13 @@
 
 #include <motormix/allocation.hpp>
 #include <motormix/axes.hpp>
+#include <motormix/motor_failure.hpp>
 #include <motormix/motor_vector.hpp>
 #include <motormix/output_stage.hpp>
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace motormix {
 
@@ -26,26 +28,62 @@ struct MixerOutput {
   MotorVector command;          // normalized motor commands after allocation (0 when disarmed)
   MotorVector output;           // output-stage values, e.g. PWM microseconds
   DirectionVector direction{};  // magnitude/direction outputs: +1, -1, 0; others 0
-  AllocationResult allocation;
+  AllocationResult allocation;  // failed motors are neither saturated bit
+  MotorMask failed = 0;         // motors treated as failed in this cycle (stopped)
+  FailureHandling failure = FailureHandling::kNone;
+  AxisMask held = kAllAxes;                 // axes the working motors still command
+  AxisVector authority = AxisVector::Zero();  // per axis, for the failure set in force
+};
+
+// One failure set prepared at set-up: the strategy rebuilt on the reduced
+// matrix, and what that set leaves.
+struct PreparedFailure {
+  MotorMask failed = 0;
+  std::unique_ptr<const Allocator> allocator;
+  AxisMask held = 0;
+  AxisVector authority = AxisVector::Zero();
+};
+
+// What the mixer needs to handle failures in flight without computing
+// anything: the healthy effectiveness (to report what the working motors
+// really produce) and every prepared failure set, sorted by mask.
+struct FailurePlan {
+  EffectivenessMatrix healthy_effectiveness;  // empty: no reallocation for this strategy
+  AxisMask controlled = kAllAxes;
+  CommandRange range;
+  AxisVector healthy_authority = AxisVector::Zero();
+  std::vector<PreparedFailure> prepared;
 };
 
 class Mixer {
  public:
   Mixer(std::unique_ptr<const Allocator> allocator, OutputStage output_stage,
-        ThrustRange thrust_range = ThrustRange::kUnipolar);
+        ThrustRange thrust_range = ThrustRange::kUnipolar, FailurePlan failures = {});
 
   int motors() const { return allocator_->motors(); }
   const Allocator& allocator() const { return *allocator_; }
   const OutputStage& output_stage() const { return output_stage_; }
+  const FailurePlan& failures() const { return failures_; }
 
-  // dt_s: time since the previous cycle, for slew limits (0: none).
-  MixStatus mix(const AxisVector& demand, MixerOutput& out, double dt_s = 0.0) const;
+  // dt_s: time since the previous cycle, for slew limits (0: none). failed:
+  // motors to treat as failed (bits beyond motors() are ignored): they are
+  // stopped (command 0, output at its disarmed value) and the others are
+  // mixed with the matrix prepared for that set. A set that was not prepared
+  // stops its motors all the same, mixes the rest with the prepared set of
+  // its two lowest motors (or the healthy matrix) and reports the loss
+  // (FailureHandling::kUnsupported).
+  MixStatus mix(const AxisVector& demand, MixerOutput& out, double dt_s = 0.0,
+                MotorMask failed = 0) const;
   void disarm(MixerOutput& out) const;
+
+  // The prepared set for exactly `failed`, or nullptr.
+  const PreparedFailure* prepared(MotorMask failed) const;
 
  private:
   std::unique_ptr<const Allocator> allocator_;
   OutputStage output_stage_;
   ThrustRange thrust_range_;
+  FailurePlan failures_;
 };
 
 }  // namespace motormix

@@ -21,7 +21,7 @@ struct OptimalSettings {
 
 class OptimalAllocator final : public MatrixAllocator {
  public:
-  OptimalAllocator(const MixingMatrix& mixing, CommandRange range, OptimalSettings settings);
+  OptimalAllocator(const MixingBasis& basis, CommandRange range, OptimalSettings settings);
   std::string_view name() const override { return "optimal"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 

@@ -49,8 +49,10 @@ class OutputStage {
   // Maps `command` (NaN and infinities count as 0, the safe middle or
   // bottom). With dt_s > 0 and `previous_armed`, each output moves at most
   // slew_per_s * dt_s from its value in `output` (the previous cycle's).
+  // Channels in `stopped` (failed motors) get their disarmed value at once,
+  // slew limit or not: a dead motor is not driven.
   void armed(const MotorVector& command, MotorVector& output, DirectionVector& direction,
-             double dt_s, bool previous_armed) const;
+             double dt_s, bool previous_armed, MotorMask stopped = 0) const;
   void disarmed(MotorVector& output, DirectionVector& direction) const;
 
   // The thrust model inverted: output fraction that produces `thrust` (0..1).

@@ -32,7 +32,7 @@ enum class Airmode : std::uint8_t { kOff, kRollPitch, kRollPitchYaw };
 
 class PrioritizedAllocator final : public MatrixAllocator {
  public:
-  PrioritizedAllocator(const MixingMatrix& mixing, CommandRange range, Airmode airmode,
+  PrioritizedAllocator(const MixingBasis& basis, CommandRange range, Airmode airmode,
                        double yaw_headroom);
   std::string_view name() const override { return "prioritized"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;

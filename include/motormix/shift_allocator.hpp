@@ -14,7 +14,7 @@ namespace motormix {
 
 class ShiftAllocator final : public MatrixAllocator {
  public:
-  ShiftAllocator(const MixingMatrix& mixing, CommandRange range);
+  ShiftAllocator(const MixingBasis& basis, CommandRange range);
   std::string_view name() const override { return "shift"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 

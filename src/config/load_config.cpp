@@ -371,6 +371,77 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
   geometry.finish();
 }
 
+// mixer.failed_motors: motors stopped from the start, by number as `motormix
+// matrix` prints them (m3 is 3) or by name.
+void read_failed_motors(MapReader& mixer, Config& config) {
+  const YAML::Node list = mixer.raw("failed_motors");
+  if (!list.IsDefined() || list.IsNull()) return;
+  const std::string path = mixer.path_of("failed_motors");
+  const int n = config.motors();
+  const std::string allowed = "a list of motor numbers 1.." + std::to_string(n) +
+                              " (as motormix matrix prints them) or motor names (" +
+                              join(config.motor_names()) + ")";
+  if (!list.IsSequence()) fail(path, describe(list), allowed);
+  const bool budgeted =
+      config.strategy == Strategy::kLegacyBudget || config.strategy == Strategy::kBudget;
+  if (budgeted && list.size() > 0) {
+    fail(path, describe(list) + " with strategy " + to_string(config.strategy),
+         "failed motors only with strategy shift, clip, prioritized or optimal (the budget "
+         "strategies have no reallocation)");
+  }
+  MotorMask mask = 0;
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    const std::string item_path = path + "[" + std::to_string(k) + "]";
+    const YAML::Node& item = list[k];
+    if (!item.IsScalar()) fail(item_path, describe(item), allowed);
+    int motor = -1;
+    const auto& names = config.motor_names();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (names[i] == item.Scalar()) motor = static_cast<int>(i);
+    }
+    if (motor < 0) {
+      try {
+        std::size_t used = 0;
+        const int number = std::stoi(item.Scalar(), &used);
+        if (used == item.Scalar().size() && number >= 1 && number <= n) motor = number - 1;
+      } catch (const std::exception&) {
+        // not a number: reported below
+      }
+    }
+    if (motor < 0) fail(item_path, describe(item), allowed);
+    const MotorMask b = MotorMask{1} << motor;
+    if (mask & b) fail(item_path, describe(item) + ", listed twice", "each motor once");
+    mask |= b;
+  }
+  if (count_motors(mask) >= n) {
+    fail(path, describe(list), "at least one working motor");
+  }
+  config.failed_motors = mask;
+}
+
+void read_battery(MapReader battery, Config& config) {
+  if (!battery.has("nominal_v")) {
+    fail(battery.path_of("nominal_v"), "nothing",
+         "the pack voltage at which no compensation is applied, 1 to 100 V (required when "
+         "'battery' is present)");
+  }
+  BatterySettings b;
+  b.nominal_v = battery.required_number("nominal_v", 1.0, 100.0);
+  b.exponent = battery.number("exponent", 1.0, 0.0, 3.0);
+  b.max_gain = battery.number("max_gain", 1.5, 1.0, 3.0);
+  b.filter_hz = battery.number("filter_hz", 2.0, 0.01, config.loop_rate_hz / 2.0);
+  b.timeout_s = battery.number("timeout_ms", 500.0, 1.0, 10000.0) / 1e3;
+  b.min_v = battery.number("min_v", 0.5 * b.nominal_v, 0.0, 100.0);
+  b.max_v = battery.number("max_v", 1.25 * b.nominal_v, 0.0, 150.0);
+  if (!(b.min_v < b.nominal_v && b.nominal_v <= b.max_v)) {
+    std::ostringstream found;
+    found << "min_v " << b.min_v << ", nominal_v " << b.nominal_v << ", max_v " << b.max_v;
+    fail(battery.path_of("min_v"), found.str(), "min_v < nominal_v <= max_v");
+  }
+  battery.finish();
+  config.battery = b;
+}
+
 void read_mixer(MapReader mixer, Config& config) {
   const std::vector<std::string> names = {"legacy_budget", "budget",      "shift",
                                           "clip",          "prioritized", "optimal"};
@@ -422,6 +493,7 @@ void read_mixer(MapReader mixer, Config& config) {
   weights.finish();
   config.optimal.max_iterations = static_cast<int>(optimal.number("max_iterations", 100, 1, 1000));
   optimal.finish();
+  read_failed_motors(mixer, config);
   mixer.finish();
 }
 
@@ -532,6 +604,8 @@ void read_channels(MapReader channels, Config& config) {
   c.pid = channels.text("pid", c.pid);
   c.motor_pwm = channels.text("motor_pwm", c.motor_pwm);
   c.status = channels.text("status", c.status);
+  c.motor_status = channels.text("motor_status", c.motor_status);
+  c.battery = channels.text("battery", c.battery);
   channels.finish();
 }
 
@@ -551,6 +625,7 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
                        : PublishMode::kTimer;
   config.loop_rate_hz = root.number("loop_rate_hz", 400.0, 50.0, 10000.0);
   config.status_rate_hz = root.number("status_rate_hz", 10.0, 0.1, 1000.0);
+  if (root.has("battery")) read_battery(root.map("battery"), config);
   if (config.status_rate_hz > config.loop_rate_hz) {
     std::ostringstream found;
     found << config.status_rate_hz << " with loop_rate_hz " << config.loop_rate_hz;

@@ -1,5 +1,7 @@
 #include <motormix/config/matrix_export.hpp>
 
+#include <motormix/config/build_mixer.hpp>
+
 #include <motormix/version.hpp>
 
 #include <nlohmann/json.hpp>
@@ -311,8 +313,7 @@ MatrixFormat matrix_format_from(const std::string& name) {
 }
 
 AxisVector authority_of(const Config& config) {
-  const bool aircraft = config.thrust_range() == ThrustRange::kUnipolar;
-  return motormix::authority_of(config.mixing, aircraft ? 0.5 : 0.0, aircraft ? 0.0 : -1.0, 1.0);
+  return authority_at_half_thrust(config, config.mixing);
 }
 
 std::vector<std::vector<long>> scaled_coefficients(const MixingMatrix& mixing, double scale) {

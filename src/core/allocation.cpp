@@ -48,11 +48,17 @@ ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, Comman
   return k;
 }
 
-MatrixAllocator::MatrixAllocator(const MixingMatrix& mixing, CommandRange range)
-    : mixing_(mixing),
-      effectiveness_(effectiveness_of(mixing)),
+MixingBasis::MixingBasis(const MixingMatrix& m)
+    : mixing(m), effectiveness(effectiveness_of(m)), controlled(controlled_axes(m)) {}
+
+MixingBasis::MixingBasis(const MixingMatrix& m, const EffectivenessMatrix& e, AxisMask c)
+    : mixing(m), effectiveness(e), controlled(c) {}
+
+MatrixAllocator::MatrixAllocator(const MixingBasis& basis, CommandRange range)
+    : mixing_(basis.mixing),
+      effectiveness_(basis.effectiveness),
       range_(range),
-      controlled_(controlled_axes(mixing)) {}
+      controlled_(basis.controlled) {}
 
 void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands) const {
   commands.noalias() = mixing_ * demand;

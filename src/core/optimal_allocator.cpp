@@ -23,9 +23,9 @@ enum : signed char { kFree = 0, kAtLower = -1, kAtUpper = 1 };
 
 }  // namespace
 
-OptimalAllocator::OptimalAllocator(const MixingMatrix& mixing, CommandRange range,
+OptimalAllocator::OptimalAllocator(const MixingBasis& basis, CommandRange range,
                                    OptimalSettings settings)
-    : MatrixAllocator(mixing, range), settings_(settings) {}
+    : MatrixAllocator(basis, range), settings_(settings) {}
 
 double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector& weights,
                       const AxisVector& demand, const MotorVector& commands) {

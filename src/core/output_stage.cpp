@@ -16,12 +16,17 @@ double OutputStage::linearize(double thrust, double factor) {
 }
 
 void OutputStage::armed(const MotorVector& command, MotorVector& output, DirectionVector& direction,
-                        double dt_s, bool previous_armed) const {
+                        double dt_s, bool previous_armed, MotorMask stopped) const {
   const bool limit_slew = previous_armed && dt_s > 0.0 && output.size() == outputs();
   MotorVector previous = output;
   output.resize(outputs());
   for (int i = 0; i < outputs(); ++i) {
     const OutputChannel& ch = channels_[static_cast<std::size_t>(i)];
+    if ((stopped >> i) & 1U) {
+      output[i] = ch.disarmed;  // the stop value, as when disarmed
+      direction[static_cast<std::size_t>(i)] = 0;
+      continue;
+    }
     const double c_in = std::isfinite(command[i]) ? command[i] : 0.0;
     double value = ch.disarmed;
     std::int8_t dir = 0;

@@ -7,15 +7,15 @@
 
 namespace motormix {
 
-PrioritizedAllocator::PrioritizedAllocator(const MixingMatrix& mixing, CommandRange range,
+PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRange range,
                                            Airmode airmode, double yaw_headroom)
-    : MatrixAllocator(mixing, range),
+    : MatrixAllocator(basis, range),
       airmode_(airmode),
       yaw_headroom_(yaw_headroom),
-      roll_(mixing.col(index(Axis::kRoll))),
-      pitch_(mixing.col(index(Axis::kPitch))),
-      yaw_(mixing.col(index(Axis::kYaw))),
-      thrust_(mixing.col(index(Axis::kThrust))) {}
+      roll_(mixing_.col(index(Axis::kRoll))),
+      pitch_(mixing_.col(index(Axis::kPitch))),
+      yaw_(mixing_.col(index(Axis::kYaw))),
+      thrust_(mixing_.col(index(Axis::kThrust))) {}
 
 double PrioritizedAllocator::desaturation_gain(const MotorVector& u, const MotorVector& v,
                                                CommandRange range) const {

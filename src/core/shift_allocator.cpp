@@ -6,14 +6,15 @@
 
 namespace motormix {
 
-ShiftAllocator::ShiftAllocator(const MixingMatrix& mixing, CommandRange range)
-    : MatrixAllocator(mixing, range) {
-  direction_ = mixing.col(index(Axis::kThrust));
+ShiftAllocator::ShiftAllocator(const MixingBasis& basis, CommandRange range)
+    : MatrixAllocator(basis, range) {
+  direction_ = mixing_.col(index(Axis::kThrust));
   const double peak = direction_.cwiseAbs().maxCoeff();
-  if (peak > 0.0 && direction_.minCoeff() > 0.0) {
+  // A motor with no share of thrust (a failed one) is not moved by the shift.
+  if (peak > 0.0 && direction_.minCoeff() >= 0.0) {
     direction_ /= peak;
   } else {
-    direction_.setOnes(mixing.rows());
+    direction_.setOnes(mixing_.rows());
   }
 }
 

@@ -3,6 +3,7 @@
 // which strategy, which output ranges, which channels and rates. Built once
 // at start-up by load_config(); nothing downstream re-validates it.
 
+#include <motormix/battery_compensation.hpp>
 #include <motormix/geometry.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
@@ -35,6 +36,8 @@ struct Channels {
   std::string pid = "PID";
   std::string motor_pwm = "MOTOR_PWM";
   std::string status = "MIXER_STATUS";
+  std::string motor_status = "MOTOR_STATUS";
+  std::string battery = "BATTERY";
 };
 
 // What the outputs do when an input goes stale, is lost or turns invalid
@@ -81,6 +84,9 @@ struct Config {
   Airmode airmode = Airmode::kOff;  // prioritized
   double yaw_headroom = 0.15;       // prioritized
   OptimalSettings optimal;          // optimal
+  MotorMask failed_motors = 0;      // mixer.failed_motors: stopped from the start, bit i = motor i
+
+  std::optional<BatterySettings> battery;  // set: thrust compensated for the pack voltage
 
   std::vector<OutputChannel> outputs;  // one per motor
   std::string output_unit = "us";      // for logs and tools

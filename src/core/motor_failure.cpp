@@ -1,0 +1,90 @@
+#include <motormix/motor_failure.hpp>
+
+#include <Eigen/QR>
+
+#include <array>
+
+namespace motormix {
+
+namespace {
+// Singular values below this fraction of the largest count as zero (as for
+// the healthy derivation).
+constexpr double kRankRelativeTolerance = 1e-9;
+
+// Axes in the order they are given up when the remaining motors cannot
+// command them all: yaw first, roll last.
+constexpr std::array<Axis, kNumAxes> kGiveUpOrder = {Axis::kYaw, Axis::kThrust, Axis::kPitch,
+                                                     Axis::kRoll};
+
+// Rows `axes` of `e`, columns of the motors that still work.
+Eigen::MatrixXd reduced(const EffectivenessMatrix& e, AxisMask axes, MotorMask failed) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(kNumAxes, e.cols());
+  for (int a = 0; a < kNumAxes; ++a) {
+    if (!((axes >> a) & 1U)) continue;
+    for (Eigen::Index i = 0; i < e.cols(); ++i) {
+      if (!((failed >> i) & 1U)) out(a, i) = e(a, i);
+    }
+  }
+  return out;
+}
+
+int count_axes(AxisMask mask) {
+  int n = 0;
+  for (int a = 0; a < kNumAxes; ++a) n += (mask >> a) & 1U;
+  return n;
+}
+
+}  // namespace
+
+const char* to_string(FailureHandling handling) {
+  switch (handling) {
+    case FailureHandling::kNone:
+      return "none";
+    case FailureHandling::kReallocated:
+      return "reallocated";
+    case FailureHandling::kAxesLost:
+      return "axes lost";
+    case FailureHandling::kUnsupported:
+      return "unsupported";
+  }
+  return "?";
+}
+
+int count_motors(MotorMask mask) {
+  int n = 0;
+  for (; mask != 0; mask &= mask - 1) ++n;
+  return n;
+}
+
+FailureMixing derive_failure_mixing(const EffectivenessMatrix& healthy, AxisMask controlled,
+                                    MotorMask failed) {
+  FailureMixing f;
+  f.failed = failed;
+  f.effectiveness = healthy;
+  for (Eigen::Index i = 0; i < healthy.cols(); ++i) {
+    if ((failed >> i) & 1U) f.effectiveness.col(i).setZero();
+  }
+  // Give axes up, lowest priority first, until the rows left are
+  // independent: then the pseudo-inverse delivers each of them exactly.
+  AxisMask held = controlled;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
+  cod.setThreshold(kRankRelativeTolerance);
+  for (Axis axis : kGiveUpOrder) {
+    cod.compute(reduced(f.effectiveness, held, failed));
+    if (cod.rank() == count_axes(held)) break;
+    held = static_cast<AxisMask>(held & ~bit(axis));
+  }
+  cod.compute(reduced(f.effectiveness, held, failed));
+  if (cod.rank() != count_axes(held)) held = 0;  // nothing independent is left
+  f.held = held;
+  f.mixing.setZero(healthy.cols(), kNumAxes);
+  if (held != 0) {
+    const Eigen::MatrixXd inverse = cod.pseudoInverse();  // motors x axes
+    for (int a = 0; a < kNumAxes; ++a) {
+      if ((held >> a) & 1U) f.mixing.col(a) = inverse.col(a);
+    }
+  }
+  return f;
+}
+
+}  // namespace motormix
