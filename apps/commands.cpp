@@ -73,12 +73,42 @@ int mix(const MixCommand& cmd) {
       !check_range("yaw", cmd.yaw, -1.0, 1.0)) {
     return kExitUsage;
   }
+  // --failed goes through the loader's own checks, as mixer.failed_motors.
+  std::optional<config::Config> failed_config;
+  MotorMask failed = config->failed_motors;
+  if (!cmd.failed.empty()) {
+    CommonOptions with_failed = cmd.common;
+    std::string list;
+    for (const std::string& f : cmd.failed) list += (list.empty() ? "" : ",") + f;
+    with_failed.overrides.push_back("mixer.failed_motors=[" + list + "]");
+    failed_config = load(with_failed);
+    if (!failed_config) return kExitUsage;
+    failed |= failed_config->failed_motors;
+  }
+  double gain = 1.0;
+  if (cmd.battery_voltage) {
+    if (!config->battery) {
+      std::cerr << "motormix mix: --battery-voltage needs a 'battery' section in the configuration"
+                << "\n";
+      return kExitUsage;
+    }
+    if (!check_range("battery-voltage", *cmd.battery_voltage, config->battery->min_v,
+                     config->battery->max_v)) {
+      return kExitUsage;
+    }
+    gain = battery_gain(*config->battery, *cmd.battery_voltage);
+  }
   const Mixer mixer = config::build_mixer(*config);
   AxisVector demand;
-  demand << cmd.roll, cmd.pitch, cmd.yaw, cmd.throttle;
+  demand << cmd.roll, cmd.pitch, cmd.yaw, cmd.throttle * gain;
   MixerOutput out;
-  mixer.mix(demand, out);
+  const MixStatus status = mixer.mix(demand, out, 0.0, failed);
   const int n = mixer.motors();
+  const auto names_of = [&](MotorMask mask) {
+    std::vector<std::string> names;
+    for (int i : motors_in(mask, n)) names.push_back(config->motor_names()[static_cast<std::size_t>(i)]);
+    return names;
+  };
 
   if (cmd.json) {
     nlohmann::json j;
@@ -92,6 +122,18 @@ int mix(const MixCommand& cmd) {
     nlohmann::json unallocated;
     for (int a = 0; a < kNumAxes; ++a) unallocated[kAxisNames[a]] = out.allocation.unallocated[a];
     j["unallocated"] = unallocated;
+    j["demand_clamped"] = status == MixStatus::kDemandClamped;
+    j["thrust_gain"] = gain;
+    j["failed_motors"] = names_of(out.failed);
+    j["failure_handling"] = to_string(out.failure);
+    nlohmann::json held;
+    nlohmann::json authority;
+    for (int a = 0; a < kNumAxes; ++a) {
+      held[kAxisNames[a]] = ((out.held >> a) & 1U) != 0;
+      authority[kAxisNames[a]] = out.authority[a];
+    }
+    j["axes_held"] = held;
+    j["authority"] = authority;
     std::cout << j.dump() << "\n";
     return kExitOk;
   }
@@ -99,7 +141,26 @@ int mix(const MixCommand& cmd) {
             << "pwm\n";
   for (int i = 0; i < n; ++i) {
     std::cout << std::setw(8) << config->motor_names()[static_cast<std::size_t>(i)] << std::setw(12)
-              << out.command[i] << out.output[i] << "\n";
+              << out.command[i] << out.output[i] << (((out.failed >> i) & 1U) ? "  failed (stopped)" : "")
+              << "\n";
+  }
+  if (cmd.battery_voltage) std::cout << "thrust gain " << gain << " at " << *cmd.battery_voltage << " V\n";
+  if (out.failed != 0) {
+    std::cout << "failure handling: " << to_string(out.failure) << "; axes held:";
+    for (int a = 0; a < kNumAxes; ++a) {
+      if ((out.held >> a) & 1U) std::cout << " " << kAxisNames[a];
+    }
+    if (out.held == 0) std::cout << " none promised";
+    std::cout << "\n";
+  }
+  if (out.allocation.axis_limited != 0) {
+    std::cout << "not delivered (demanded minus produced):";
+    for (int a = 0; a < kNumAxes; ++a) {
+      if ((out.allocation.axis_limited >> a) & 1U) {
+        std::cout << " " << kAxisNames[a] << " " << out.allocation.unallocated[a];
+      }
+    }
+    std::cout << "\n";
   }
   return kExitOk;
 }

@@ -3,6 +3,7 @@
 // 0 ok, 1 runtime error, 2 usage or configuration error, 3 (replay) damaged
 // input log.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,8 @@ struct MixCommand {
   double pitch = 0.0;
   double yaw = 0.0;
   bool json = false;
+  std::optional<double> battery_voltage;  // applied unfiltered, needs a battery section
+  std::vector<std::string> failed;        // motor numbers or names, added to mixer.failed_motors
 };
 int mix(const MixCommand& cmd);
 

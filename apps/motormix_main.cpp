@@ -43,6 +43,12 @@ int main(int argc, char** argv) {
   mix_app->add_option("--pitch", mix_cmd.pitch, "pitch demand -1..1");
   mix_app->add_option("--yaw", mix_cmd.yaw, "yaw demand -1..1");
   mix_app->add_flag("--json", mix_cmd.json, "print one JSON object");
+  mix_app->add_option("--battery-voltage", mix_cmd.battery_voltage,
+                      "apply battery compensation for this pack voltage (unfiltered)");
+  mix_app->add_option("--failed", mix_cmd.failed,
+                      "treat these motors as failed: numbers as motormix matrix prints them, or "
+                      "names (added to mixer.failed_motors)")
+      ->delimiter(',');
 
   MatrixCommand matrix_cmd;
   CLI::App* matrix_app =

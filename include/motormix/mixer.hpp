@@ -79,7 +79,18 @@ class Mixer {
   // The prepared set for exactly `failed`, or nullptr.
   const PreparedFailure* prepared(MotorMask failed) const;
 
+  // How `failed` is handled and what it leaves, as mix() reports it.
+  struct FailureReport {
+    FailureHandling handling = FailureHandling::kNone;
+    AxisMask held = kAllAxes;
+    AxisVector authority = AxisVector::Zero();
+  };
+  FailureReport failure_report(MotorMask failed) const;
+
  private:
+  // The allocator mix() uses for `failed` (already limited to the motors).
+  const Allocator& allocator_for(MotorMask failed) const;
+
   std::unique_ptr<const Allocator> allocator_;
   OutputStage output_stage_;
   ThrustRange thrust_range_;

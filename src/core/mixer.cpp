@@ -15,6 +15,35 @@ Mixer::Mixer(std::unique_ptr<const Allocator> allocator, OutputStage output_stag
             [](const PreparedFailure& a, const PreparedFailure& b) { return a.failed < b.failed; });
 }
 
+Mixer::FailureReport Mixer::failure_report(MotorMask failed) const {
+  FailureReport r;
+  r.held = failures_.controlled;
+  r.authority = failures_.healthy_authority;
+  if (failed == 0) return r;
+  if (const PreparedFailure* p = prepared(failed)) {
+    r.handling = p->held == failures_.controlled ? FailureHandling::kReallocated
+                                                 : FailureHandling::kAxesLost;
+    r.held = p->held;
+    r.authority = p->authority;
+  } else {
+    // No promise is made for a set that was not prepared.
+    r.handling = FailureHandling::kUnsupported;
+    r.held = 0;
+    r.authority.setZero();
+  }
+  return r;
+}
+
+const Allocator& Mixer::allocator_for(MotorMask failed) const {
+  if (failed == 0) return *allocator_;
+  if (const PreparedFailure* p = prepared(failed)) return *p->allocator;
+  // Not prepared: the set of its two lowest motors, if that one was.
+  const MotorMask first = failed & (~failed + 1);
+  const MotorMask rest = failed & ~first;
+  if (const PreparedFailure* pair = prepared(first | (rest & (~rest + 1)))) return *pair->allocator;
+  return *allocator_;
+}
+
 const PreparedFailure* Mixer::prepared(MotorMask failed) const {
   const auto it = std::lower_bound(
       failures_.prepared.begin(), failures_.prepared.end(), failed,
@@ -36,29 +65,12 @@ MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out, double dt_s,
       std::clamp(demand[index(Axis::kThrust)], thrust_low, 1.0);
   const MotorMask all = motors() >= 32 ? ~MotorMask{0} : (MotorMask{1} << motors()) - 1;
   failed &= all;
-  const Allocator* allocator = allocator_.get();
+  const Allocator* allocator = &allocator_for(failed);
+  const FailureReport report = failure_report(failed);
   out.failed = failed;
-  out.failure = FailureHandling::kNone;
-  out.held = failures_.controlled;
-  out.authority = failures_.healthy_authority;
-  if (failed != 0) {
-    if (const PreparedFailure* p = prepared(failed)) {
-      allocator = p->allocator.get();
-      out.failure = p->held == failures_.controlled ? FailureHandling::kReallocated
-                                                    : FailureHandling::kAxesLost;
-      out.held = p->held;
-      out.authority = p->authority;
-    } else {
-      // Not prepared: the set of its two lowest motors, if that one was.
-      const MotorMask first = failed & (~failed + 1);
-      const MotorMask rest = failed & ~first;
-      const PreparedFailure* pair = prepared(first | (rest & (~rest + 1)));
-      if (pair) allocator = pair->allocator.get();
-      out.failure = FailureHandling::kUnsupported;
-      out.held = 0;
-      out.authority.setZero();
-    }
-  }
+  out.failure = report.handling;
+  out.held = report.held;
+  out.authority = report.authority;
   out.allocation = allocator->allocate(clamped, out.command);
   if (failed != 0) {
     for (int i = 0; i < motors(); ++i) {

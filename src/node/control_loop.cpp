@@ -57,8 +57,11 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       failsafe_action_(config.inputs.failsafe),
       hold_last_us_(seconds_to_us(config.inputs.hold_last_s)),
       max_future_us_(seconds_to_us(config.inputs.max_future_s)),
-      arm_max_throttle_(config.inputs.arm_max_throttle) {
+      arm_max_throttle_(config.inputs.arm_max_throttle),
+      config_failed_(config.failed_motors) {
+  if (config.battery) battery_.emplace(*config.battery);
   mixer_.disarm(result_.mix);
+  describe_failures(0);
 }
 
 void ControlLoop::count(Rejection rejection) {
@@ -76,6 +79,9 @@ void ControlLoop::count(Rejection rejection) {
       break;
     case Rejection::kFromFuture:
       break;  // counted where it is detected
+    case Rejection::kWrongSize:
+      ++counters_.rejected_size;
+      break;
   }
 }
 
@@ -114,6 +120,62 @@ Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us, std::in
   return rejection;
 }
 
+Rejection ControlLoop::on_motor_status(const MotorStatusSample& sample, std::int64_t now_us,
+                                       std::int64_t wall_us) {
+  if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
+  const Rejection rejection =
+      check_motor_status(sample, mixer_.motors(), last_motor_status_utime_);
+  count(rejection);
+  if (rejection != Rejection::kNone) return rejection;
+  ++counters_.motor_status_received;
+  reported_failed_ = sample.failed;
+  last_motor_status_utime_ = sample.utime;
+  motor_status_received_us_ = now_us;
+  return rejection;
+}
+
+Rejection ControlLoop::on_battery(const BatterySample& sample, std::int64_t now_us,
+                                  std::int64_t wall_us) {
+  if (!battery_) return Rejection::kNone;  // not configured: not read at all
+  if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
+  Rejection rejection = check_battery(sample, last_battery_utime_);
+  if (rejection == Rejection::kNone) {
+    switch (battery_->add(sample.voltage, now_us)) {
+      case BatteryCompensation::Reading::kAccepted:
+        break;
+      case BatteryCompensation::Reading::kNonFinite:
+        rejection = Rejection::kNonFinite;
+        break;
+      case BatteryCompensation::Reading::kImplausible:
+        rejection = Rejection::kOutOfRange;
+        break;
+    }
+  }
+  count(rejection);
+  if (rejection != Rejection::kNone) return rejection;
+  ++counters_.battery_received;
+  last_battery_utime_ = sample.utime;
+  battery_received_us_ = now_us;
+  return rejection;
+}
+
+void ControlLoop::describe_failures(std::int64_t now_us) {
+  const MotorMask all = (MotorMask{1} << mixer_.motors()) - 1;
+  result_.failed = (config_failed_ | reported_failed_) & all;
+  const Mixer::FailureReport report = mixer_.failure_report(result_.failed);
+  result_.failure = report.handling;
+  result_.held = report.held;
+  result_.authority = report.authority;
+  result_.battery = battery_ ? battery_->state(now_us) : BatteryState::kOff;
+  result_.battery_v = battery_ && std::isfinite(battery_->filtered_v()) ? battery_->filtered_v() : 0.0;
+  result_.thrust_gain = battery_ ? battery_->gain(now_us) : 1.0;
+  const auto age = [&](std::int64_t received) {
+    return received == kNever ? -1.0 : static_cast<double>(now_us - received) / 1e3;
+  };
+  result_.input_age_ms = {age(setpoint_received_us_), age(pid_received_us_),
+                          age(battery_received_us_), age(motor_status_received_us_)};
+}
+
 void ControlLoop::enter_failsafe(FailsafeReason reason, std::int64_t now_us) {
   result_.state = LoopState::kFailsafe;
   result_.reason = reason;
@@ -125,7 +187,10 @@ void ControlLoop::enter_failsafe(FailsafeReason reason, std::int64_t now_us) {
 void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us) {
   const double dt_s =
       last_cycle_us_ == kNever ? 0.0 : static_cast<double>(now_us - last_cycle_us_) / 1e6;
-  if (mixer_.mix(demand, result_.mix, dt_s) == MixStatus::kNonFiniteDemand) {
+  AxisVector compensated = demand;
+  compensated[index(Axis::kThrust)] *= result_.thrust_gain;
+  if (mixer_.mix(compensated, result_.mix, dt_s, result_.failed) ==
+      MixStatus::kNonFiniteDemand) {
     // Unreachable while message checks hold; kept so the promise does not
     // depend on them.
     if (result_.state == LoopState::kArmed) enter_failsafe(FailsafeReason::kInvalidInput, now_us);
@@ -178,6 +243,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
       break;
   }
 
+  describe_failures(now_us);
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
   const AxisVector demand(pid_.roll, pid_.pitch, yaw, setpoint_.throttle);
   if (result_.state == LoopState::kArmed) {

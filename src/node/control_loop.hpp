@@ -22,6 +22,13 @@
 // - Rejected messages (non-finite, out of range, out of order) are counted
 //   and otherwise ignored: the previous valid message stays in force and
 //   keeps ageing toward its timeout.
+// - Motors are failed by the configuration (mixer.failed_motors, always) and
+//   by the latest accepted motor_status message (until the next one says
+//   otherwise: a silent failure detector does not bring a motor back). A
+//   motor_status whose num_motors differs from the mixer's is rejected.
+// - With battery compensation configured, the thrust demand is multiplied by
+//   the gain of the filtered voltage while it is fresh and plausible; a
+//   stale, missing or implausible voltage means gain 1 (no compensation).
 
 #include <motormix/config/config.hpp>
 #include "node/input_samples.hpp"
@@ -29,8 +36,12 @@
 
 #include <motormix/mixer.hpp>
 
+#include <motormix/battery_compensation.hpp>
+
+#include <array>
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 namespace motormix::node {
 
@@ -57,10 +68,13 @@ struct Counters {
   std::int64_t rejected_future = 0;
   std::int64_t failsafe_events = 0;
   std::int64_t arming_refused = 0;  // armed requests refused by the arming check
+  std::int64_t motor_status_received = 0;
+  std::int64_t battery_received = 0;
+  std::int64_t rejected_size = 0;  // wrong array sizes
 
   std::int64_t rejected() const {
     return rejected_decode + rejected_nonfinite + rejected_range + rejected_out_of_order +
-           rejected_future;
+           rejected_future + rejected_size;
   }
 };
 
@@ -74,6 +88,16 @@ struct CycleResult {
   std::int64_t setpoint_utime = 0;         // utime of the setpoint in force, 0 if none
   std::int64_t pid_utime = 0;              // utime of the pid in force, 0 if none
   AllocationResult last_armed_allocation;  // from the most recent armed cycle
+  MotorMask failed = 0;                    // failure set in force (config and motor_status)
+  FailureHandling failure = FailureHandling::kNone;  // how that set is handled
+  AxisMask held = kAllAxes;                          // axes the working motors still command
+  AxisVector authority = AxisVector::Zero();         // per axis, for that set
+  BatteryState battery = BatteryState::kOff;
+  double battery_v = 0.0;    // filtered, 0 before the first plausible reading
+  double thrust_gain = 1.0;  // applied to the thrust demand in this cycle
+  // Milliseconds since the last accepted setpoint, pid, battery and
+  // motor_status message; -1 if none yet.
+  std::array<double, 4> input_age_ms{-1.0, -1.0, -1.0, -1.0};
 };
 
 class ControlLoop {
@@ -85,6 +109,9 @@ class ControlLoop {
   // host's wall clock, to spot messages from the future.
   Rejection on_setpoint(const SetpointSample& sample, std::int64_t now_us, std::int64_t wall_us);
   Rejection on_pid(const PidSample& pid, std::int64_t now_us, std::int64_t wall_us);
+  Rejection on_motor_status(const MotorStatusSample& sample, std::int64_t now_us,
+                            std::int64_t wall_us);
+  Rejection on_battery(const BatterySample& sample, std::int64_t now_us, std::int64_t wall_us);
   void on_undecodable() { ++counters_.rejected_decode; }
 
   // One control cycle at time now_us. The returned reference stays valid
@@ -100,6 +127,7 @@ class ControlLoop {
   bool from_future(std::int64_t utime, std::int64_t wall_us);
   void enter_failsafe(FailsafeReason reason, std::int64_t now_us);
   void mix_inputs(const AxisVector& demand, std::int64_t now_us);
+  void describe_failures(std::int64_t now_us);
 
   Mixer mixer_;
   ThrustRange thrust_range_;
@@ -120,6 +148,13 @@ class ControlLoop {
   std::int64_t last_setpoint_utime_ = kNever;
   std::int64_t last_pid_utime_ = kNever;
   std::int64_t last_cycle_us_ = kNever;
+  MotorMask config_failed_ = 0;
+  MotorMask reported_failed_ = 0;  // from the latest accepted motor_status
+  std::int64_t motor_status_received_us_ = kNever;
+  std::int64_t last_motor_status_utime_ = kNever;
+  std::optional<BatteryCompensation> battery_;
+  std::int64_t battery_received_us_ = kNever;
+  std::int64_t last_battery_utime_ = kNever;
   bool arm_permitted_ = false;
   bool arm_refused_logged_ = false;  // a disarmed setpoint has been seen since boot or failsafe
 

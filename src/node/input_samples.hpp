@@ -20,4 +20,15 @@ struct PidSample {
   double yaw = 0.0;
 };
 
+struct MotorStatusSample {
+  std::int64_t utime = 0;
+  int num_motors = 0;        // as sent; must match the mixer
+  std::uint32_t failed = 0;  // bit i: failed[i] was true
+};
+
+struct BatterySample {
+  std::int64_t utime = 0;
+  double voltage = 0.0;
+};
+
 }  // namespace motormix::node

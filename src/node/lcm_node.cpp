@@ -87,6 +87,12 @@ class Node {
     lcm_.subscribe(config_.channels.setpoint, &Node::on_setpoint, this)
         ->setQueueCapacity(kQueueCapacity);
     lcm_.subscribe(config_.channels.pid, &Node::on_pid, this)->setQueueCapacity(kQueueCapacity);
+    lcm_.subscribe(config_.channels.motor_status, &Node::on_motor_status, this)
+        ->setQueueCapacity(kQueueCapacity);
+    if (config_.battery) {
+      lcm_.subscribe(config_.channels.battery, &Node::on_battery, this)
+          ->setQueueCapacity(kQueueCapacity);
+    }
   }
 
   void drain() {
@@ -106,6 +112,10 @@ class Node {
       if (r.state == LoopState::kFailsafe) log_ << " (" << to_string(r.reason) << ")";
       log_ << std::endl;
     }
+    if (r.failed != logged_failed_) {
+      log_failures(r);
+      logged_failed_ = r.failed;
+    }
     publish_pwm(r);
     compute_stats_.add(static_cast<double>(monotonic_us() - woke_us));
     if (now_us >= next_status_us_) {
@@ -113,6 +123,23 @@ class Node {
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
       warn_about_rejections(now_us);
     }
+  }
+
+  void log_failures(const CycleResult& r) {
+    log_ << "motormix: failed motors:";
+    if (r.failed == 0) log_ << " none";
+    for (int i = 0; i < config_.motors(); ++i) {
+      if ((r.failed >> i) & 1U) log_ << " " << config_.motor_names()[static_cast<std::size_t>(i)];
+    }
+    log_ << " (" << to_string(r.failure);
+    if (r.failure != FailureHandling::kNone) {
+      log_ << "; axes held:";
+      for (int a = 0; a < kNumAxes; ++a) {
+        if ((r.held >> a) & 1U) log_ << " " << kAxisNames[static_cast<std::size_t>(a)];
+      }
+      if (r.held == 0) log_ << " none promised";
+    }
+    log_ << ")" << std::endl;
   }
 
   // At most one line per second, and only when something was rejected: a
@@ -125,7 +152,7 @@ class Node {
          << " input messages rejected since the last warning (totals: undecodable "
          << c.rejected_decode << ", non-finite " << c.rejected_nonfinite << ", out of range "
          << c.rejected_range << ", out of order " << c.rejected_out_of_order << ", from the future "
-         << c.rejected_future << ")" << std::endl;
+         << c.rejected_future << ", wrong size " << c.rejected_size << ")" << std::endl;
     warned_total_ = total;
     last_warning_us_ = now_us;
   }
@@ -186,6 +213,26 @@ class Node {
     }
   }
 
+  void on_motor_status(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    MotorStatusSample sample;
+    if (!decode_motor_status(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
+      loop_.on_undecodable();
+      return;
+    }
+    const std::int64_t wall = wall_us();
+    loop_.on_motor_status(sample, received_us(rbuf, monotonic_us(), wall), wall);
+  }
+
+  void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    BatterySample sample;
+    if (!decode_battery(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
+      loop_.on_undecodable();
+      return;
+    }
+    const std::int64_t wall = wall_us();
+    loop_.on_battery(sample, received_us(rbuf, monotonic_us(), wall), wall);
+  }
+
   void publish_pwm(const CycleResult& r) {
     fill_pwm_message(pwm_msg_, r, wall_us());
     const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
@@ -223,6 +270,7 @@ class Node {
   std::int64_t last_warning_us_ = 0;
   std::int64_t drained_us_ = monotonic_us();  // end of the previous drain, monotonic
   bool new_pid_ = false;
+  MotorMask logged_failed_ = 0;
   WindowStats period_stats_;
   WindowStats compute_stats_;
 

@@ -60,6 +60,9 @@ Counters add(const Counters& a, const Counters& b) {
   s.rejected_future = a.rejected_future + b.rejected_future;
   s.failsafe_events = a.failsafe_events + b.failsafe_events;
   s.arming_refused = a.arming_refused + b.arming_refused;
+  s.motor_status_received = a.motor_status_received + b.motor_status_received;
+  s.battery_received = a.battery_received + b.battery_received;
+  s.rejected_size = a.rejected_size + b.rejected_size;
   return s;
 }
 
@@ -200,9 +203,29 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     run_ticks_until(ev->timestamp);
     const bool is_setpoint = ev->channel == config.channels.setpoint;
     const bool is_pid = ev->channel == config.channels.pid;
+    const bool is_motor_status = ev->channel == config.channels.motor_status;
+    const bool is_battery = config.battery && ev->channel == config.channels.battery;
     const int size = static_cast<int>(ev->data.size());
     out.raw(ev->channel, ev->timestamp, ev->data.data(), size);
-    if (is_setpoint || is_pid) {
+    if (is_motor_status || is_battery) {
+      ++summary.input_events;
+      if (is_motor_status) {
+        MotorStatusSample m;
+        if (decode_motor_status(ev->data.data(), size, m)) {
+          loop->on_motor_status(m, ev->timestamp, ev->timestamp);
+        } else {
+          loop->on_undecodable();
+        }
+      } else {
+        BatterySample b;
+        if (decode_battery(ev->data.data(), size, b)) {
+          loop->on_battery(b, ev->timestamp, ev->timestamp);
+        } else {
+          loop->on_undecodable();
+        }
+      }
+      if (options.cycle_on_every_input) cycle_at(ev->timestamp);
+    } else if (is_setpoint || is_pid) {
       ++summary.input_events;
       bool accepted = false;
       if (is_setpoint) {

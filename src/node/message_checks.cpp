@@ -30,6 +30,8 @@ const char* to_string(Rejection rejection) {
       return "utime went backwards";
     case Rejection::kFromFuture:
       return "utime in the future";
+    case Rejection::kWrongSize:
+      return "array size does not match the mixer";
   }
   return "?";
 }
@@ -50,6 +52,16 @@ Rejection check_pid(const PidSample& p, std::int64_t last_utime) {
     return Rejection::kOutOfRange;
   }
   return check_order(p.utime, last_utime);
+}
+
+Rejection check_motor_status(const MotorStatusSample& m, int motors, std::int64_t last_utime) {
+  if (m.num_motors != motors) return Rejection::kWrongSize;
+  return check_order(m.utime, last_utime);
+}
+
+Rejection check_battery(const BatterySample& b, std::int64_t last_utime) {
+  if (!std::isfinite(b.voltage)) return Rejection::kNonFinite;
+  return check_order(b.utime, last_utime);
 }
 
 }  // namespace motormix::node

@@ -16,6 +16,7 @@ enum class Rejection : std::uint8_t {
   kOutOfRange,  // a field outside its documented range
   kOutOfOrder,  // utime went backwards on this channel
   kFromFuture,  // utime further ahead of this host's clock than inputs.max_future_ms
+  kWrongSize,   // an array whose length does not match the mixer (motor_status num_motors)
 };
 
 const char* to_string(Rejection rejection);
@@ -27,5 +28,8 @@ inline constexpr std::int64_t kPublisherRestartUs = 1'000'000;
 Rejection check_setpoint(const SetpointSample& s, ThrustRange thrust_range,
                          std::int64_t last_utime);
 Rejection check_pid(const PidSample& p, std::int64_t last_utime);
+Rejection check_motor_status(const MotorStatusSample& m, int motors, std::int64_t last_utime);
+// Only the order: the voltage's plausibility is the battery compensation's.
+Rejection check_battery(const BatterySample& b, std::int64_t last_utime);
 
 }  // namespace motormix::node

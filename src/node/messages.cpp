@@ -1,5 +1,7 @@
 #include "node/messages.hpp"
 
+#include <cstring>
+
 namespace motormix::node {
 
 void size_pwm_message(motor_pwm_t& msg, int motors) {
@@ -20,6 +22,7 @@ void fill_pwm_message(motor_pwm_t& msg, const CycleResult& r, std::int64_t utime
   msg.armed = r.mix.armed;
   msg.setpoint_utime = r.setpoint_utime;
   msg.pid_utime = r.pid_utime;
+  msg.failed_motors = static_cast<int32_t>(r.mix.armed ? r.mix.failed : r.failed);
 }
 
 void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters& c,
@@ -38,6 +41,16 @@ void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters
     s.axis_limited[i] = (a.axis_limited >> i) & 1U;
     s.unallocated[i] = static_cast<float>(a.unallocated[i]);
   }
+  s.failed_motors = static_cast<int32_t>(r.failed);
+  s.failure_handling = static_cast<int8_t>(r.failure);
+  for (int i = 0; i < kNumAxes; ++i) {
+    s.axis_held[i] = (r.held >> i) & 1U;
+    s.authority[i] = static_cast<float>(r.authority[i]);
+  }
+  s.battery_state = static_cast<int8_t>(r.battery);
+  s.battery_voltage = static_cast<float>(r.battery_v);
+  s.thrust_gain = static_cast<float>(r.thrust_gain);
+  for (std::size_t i = 0; i < 4; ++i) s.input_age_ms[i] = static_cast<float>(r.input_age_ms[i]);
   s.cycles = c.cycles;
   s.setpoint_received = c.setpoint_received;
   s.pid_received = c.pid_received;
@@ -48,6 +61,9 @@ void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters
   s.rejected_future = c.rejected_future;
   s.failsafe_events = c.failsafe_events;
   s.arming_refused = c.arming_refused;
+  s.motor_status_received = c.motor_status_received;
+  s.battery_received = c.battery_received;
+  s.rejected_size = c.rejected_size;
   for (std::size_t i = 0; i < 4; ++i) {
     s.period_us[i] = timing.period_us[i];
     s.compute_us[i] = timing.compute_us[i];
@@ -71,6 +87,32 @@ bool decode_setpoint(const void* data, int size, SetpointSample& out) {
   setpoint_t msg{};
   if (!decode_whole(data, size, msg)) return false;
   out = SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0};
+  return true;
+}
+
+bool decode_motor_status(const void* data, int size, MotorStatusSample& out) {
+  // fingerprint (8) + utime (8) + num_motors (4, big-endian) + one byte per motor.
+  constexpr int kHeader = 20;
+  if (data == nullptr || size < kHeader) return false;
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  const std::uint32_t raw = (std::uint32_t{bytes[16]} << 24) | (std::uint32_t{bytes[17]} << 16) |
+                            (std::uint32_t{bytes[18]} << 8) | std::uint32_t{bytes[19]};
+  std::int32_t n = 0;
+  std::memcpy(&n, &raw, sizeof n);
+  if (n < 0 || n > kMaxMotors || size != kHeader + n) return false;
+  motor_status_t msg{};
+  if (!decode_whole(data, size, msg)) return false;
+  out = MotorStatusSample{msg.utime, msg.num_motors, 0};
+  for (int i = 0; i < msg.num_motors; ++i) {
+    if (msg.failed[static_cast<std::size_t>(i)] != 0) out.failed |= std::uint32_t{1} << i;
+  }
+  return true;
+}
+
+bool decode_battery(const void* data, int size, BatterySample& out) {
+  battery_t msg{};
+  if (!decode_whole(data, size, msg)) return false;
+  out = BatterySample{msg.utime, msg.voltage};
   return true;
 }
 

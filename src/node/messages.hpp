@@ -6,8 +6,10 @@
 #include <motormix/config/config.hpp>
 #include "node/control_loop.hpp"
 
+#include <motormix/battery_t.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/motor_status_t.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
 
@@ -34,5 +36,10 @@ void fill_status_message(mixer_status_t& msg, const CycleResult& r, const Counte
 // type (wrong type, truncated, trailing bytes).
 bool decode_setpoint(const void* data, int size, SetpointSample& out);
 bool decode_pid(const void* data, int size, PidSample& out);
+// A motor_status_t is checked for a plausible length before it is decoded,
+// so a hostile num_motors cannot make the decoder allocate gigabytes.
+// Lengths other than 0..kMaxMotors decode as nothing.
+bool decode_motor_status(const void* data, int size, MotorStatusSample& out);
+bool decode_battery(const void* data, int size, BatterySample& out);
 
 }  // namespace motormix::node
