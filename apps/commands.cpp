@@ -5,6 +5,7 @@
 #include <motormix/config/matrix_export.hpp>
 #include "node/lcm_node.hpp"
 #include "node/log_replay.hpp"
+#include "node/monitor.hpp"
 
 #include <unistd.h>
 
@@ -192,6 +193,28 @@ int replay(const ReplayCommand& cmd) {
             << s.skipped_events << " events skipped), " << s.skipped.size()
             << " damaged stretches skipped\n";
   return s.damaged() ? kExitDamagedLog : kExitOk;
+}
+
+int monitor(const MonitorCommand& cmd) {
+  node::MonitorOptions o;
+  if (!cmd.config_path.empty()) {
+    const auto config = load(CommonOptions{cmd.config_path, cmd.overrides});
+    if (!config) return kExitUsage;
+    o.status_channel = config->channels.status;
+    o.pwm_channel = config->channels.motor_pwm;
+    o.motor_names = config->motor_names();
+    o.output_unit = config->output_unit;
+  }
+  if (!cmd.status_channel.empty()) o.status_channel = cmd.status_channel;
+  if (!cmd.pwm_channel.empty()) o.pwm_channel = cmd.pwm_channel;
+  o.lcm_url = cmd.lcm_url;
+  if (o.lcm_url.empty()) {
+    if (const char* env = std::getenv("LCM_DEFAULT_URL")) o.lcm_url = env;
+  }
+  o.once = cmd.once;
+  o.wait_s = cmd.wait_s;
+  o.duration_s = cmd.duration_s;
+  return node::run_monitor(o, std::cout, std::cerr);
 }
 
 int matrix(const MatrixCommand& cmd) {

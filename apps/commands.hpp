@@ -49,6 +49,18 @@ struct MatrixCommand {
 };
 int matrix(const MatrixCommand& cmd);
 
+struct MonitorCommand {
+  std::string config_path;  // optional: channels, motor names, unit
+  std::vector<std::string> overrides;
+  std::string lcm_url;
+  std::string status_channel;  // empty: from the config, else MIXER_STATUS
+  std::string pwm_channel;     // empty: from the config, else MOTOR_PWM
+  bool once = false;
+  double wait_s = 3.0;
+  double duration_s = 0.0;
+};
+int monitor(const MonitorCommand& cmd);
+
 struct ReplayCommand {
   CommonOptions common;
   std::string in_log;

@@ -79,6 +79,30 @@ int main(int argc, char** argv) {
                    "(no cycles are run across; default 10)")
       ->check(CLI::Range(0.001, 86400.0));
 
+  MonitorCommand monitor_cmd;
+  CLI::App* monitor_app =
+      app.add_subcommand("monitor", "live terminal view of a running motormix on the bus");
+  monitor_app
+      ->add_option("--config", monitor_cmd.config_path,
+                   "configuration of the running mixer (channels, motor names, unit)")
+      ->check(CLI::ExistingFile);
+  monitor_app->add_option("--set", monitor_cmd.overrides, "override a config value: key.path=value");
+  monitor_app->add_option("--lcm-url", monitor_cmd.lcm_url,
+                          "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  monitor_app->add_option("--status-channel", monitor_cmd.status_channel,
+                          "mixer_status_t channel (default: from --config, else MIXER_STATUS)");
+  monitor_app->add_option("--pwm-channel", monitor_cmd.pwm_channel,
+                          "motor_pwm_t channel (default: from --config, else MOTOR_PWM)");
+  monitor_app->add_flag("--once", monitor_cmd.once, "print one snapshot and exit");
+  monitor_app
+      ->add_option("--wait", monitor_cmd.wait_s,
+                   "seconds to wait for a status before giving up (default 3)")
+      ->check(CLI::Range(0.1, 600.0));
+  monitor_app
+      ->add_option("--duration", monitor_cmd.duration_s,
+                   "stop the live view by itself after this many seconds (default: until Ctrl-C)")
+      ->check(CLI::Range(0.0, 1e6));
+
   try {
     app.parse(argc, argv);
     if (matrix_app->parsed() && matrix_cmd.config_path.empty() == matrix_cmd.preset.empty()) {
@@ -98,5 +122,6 @@ int main(int argc, char** argv) {
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);
+  if (monitor_app->parsed()) return monitor(monitor_cmd);
   return kExitUsage;
 }

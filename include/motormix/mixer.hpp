@@ -35,26 +35,6 @@ struct MixerOutput {
   AxisVector authority = AxisVector::Zero();  // per axis, for the failure set in force
 };
 
-// One failure set prepared at set-up: the strategy rebuilt on the reduced
-// matrix, and what that set leaves.
-struct PreparedFailure {
-  MotorMask failed = 0;
-  std::unique_ptr<const Allocator> allocator;
-  AxisMask held = 0;
-  AxisVector authority = AxisVector::Zero();
-};
-
-// What the mixer needs to handle failures in flight without computing
-// anything: the healthy effectiveness (to report what the working motors
-// really produce) and every prepared failure set, sorted by mask.
-struct FailurePlan {
-  EffectivenessMatrix healthy_effectiveness;  // empty: no reallocation for this strategy
-  AxisMask controlled = kAllAxes;
-  CommandRange range;
-  AxisVector healthy_authority = AxisVector::Zero();
-  std::vector<PreparedFailure> prepared;
-};
-
 class Mixer {
  public:
   Mixer(std::unique_ptr<const Allocator> allocator, OutputStage output_stage,

@@ -37,6 +37,11 @@ class PrioritizedAllocator final : public MatrixAllocator {
   std::string_view name() const override { return "prioritized"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
+  // Whether the undelivered demand `error_a` (as reported, axes the vehicle is
+  // not commanded in already zero) is smaller than `error_b` in priority
+  // order: roll/pitch (Euclidean), then thrust, then yaw; ties go to `b`.
+  static bool closer_in_priority_order(const AxisVector& error_a, const AxisVector& error_b);
+
  private:
   enum class Direction { kBoth, kDecreaseOnly };
   // Gain along `v` that removes as much of the range violation as possible.
@@ -51,10 +56,6 @@ class PrioritizedAllocator final : public MatrixAllocator {
   // even s = 0 fits. Closed form: each repair step is one-dimensional.
   double largest_fitting_scale(const MotorVector& base, const MotorVector& part,
                                bool may_raise) const;
-  // Whether the undelivered demand `error_a` (as reported, axes the vehicle is
-  // not commanded in already zero) is smaller than `error_b` in priority
-  // order: roll/pitch (Euclidean), then thrust, then yaw; ties go to `b`.
-  static bool closer_in_priority_order(const AxisVector& error_a, const AxisVector& error_b);
   const MotorVector& column(Axis axis) const;
 
   Airmode airmode_;

@@ -6,6 +6,7 @@
 #include <motormix/optimal_allocator.hpp>
 #include <motormix/prioritized_allocator.hpp>
 #include <motormix/shift_allocator.hpp>
+#include <motormix/yaw_yielding_allocator.hpp>
 
 #include <motormix/motor_failure.hpp>
 
@@ -53,30 +54,18 @@ AxisVector authority_at_half_thrust(const Config& config, const MixingMatrix& mi
 }
 
 FailurePlan failure_plan(const Config& config) {
-  FailurePlan plan;
-  plan.healthy_effectiveness = effectiveness_of(config.mixing);
-  plan.controlled = controlled_axes(config.mixing);
-  plan.range = command_range(config);
-  plan.healthy_authority = authority_at_half_thrust(config, config.mixing);
-  if (!reallocates(config.strategy)) return plan;
-  // Every single failure and every pair, whatever the motor count (at most
-  // 16 + 120 sets): a switch in flight then only selects one.
-  const int n = config.motors();
-  const auto prepare = [&](MotorMask failed) {
-    const FailureMixing f =
-        derive_failure_mixing(plan.healthy_effectiveness, plan.controlled, failed);
-    PreparedFailure p;
-    p.failed = failed;
-    p.allocator = make_allocator(config, MixingBasis(f.mixing, f.effectiveness, plan.controlled));
-    p.held = f.held;
-    p.authority = authority_at_half_thrust(config, f.mixing);
-    plan.prepared.push_back(std::move(p));
-  };
-  for (int i = 0; i < n; ++i) {
-    if (n > 1) prepare(MotorMask{1} << i);
-    for (int j = i + 1; j < n && n > 2; ++j) prepare((MotorMask{1} << i) | (MotorMask{1} << j));
+  const bool aircraft = config.thrust_range() == ThrustRange::kUnipolar;
+  FailureAllocatorFactory make;
+  if (reallocates(config.strategy)) {
+    make = [&config](const FailureMixing& f, const MixingBasis& basis) {
+      if (config.strategy == Strategy::kPrioritized && f.yaw_free) {
+        return std::unique_ptr<const Allocator>(std::make_unique<YawYieldingAllocator>(
+            basis, *f.yaw_free, command_range(config), config.airmode, config.yaw_headroom));
+      }
+      return make_allocator(config, basis);
+    };
   }
-  return plan;
+  return prepare_failures(config.mixing, command_range(config), aircraft ? 0.5 : 0.0, make);
 }
 
 Mixer build_mixer(const Config& config) {

@@ -84,7 +84,53 @@ FailureMixing derive_failure_mixing(const EffectivenessMatrix& healthy, AxisMask
       if ((held >> a) & 1U) f.mixing.col(a) = inverse.col(a);
     }
   }
+  if ((held & bit(Axis::kYaw)) && failed != 0) {
+    const AxisMask others = static_cast<AxisMask>(held & ~bit(Axis::kYaw));
+    const Eigen::MatrixXd a = reduced(f.effectiveness, others, failed);
+    cod.compute(a);
+    const Eigen::MatrixXd least_norm = cod.pseudoInverse();  // motors x axes, yaw column zero
+    // The part of the yaw row that roll, pitch and thrust do not see: moving
+    // along it changes yaw and nothing else.
+    const Eigen::VectorXd yaw_row =
+        reduced(f.effectiveness, bit(Axis::kYaw), failed).row(index(Axis::kYaw)).transpose();
+    const Eigen::VectorXd alone = yaw_row - least_norm * (a * yaw_row);
+    const double per_unit = yaw_row.dot(alone);
+    if (per_unit > kRankRelativeTolerance * yaw_row.squaredNorm()) {
+      MixingMatrix m = MixingMatrix::Zero(healthy.cols(), kNumAxes);
+      for (int ax = 0; ax < kNumAxes; ++ax) {
+        if ((others >> ax) & 1U) m.col(ax) = least_norm.col(ax);
+      }
+      m.col(index(Axis::kYaw)) = alone / per_unit;
+      f.yaw_free = m;
+    }
+  }
   return f;
+}
+
+FailurePlan prepare_failures(const MixingMatrix& healthy_mixing, CommandRange range,
+                             double base_thrust, const FailureAllocatorFactory& make) {
+  FailurePlan plan;
+  plan.healthy_effectiveness = effectiveness_of(healthy_mixing);
+  plan.controlled = controlled_axes(healthy_mixing);
+  plan.range = range;
+  plan.healthy_authority = authority_of(healthy_mixing, base_thrust, range.lower, range.upper);
+  if (!make) return plan;
+  const int n = static_cast<int>(healthy_mixing.rows());
+  const auto prepare = [&](MotorMask failed) {
+    const FailureMixing f =
+        derive_failure_mixing(plan.healthy_effectiveness, plan.controlled, failed);
+    PreparedFailure p;
+    p.failed = failed;
+    p.allocator = make(f, MixingBasis(f.mixing, f.effectiveness, plan.controlled));
+    p.held = f.held;
+    p.authority = authority_of(f.mixing, base_thrust, range.lower, range.upper);
+    plan.prepared.push_back(std::move(p));
+  };
+  for (int i = 0; i < n; ++i) {
+    if (n > 1) prepare(MotorMask{1} << i);
+    for (int j = i + 1; j < n && n > 2; ++j) prepare((MotorMask{1} << i) | (MotorMask{1} << j));
+  }
+  return plan;
 }
 
 }  // namespace motormix

@@ -8,6 +8,8 @@
 #include <motormix/clip_allocator.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
+#include <motormix/motor_failure.hpp>
+#include <motormix/yaw_yielding_allocator.hpp>
 #include <motormix/optimal_allocator.hpp>
 #include <motormix/presets.hpp>
 #include <motormix/prioritized_allocator.hpp>
@@ -19,6 +21,8 @@
 #include <cstdlib>
 #include <limits>
 #include <new>
+#include <functional>
+#include <optional>
 #include <random>
 
 namespace {
@@ -49,15 +53,37 @@ std::vector<std::unique_ptr<Mixer>> mixers_for(const MixingMatrix& m, bool wheel
   const std::vector<OutputChannel> outputs(static_cast<std::size_t>(m.rows()), ch);
   const ThrustRange thrust = wheels ? ThrustRange::kBipolar : ThrustRange::kUnipolar;
   std::vector<std::unique_ptr<Mixer>> out;
+  // Each strategy with every failure set prepared, as the config layer
+  // builds it, so the failure paths are counted too.
+  using Make = std::function<std::unique_ptr<const Allocator>(const MixingBasis&)>;
+  const auto add_reallocating = [&](const Make& make, std::optional<Airmode> yaw_yielding = {}) {
+    FailurePlan plan = prepare_failures(
+        m, range, wheels ? 0.0 : 0.5,
+        [&](const FailureMixing& f, const MixingBasis& basis) -> std::unique_ptr<const Allocator> {
+          if (yaw_yielding && f.yaw_free) {
+            return std::make_unique<YawYieldingAllocator>(basis, *f.yaw_free, range,
+                                                          *yaw_yielding, 0.15);
+          }
+          return make(basis);
+        });
+    out.push_back(
+        std::make_unique<Mixer>(make(MixingBasis(m)), OutputStage(outputs), thrust, std::move(plan)));
+  };
   const auto add = [&](std::unique_ptr<const Allocator> a) {
     out.push_back(std::make_unique<Mixer>(std::move(a), OutputStage(outputs), thrust));
   };
-  add(std::make_unique<ClipAllocator>(m, range));
-  add(std::make_unique<ShiftAllocator>(m, range));
+  add_reallocating([&](const MixingBasis& b) { return std::make_unique<ClipAllocator>(b, range); });
+  add_reallocating([&](const MixingBasis& b) { return std::make_unique<ShiftAllocator>(b, range); });
   for (Airmode am : {Airmode::kOff, Airmode::kRollPitch, Airmode::kRollPitchYaw}) {
-    add(std::make_unique<PrioritizedAllocator>(m, range, am, 0.15));
+    add_reallocating(
+        [&](const MixingBasis& b) {
+          return std::make_unique<PrioritizedAllocator>(b, range, am, 0.15);
+        },
+        am);
   }
-  add(std::make_unique<OptimalAllocator>(m, range, OptimalSettings{}));
+  add_reallocating([&](const MixingBasis& b) {
+    return std::make_unique<OptimalAllocator>(b, range, OptimalSettings{});
+  });
   if (!wheels) {
     add(std::make_unique<LegacyBudgetAllocator>(m, LegacyBudgets{}));
     add(std::make_unique<BudgetAllocator>(m, LegacyBudgets{}));
@@ -85,8 +111,11 @@ TEST(NoHeap, EveryStrategyMixesWithoutAllocating) {
     Eigen::internal::set_is_malloc_allowed(false);
     g_allocations = 0;
     g_counting = true;
+    // No failure, every single and pair (prepared), a triple (not prepared).
+    const MotorMask masks[] = {0, 0b1, 0b10, 0b101, 0b1000, 0b1011};
     for (const auto& mixer : mixers) {
-      for (const AxisVector& d : demands) mixer->mix(d, out, 0.0025);
+      std::size_t k = 0;
+      for (const AxisVector& d : demands) mixer->mix(d, out, 0.0025, masks[k++ % 6]);
       mixer->disarm(out);
     }
     g_counting = false;

@@ -1,0 +1,325 @@
+#include "node/monitor.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ostream>
+#include <sstream>
+
+namespace motormix::node {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+const char* state_name(int8_t s) {
+  switch (s) {
+    case mixer_status_t::STATE_DISARMED:
+      return "DISARMED";
+    case mixer_status_t::STATE_ARMED:
+      return "ARMED";
+    case mixer_status_t::STATE_FAILSAFE:
+      return "FAILSAFE";
+    default:
+      return "?";
+  }
+}
+
+const char* reason_name(int8_t r) {
+  switch (r) {
+    case mixer_status_t::REASON_NONE:
+      return "none";
+    case mixer_status_t::REASON_SETPOINT_STALE:
+      return "setpoint stale";
+    case mixer_status_t::REASON_PID_STALE:
+      return "pid stale";
+    case mixer_status_t::REASON_INVALID_INPUT:
+      return "invalid input";
+    case mixer_status_t::REASON_LOOP_STALLED:
+      return "loop stalled";
+    default:
+      return "?";
+  }
+}
+
+const char* failure_name(int8_t f) {
+  switch (f) {
+    case mixer_status_t::FAILURE_NONE:
+      return "none";
+    case mixer_status_t::FAILURE_REALLOCATED:
+      return "reallocated";
+    case mixer_status_t::FAILURE_AXES_LOST:
+      return "AXES LOST";
+    case mixer_status_t::FAILURE_UNSUPPORTED:
+      return "UNSUPPORTED (no promise)";
+    default:
+      return "?";
+  }
+}
+
+const char* battery_name(int8_t b) {
+  switch (b) {
+    case mixer_status_t::BATTERY_OFF:
+      return "off";
+    case mixer_status_t::BATTERY_OK:
+      return "ok";
+    case mixer_status_t::BATTERY_MISSING:
+      return "missing";
+    case mixer_status_t::BATTERY_STALE:
+      return "stale";
+    case mixer_status_t::BATTERY_IMPLAUSIBLE:
+      return "implausible";
+    default:
+      return "?";
+  }
+}
+
+constexpr const char* kAxes[4] = {"roll", "pitch", "yaw", "thrust"};
+
+std::string fixed(double v, int precision) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", precision, v);
+  return buf;
+}
+
+std::string age(float ms) { return ms < 0.0F ? "never" : fixed(ms, 0) + " ms"; }
+
+std::string motor_name(const MonitorOptions& o, int i) {
+  const auto k = static_cast<std::size_t>(i);
+  return k < o.motor_names.size() ? o.motor_names[k] : "m" + std::to_string(i + 1);
+}
+
+// A bar for a command: 0..1 fills from the left; a negative command (wheels)
+// fills from the middle to the left, a positive one from the middle right.
+std::string bar(double command, bool bipolar, int width) {
+  std::string b(static_cast<std::size_t>(width), '.');
+  if (!std::isfinite(command)) return std::string(static_cast<std::size_t>(width), '?');
+  if (!bipolar) {
+    const int filled = static_cast<int>(std::lround(std::clamp(command, 0.0, 1.0) * width));
+    std::fill(b.begin(), b.begin() + filled, '#');
+  } else {
+    const int mid = width / 2;
+    const int cells = static_cast<int>(std::lround(std::clamp(std::abs(command), 0.0, 1.0) * mid));
+    if (command >= 0) {
+      std::fill(b.begin() + mid, b.begin() + std::min(width, mid + cells), '#');
+    } else {
+      std::fill(b.begin() + (mid - cells), b.begin() + mid, '#');
+    }
+    b[static_cast<std::size_t>(mid)] = '|';
+  }
+  return "[" + b + "]";
+}
+
+}  // namespace
+
+std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o, int bar_width) {
+  std::ostringstream s;
+  s << "motormix monitor: status '" << o.status_channel << "', outputs '" << o.pwm_channel
+    << "'\n";
+  if (!snap.status) {
+    s << "no mixer_status received yet\n";
+    return s.str();
+  }
+  const mixer_status_t& st = *snap.status;
+  if (snap.status_age_s > 1.0) {
+    s << "STATUS STALE: last status " << fixed(snap.status_age_s, 1)
+      << " s ago (is motormix still running?)\n";
+  }
+  char hash[32];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(st.config_hash));
+  s << "state     " << state_name(st.state);
+  if (st.state == mixer_status_t::STATE_FAILSAFE) s << " (" << reason_name(st.failsafe_reason) << ")";
+  s << "    config " << hash << "    status " << fixed(snap.status_age_s * 1e3, 0) << " ms ago\n";
+  s << "inputs    setpoint " << age(st.input_age_ms[0]) << (st.setpoint_stale ? " STALE" : "")
+    << "   pid " << age(st.input_age_ms[1]) << (st.pid_stale ? " STALE" : "")
+    << "   motor_status " << age(st.input_age_ms[3]) << "   battery " << age(st.input_age_ms[2])
+    << "\n";
+  s << "battery   " << battery_name(st.battery_state);
+  if (st.battery_state != mixer_status_t::BATTERY_OFF) {
+    s << ", " << fixed(st.battery_voltage, 2) << " V, thrust x" << fixed(st.thrust_gain, 3);
+  }
+  s << "\n";
+  s << "failures  ";
+  if (st.failed_motors == 0) {
+    s << "none";
+  } else {
+    for (int i = 0; i < st.num_motors && i < 32; ++i) {
+      if ((st.failed_motors >> i) & 1) s << motor_name(o, i) << " ";
+    }
+    s << "failed: " << failure_name(st.failure_handling) << "; held:";
+    bool any = false;
+    for (int a = 0; a < 4; ++a) {
+      if (st.axis_held[a]) s << " " << kAxes[a], any = true;
+    }
+    if (!any) s << " none";
+  }
+  s << "\nauthority";
+  for (int a = 0; a < 4; ++a) s << "  " << kAxes[a] << " " << fixed(st.authority[a], 2);
+  s << "\n\n";
+
+  const bool have_pwm = snap.pwm && snap.pwm->num_motors == st.num_motors;
+  bool bipolar = false;
+  if (have_pwm) {
+    for (float c : snap.pwm->command) bipolar = bipolar || c < 0.0F;
+  }
+  s << "motor     command" << std::string(static_cast<std::size_t>(std::max(0, bar_width - 5)), ' ')
+    << "output\n";
+  for (int i = 0; i < st.num_motors; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    std::string name = motor_name(o, i);
+    name.resize(std::max<std::size_t>(name.size(), 8), ' ');
+    s << "  " << name;
+    const bool failed = (st.failed_motors >> i) & 1;
+    if (have_pwm) {
+      s << bar(snap.pwm->command[k], bipolar, bar_width) << " " << fixed(snap.pwm->pwm[k], 1) << " "
+        << o.output_unit;
+    } else {
+      s << "[" << std::string(static_cast<std::size_t>(bar_width), ' ') << "] (no outputs seen)";
+    }
+    if (failed) s << "  FAILED";
+    if ((st.saturated_upper >> i) & 1) s << "  SAT-HIGH";
+    if ((st.saturated_lower >> i) & 1) s << "  SAT-LOW";
+    s << "\n";
+  }
+  if (have_pwm && !snap.pwm->armed) s << "  (outputs disarmed)\n";
+  s << "\nunallocated";
+  for (int a = 0; a < 4; ++a) {
+    s << "  " << kAxes[a] << " " << (st.unallocated[a] >= 0 ? "+" : "") << fixed(st.unallocated[a], 3)
+      << (st.axis_limited[a] ? "!" : "");
+  }
+  s << "   (! = not fully delivered)\n";
+  s << "loop      period us min/mean/max/p99 " << fixed(st.period_us[0], 0) << "/"
+    << fixed(st.period_us[1], 0) << "/" << fixed(st.period_us[2], 0) << "/"
+    << fixed(st.period_us[3], 0) << "   compute us mean/p99 " << fixed(st.compute_us[1], 1) << "/"
+    << fixed(st.compute_us[3], 1) << "   overruns " << st.overruns << "   cycles " << st.cycles
+    << "\n";
+  s << "accepted  setpoint " << st.setpoint_received << "   pid " << st.pid_received
+    << "   motor_status " << st.motor_status_received << "   battery " << st.battery_received
+    << "\n";
+  s << "rejected  undecodable " << st.rejected_decode << "   non-finite " << st.rejected_nonfinite
+    << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "
+    << st.rejected_future << "   size " << st.rejected_size << "\n";
+  s << "events    failsafe " << st.failsafe_events << "   arming refused " << st.arming_refused
+    << "\n";
+  return s.str();
+}
+
+namespace {
+
+class Listener {
+ public:
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    mixer_status_t m;
+    try {
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
+          static_cast<int>(rbuf->data_size)) {
+        ++undecodable;
+        return;
+      }
+    } catch (...) {
+      ++undecodable;
+      return;
+    }
+    status = m;
+    status_at = Clock::now();
+  }
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    motor_pwm_t m;
+    try {
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
+          static_cast<int>(rbuf->data_size)) {
+        ++undecodable;
+        return;
+      }
+    } catch (...) {
+      ++undecodable;
+      return;
+    }
+    pwm = m;
+    pwm_at = Clock::now();
+  }
+  MonitorSnapshot snapshot() const {
+    MonitorSnapshot s;
+    s.status = status;
+    s.pwm = pwm;
+    const auto now = Clock::now();
+    s.status_age_s = std::chrono::duration<double>(now - status_at).count();
+    s.pwm_age_s = std::chrono::duration<double>(now - pwm_at).count();
+    return s;
+  }
+
+  std::optional<mixer_status_t> status;
+  std::optional<motor_pwm_t> pwm;
+  Clock::time_point status_at;
+  Clock::time_point pwm_at;
+  long undecodable = 0;
+};
+
+}  // namespace
+
+int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
+  sigprocmask(SIG_BLOCK, &signals, nullptr);
+  const int signal_fd = signalfd(-1, &signals, SFD_CLOEXEC);
+
+  lcm::LCM lcm(o.lcm_url);
+  if (!lcm.good()) {
+    log << "motormix monitor: cannot open LCM" << (o.lcm_url.empty() ? "" : " at " + o.lcm_url)
+        << " (see Troubleshooting in the README)\n";
+    if (signal_fd >= 0) close(signal_fd);
+    return 1;
+  }
+  Listener listener;
+  lcm.subscribe(o.status_channel, &Listener::on_status, &listener);
+  lcm.subscribe(o.pwm_channel, &Listener::on_pwm, &listener);
+
+  const auto start = Clock::now();
+  const auto refresh = std::chrono::duration<double>(1.0 / o.refresh_hz);
+  auto next_draw = start;
+  int rc = 0;
+  while (true) {
+    const auto now = Clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    if (!listener.status && elapsed > o.wait_s) {
+      log << "motormix monitor: no mixer_status on channel '" << o.status_channel << "' within "
+          << o.wait_s << " s (lcm url " << (o.lcm_url.empty() ? "default" : o.lcm_url)
+          << "): is motormix run running on this bus, with these channels?\n";
+      rc = 1;
+      break;
+    }
+    if (o.once && listener.status && (listener.pwm || elapsed > o.wait_s)) {
+      out << render_monitor(listener.snapshot(), o) << std::flush;
+      break;
+    }
+    if (!o.once && listener.status && now >= next_draw) {
+      out << "\x1b[H\x1b[2J" << render_monitor(listener.snapshot(), o) << std::flush;
+      next_draw = now + std::chrono::duration_cast<Clock::duration>(refresh);
+    }
+    if (!o.once && o.duration_s > 0.0 && elapsed >= o.duration_s) break;
+    pollfd fds[2] = {{lcm.getFileno(), POLLIN, 0}, {signal_fd, POLLIN, 0}};
+    if (poll(fds, signal_fd >= 0 ? 2 : 1, 20) > 0) {
+      if (fds[0].revents & POLLIN) {
+        for (int i = 0; i < 1000 && lcm.handleTimeout(0) > 0; ++i) {
+        }
+      }
+      if (signal_fd >= 0 && (fds[1].revents & POLLIN)) break;
+    }
+  }
+  if (signal_fd >= 0) close(signal_fd);
+  return rc;
+}
+
+}  // namespace motormix::node

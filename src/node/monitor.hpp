@@ -1,0 +1,48 @@
+#pragma once
+// `motormix monitor`: a live terminal view of a running motormix, read from
+// its status and output channels. Plain ANSI (cursor home + clear), so it
+// works over SSH and in any terminal; `--once` prints one snapshot without
+// escape codes. The view itself is a pure function of the last messages,
+// so it is tested without a bus.
+
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+
+#include <cstdint>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace motormix::node {
+
+struct MonitorOptions {
+  std::string lcm_url;  // empty: LCM_DEFAULT_URL, then LCM's default
+  std::string status_channel = "MIXER_STATUS";
+  std::string pwm_channel = "MOTOR_PWM";
+  std::vector<std::string> motor_names;  // empty: m1, m2, ...
+  std::string output_unit = "us";
+  bool once = false;         // one snapshot, then exit 0
+  double wait_s = 3.0;       // no status within this long: exit 1
+  double duration_s = 0.0;   // live view: stop by itself after this long (0: until a signal)
+  double refresh_hz = 10.0;  // live view redraws
+};
+
+// What the view is drawn from: the last status and outputs, and how old
+// they are (seconds, on this host's receive clock).
+struct MonitorSnapshot {
+  std::optional<mixer_status_t> status;
+  std::optional<motor_pwm_t> pwm;
+  double status_age_s = 0.0;
+  double pwm_age_s = 0.0;
+};
+
+// The whole screen as text (no escape codes); `width` columns for the bars.
+std::string render_monitor(const MonitorSnapshot& snapshot, const MonitorOptions& options,
+                           int bar_width = 30);
+
+// Exit codes: 0 (snapshot printed or duration reached or signal), 1 (no
+// mixer on the bus within wait_s, or LCM cannot be opened).
+int run_monitor(const MonitorOptions& options, std::ostream& out, std::ostream& log);
+
+}  // namespace motormix::node

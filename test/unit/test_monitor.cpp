@@ -1,0 +1,72 @@
+// The monitor's screen, drawn from messages without a bus.
+
+#include "node/monitor.hpp"
+
+#include <gtest/gtest.h>
+
+namespace motormix::test {
+namespace {
+
+bool has(const std::string& text, const std::string& needle) {
+  return text.find(needle) != std::string::npos;
+}
+
+TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
+  mixer_status_t st{};
+  st.state = mixer_status_t::STATE_FAILSAFE;
+  st.failsafe_reason = mixer_status_t::REASON_PID_STALE;
+  st.num_motors = 3;
+  st.failed_motors = 0b010;
+  st.failure_handling = mixer_status_t::FAILURE_AXES_LOST;
+  st.axis_held[0] = st.axis_held[1] = st.axis_held[3] = 1;
+  st.saturated_upper = 0b001;
+  st.axis_limited[2] = 1;
+  st.unallocated[2] = -0.25F;
+  st.input_age_ms[0] = 4.0F;
+  st.input_age_ms[1] = 150.0F;
+  st.input_age_ms[2] = -1.0F;
+  st.input_age_ms[3] = 20.0F;
+  st.pid_stale = 1;
+  st.battery_state = mixer_status_t::BATTERY_OK;
+  st.battery_voltage = 14.5F;
+  st.thrust_gain = 1.158F;
+  st.rejected_size = 7;
+  st.overruns = 2;
+  motor_pwm_t pwm{};
+  pwm.num_motors = 3;
+  pwm.command = {1.0F, 0.0F, 0.5F};
+  pwm.pwm = {2000.0F, 1000.0F, 1500.0F};
+  pwm.direction = {0, 0, 0};
+  pwm.armed = 1;
+  node::MonitorSnapshot snap{st, pwm, 0.05, 0.01};
+  node::MonitorOptions o;
+  o.motor_names = {"FL", "FR", "RR"};
+  const std::string view = node::render_monitor(snap, o, 10);
+  EXPECT_TRUE(has(view, "FAILSAFE (pid stale)")) << view;
+  EXPECT_TRUE(has(view, "pid 150 ms STALE")) << view;
+  EXPECT_TRUE(has(view, "battery never")) << view;
+  EXPECT_TRUE(has(view, "FR failed: AXES LOST; held: roll pitch thrust")) << view;
+  EXPECT_TRUE(has(view, "FL      [##########] 2000.0 us  SAT-HIGH")) << view;
+  EXPECT_TRUE(has(view, "RR      [#####.....] 1500.0 us")) << view;
+  EXPECT_TRUE(has(view, "1000.0 us  FAILED")) << view;
+  EXPECT_TRUE(has(view, "yaw -0.250!")) << view;
+  EXPECT_TRUE(has(view, "14.50 V, thrust x1.158")) << view;
+  EXPECT_TRUE(has(view, "size 7")) << view;
+  EXPECT_TRUE(has(view, "overruns 2")) << view;
+  EXPECT_FALSE(has(view, "\x1b")) << "no escape codes in the view itself";
+}
+
+TEST(MonitorView, SaysWhenNothingOrOldStatusArrived) {
+  node::MonitorOptions o;
+  EXPECT_TRUE(has(node::render_monitor(node::MonitorSnapshot{}, o), "no mixer_status"));
+  mixer_status_t st{};
+  st.num_motors = 1;
+  node::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0};
+  const std::string view = node::render_monitor(old, o);
+  EXPECT_TRUE(has(view, "STATUS STALE")) << view;
+  EXPECT_TRUE(has(view, "m1")) << view;
+  EXPECT_TRUE(has(view, "no outputs seen")) << view;
+}
+
+}  // namespace
+}  // namespace motormix::test
