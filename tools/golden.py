@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Turns a `motormix replay --every-input` log into a golden file: for every
 pair of inputs (setpoint utime, pid utime) for which the mixer produced armed
-outputs, those outputs. Plain CSV, one line per pair, sorted, so a change in
+outputs, those outputs. When some output had failed motors, the failure set
+in force (motor_pwm_t.failed_motors) is part of the key too. Plain CSV, one line per pair, sorted, so a change in
 the mixer shows up as a reviewable diff.
 
     tools/golden.py REPLAY.lcmlog --title "..." -o GOLDEN.csv
@@ -35,16 +36,20 @@ def main():
         except ValueError:
             continue
         if m.armed:
-            rows[(m.setpoint_utime, m.pid_utime)] = list(m.pwm) + list(m.direction)
+            rows[(m.setpoint_utime, m.pid_utime, m.failed_motors)] = list(m.pwm) + list(m.direction)
+    with_failures = any(key[2] != 0 for key in rows)
+    if not with_failures:
+        rows = {key[:2]: values for key, values in rows.items()}
     # Directions only where an output uses them (H-bridges); PWM to 0.001.
     with_direction = any(any(v != 0 for v in values[len(values) // 2:]) for values in rows.values())
     with open(args.output, "w") as f:
         f.write(f"# {args.title}\n")
-        f.write("# setpoint_utime,pid_utime,pwm per motor" + (",direction per motor" if with_direction else "") + "\n")
-        for (sp, pid), values in sorted(rows.items()):
+        f.write("# setpoint_utime,pid_utime," + ("failed_motors," if with_failures else "") + "pwm per motor"
+                + (",direction per motor" if with_direction else "") + "\n")
+        for key, values in sorted(rows.items()):
             n = len(values) // 2
             cells = [f"{v:.3f}" for v in values[:n]] + ([str(v) for v in values[n:]] if with_direction else [])
-            f.write(f"{sp},{pid}," + ",".join(cells) + "\n")
+            f.write(",".join(str(k) for k in key) + "," + ",".join(cells) + "\n")
     print(f"{args.output}: {len(rows)} input pairs")
 
 

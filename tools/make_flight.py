@@ -14,6 +14,12 @@ timing noise. Scenarios:
   flips (SETPOINT / PID).
 - diff_drive: a wheeled robot: straight, spin in place, saturating turns as
   in the locomotion document, reverse (SETPOINT / PID; throttle -1..1).
+- hexa_motor_out: a hexa hovers and manoeuvres; at 5.0 s its failure
+  detector reports m1 dead on MOTOR_STATUS (10 Hz, healthy before), and the
+  flight goes on with the same manoeuvres on five motors (SETPOINT / PID).
+- battery_sag: hover and gentle manoeuvres while the pack sags from 16.8 V
+  to 13.4 V on BATTERY (50 Hz), with a 0 V sensor glitch at 4.0 s and a
+  0.8 s silence of the battery monitor at 6.0 s (SETPOINT / PID).
 
     tools/make_flight.py --scenario team_quad --seed 1 -o test/data/flights/team_quad.lcmlog
     tools/make_flight.py --all test/data/flights     # every scenario + MANIFEST.md
@@ -31,7 +37,7 @@ import lcm_python  # noqa: E402
 
 lcm_python.add_types_path()
 import lcm  # noqa: E402
-from motormix import pid_t, setpoint_t  # noqa: E402
+from motormix import battery_t, motor_status_t, pid_t, setpoint_t  # noqa: E402
 
 SETPOINT_HZ = 50.0
 PID_HZ = 400.0
@@ -173,18 +179,110 @@ def no_pid(t, rng):
     return 0.0, 0.0
 
 
+def hexa_setpoint(t):
+    if t < 1.0:
+        return 0.0, 0.0, False
+    if t < 1.5:
+        return 0.05, 0.0, True
+    if t < 2.5:
+        return 0.05 + 0.45 * (t - 1.5), 0.0, True  # take-off
+    if t < 9.5:
+        # yaw left and right, before and after the failure alike
+        yaw = 0.0
+        if 3.5 <= t < 4.5 or 7.5 <= t < 8.5:
+            yaw = 0.4 if int(t * 2) % 2 else -0.4
+        return 0.5, yaw, True
+    if t < 10.5:
+        return 0.5 * (10.5 - t), 0.0, True  # landing
+    return 0.0, 0.0, False
+
+
+def hexa_pid(t, rng):
+    if t < 2.5 or t >= 9.5:
+        return 0.0, 0.0
+    n = rng.normal(0.0, 0.01, size=2)
+    # the same manoeuvres before (2.5..5) and after (6..8.5) the failure
+    phase = (t - 2.5) if t < 5.0 else (t - 6.0)
+    roll = 0.15 * math.sin(2.0 * math.pi * 0.5 * phase) if 0.0 <= phase < 2.5 else 0.0
+    pitch = 0.1 if 1.0 <= phase < 1.5 else (-0.1 if 1.5 <= phase < 2.0 else 0.0)
+    return float(np.clip(roll + n[0], -1, 1)), float(np.clip(pitch + n[1], -1, 1))
+
+
+HEXA_FAILURE_S = 5.0
+
+
+def hexa_extra(rng, end_s):
+    """MOTOR_STATUS at 10 Hz: six healthy motors, then m1 failed from 5.0 s."""
+    out = []
+    for k in range(int(end_s * 10)):
+        t = k / 10.0 + 0.003
+        msg = motor_status_t()
+        msg.num_motors = 6
+        msg.failed = [t >= HEXA_FAILURE_S] + [False] * 5
+        out.append((t, "MOTOR_STATUS", msg))
+    # the failure is reported the moment it is detected, not at the next tick
+    msg = motor_status_t()
+    msg.num_motors = 6
+    msg.failed = [True] + [False] * 5
+    out.append((HEXA_FAILURE_S, "MOTOR_STATUS", msg))
+    return out
+
+
+def sag_setpoint(t):
+    if t < 1.0:
+        return 0.0, 0.0, False
+    if t < 1.5:
+        return 0.05, 0.0, True
+    if t < 10.0:
+        return 0.5, 0.0, True
+    return 0.0, 0.0, False
+
+
+def sag_pid(t, rng):
+    if t < 1.5 or t >= 10.0:
+        return 0.0, 0.0
+    n = rng.normal(0.0, 0.01, size=2)
+    return float(np.clip(0.1 * math.sin(t) + n[0], -1, 1)), float(np.clip(n[1], -1, 1))
+
+
+SAG_FULL_V = 16.8
+SAG_EMPTY_V = 13.4
+
+
+def sag_voltage(t, end_s):
+    """The pack voltage: a linear sag under load, deeper while hovering."""
+    return SAG_FULL_V - (SAG_FULL_V - SAG_EMPTY_V) * min(1.0, t / end_s)
+
+
+def sag_extra(rng, end_s):
+    """BATTERY at 50 Hz with measurement noise, one 0 V glitch, one 0.8 s silence."""
+    out = []
+    for k in range(int(end_s * 50)):
+        t = k / 50.0 + 0.007
+        if 6.0 <= t < 6.8:
+            continue  # the battery monitor goes silent
+        msg = battery_t()
+        msg.voltage = 0.0 if abs(t - 4.007) < 1e-6 else sag_voltage(t, end_s) + float(rng.normal(0.0, 0.05))
+        out.append((t, "BATTERY", msg))
+    return out
+
+
 SCENARIOS = {
-    # name: (setpoint_at, pid_at, end_s, channels, silent windows (s), bad-value times (s))
+    # name: (setpoint_at, pid_at, end_s, channels, silent windows (s), bad-value times (s)[,
+    #        extra events (rng, end_s) -> [(t, channel, message)]])
     "team_quad": (setpoint_at, pid_at, END_S, ("pos_deseada", "pid"), [], []),
     "dropout": (dropout_setpoint, dropout_pid, 9.0, ("SETPOINT", "PID"), [(5.0, 5.4)],
                 [2.5, 3.0, 3.5, 4.0]),
     "flips": (flips_setpoint, flips_pid, 8.5, ("SETPOINT", "PID"), [], []),
     "diff_drive": (drive_setpoint, no_pid, 9.5, ("SETPOINT", "PID"), [], []),
+    "hexa_motor_out": (hexa_setpoint, hexa_pid, 11.0, ("SETPOINT", "PID"), [], [], hexa_extra),
+    "battery_sag": (sag_setpoint, sag_pid, 10.5, ("SETPOINT", "PID"), [], [], sag_extra),
 }
 
 
 def events(seed, setpoint_channel, pid_channel, scenario="team_quad"):
-    sp_at, pid_fn, end_s, _, silent, bad_times = SCENARIOS[scenario]
+    sp_at, pid_fn, end_s, _, silent, bad_times = SCENARIOS[scenario][:6]
+    extra = SCENARIOS[scenario][6] if len(SCENARIOS[scenario]) > 6 else None
     rng = np.random.default_rng(seed)
     out = []
     for rate, kind in ((SETPOINT_HZ, "setpoint"), (PID_HZ, "pid")):
@@ -227,6 +325,13 @@ def events(seed, setpoint_channel, pid_channel, scenario="team_quad"):
             msg.utime = utime
             msg.roll, msg.pitch = (float("inf"), 0.0) if int(t * 2) % 2 else (0.0, -2.0)
             encoded.append((utime, pid_channel, msg.encode()))
+    if extra:
+        last = 0
+        for t, channel, msg in sorted(extra(rng, end_s), key=lambda e: e[0]):
+            utime = max(START_UTIME + int(round(t * 1e6)), last + 1)
+            last = utime
+            msg.utime = utime
+            encoded.append((utime, channel, msg.encode()))
     encoded.sort(key=lambda e: e[0])
     return encoded
 
@@ -246,6 +351,8 @@ MANIFEST = {
     "dropout": "hover, 0.4 s publisher silence, return still armed, disarm and re-arm; NaN/Inf/out-of-range messages at 2.5, 3.0, 3.5, 4.0 s",
     "flips": "punch-out with roll, full-yaw spins at low and high throttle, saturating roll+pitch flips",
     "diff_drive": "wheeled robot: straight, spin in place, move(1.0, 0.9) and move(-1.0, 0.9) turns, reverse",
+    "hexa_motor_out": "hexa: hover, roll sine and pitch steps, yaw; m1 reported failed on MOTOR_STATUS at 5.0 s; the same manoeuvres on five motors, landing",
+    "battery_sag": "hover while the pack sags 16.8 -> 13.4 V on BATTERY (50 Hz), a 0 V glitch at 4.0 s, 0.8 s battery silence at 6.0 s",
 }
 
 

@@ -138,14 +138,22 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     next_status = t;
   };
 
+  MotorMask last_failed = config.failed_motors;
   const auto cycle_at = [&](std::int64_t t) {
     const CycleResult& r = loop->cycle(t);
     fill_pwm_message(pwm, r, t);
     out.write(config.channels.motor_pwm, t, pwm);
     ++summary.outputs;
+    if (r.failed != last_failed) {
+      ++summary.failure_changes;
+      last_failed = r.failed;
+    }
     if (r.mix.armed) {
       const double dt = static_cast<double>(period_us) / 1e6;
       summary.armed_s += dt;
+      if (r.failed != 0) summary.failed_s += dt;
+      if (r.thrust_gain > 1.0) summary.compensated_s += dt;
+      summary.max_thrust_gain = std::max(summary.max_thrust_gain, r.thrust_gain);
       for (int a = 0; a < kNumAxes; ++a) {
         if ((r.mix.allocation.axis_limited >> a) & 1U)
           summary.limited_s[static_cast<std::size_t>(a)] += dt;

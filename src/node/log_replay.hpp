@@ -34,6 +34,10 @@ struct ReplaySummary {
   std::array<double, 4>
       limited_s{};  // per axis (roll, pitch, yaw, thrust): armed time not fully delivered
   std::int64_t failsafe_events = 0;
+  double failed_s = 0.0;             // armed time with motors treated as failed
+  std::int64_t failure_changes = 0;  // times the failure set in force changed
+  double compensated_s = 0.0;        // armed time with battery compensation (gain > 1)
+  double max_thrust_gain = 1.0;
   std::int64_t rejected = 0;         // all rejection counters together
   std::int64_t discontinuities = 0;  // timestamps that jumped back or beyond max_gap_s
   std::int64_t skipped_events = 0;   // of those, single events skipped as damaged timestamps

@@ -22,6 +22,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 namespace motormix::test {
 namespace {
@@ -43,8 +44,12 @@ constexpr double kGoldenPwm = 1e-3;
 // longer than any timeout) and the suite runs in half the time.
 constexpr int kPlaybackSpeed = 2;
 
+// Key: setpoint utime, pid utime, and the failure set in force (0 unless the
+// golden file has a failed_motors column).
+using GoldenKey = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
 struct Golden {
-  std::map<std::pair<std::int64_t, std::int64_t>, std::vector<double>> armed;  // pwm then direction
+  bool keyed_by_failures = false;
+  std::map<GoldenKey, std::vector<double>> armed;  // pwm then direction
 };
 
 Golden read_golden(const std::string& path) {
@@ -52,22 +57,27 @@ Golden read_golden(const std::string& path) {
   std::ifstream f(path);
   EXPECT_TRUE(f.good()) << path << " (regenerate with scripts/regen-golden)";
   for (std::string line; std::getline(f, line);) {
+    if (line.rfind("# setpoint_utime,pid_utime,failed_motors", 0) == 0) g.keyed_by_failures = true;
     if (line.empty() || line[0] == '#') continue;
     std::stringstream s(line);
     std::string cell;
     std::vector<double> values;
     std::int64_t sp = 0;
     std::int64_t pid = 0;
+    std::int64_t failed = 0;
+    const int keys = g.keyed_by_failures ? 3 : 2;
     for (int i = 0; std::getline(s, cell, ','); ++i) {
       if (i == 0) {
         sp = std::stoll(cell);
       } else if (i == 1) {
         pid = std::stoll(cell);
+      } else if (i < keys) {
+        failed = std::stoll(cell);
       } else {
         values.push_back(std::stod(cell));
       }
     }
-    g.armed[{sp, pid}] = values;
+    g.armed[{sp, pid, failed}] = values;
   }
   return g;
 }
@@ -121,7 +131,9 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
       const auto k = static_cast<std::size_t>(i);
       const OutputChannel& ch = config.outputs[k];
       ASSERT_TRUE(std::isfinite(out.pwm[k]));
-      if (out.armed) {
+      if (out.armed && ((out.failed_motors >> i) & 1)) {
+        ASSERT_EQ(out.pwm[k], static_cast<float>(ch.disarmed)) << "a failed motor is stopped";
+      } else if (out.armed) {
         ASSERT_GE(out.pwm[k], ch.min);
         ASSERT_LE(out.pwm[k], ch.max);
       } else {
@@ -135,7 +147,8 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
     }
     if (!out.armed) continue;
     ++armed;
-    const auto g = golden.armed.find({out.setpoint_utime, out.pid_utime});
+    const auto g = golden.armed.find(
+        {out.setpoint_utime, out.pid_utime, golden.keyed_by_failures ? out.failed_motors : 0});
     ASSERT_NE(g, golden.armed.end()) << "armed output for inputs (" << out.setpoint_utime << ", "
                                      << out.pid_utime << ") that the golden replay never armed";
     ++compared;
