@@ -39,8 +39,10 @@ class PrioritizedAllocator final : public MatrixAllocator {
 
   // Whether the undelivered demand `error_a` (as reported, axes the vehicle is
   // not commanded in already zero) is smaller than `error_b` in priority
-  // order: roll/pitch (Euclidean), then thrust, then yaw; ties go to `b`.
-  static bool closer_in_priority_order(const AxisVector& error_a, const AxisVector& error_b);
+  // order: roll/pitch (Euclidean), then thrust, then yaw; differences within
+  // `tolerance` are ties, and ties go to `b`.
+  static bool closer_in_priority_order(const AxisVector& error_a, const AxisVector& error_b,
+                                       double tolerance = kDeliveredTolerance);
 
  private:
   enum class Direction { kBoth, kDecreaseOnly };

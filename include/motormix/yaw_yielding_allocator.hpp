@@ -5,12 +5,20 @@
 // what the working motors can do, so roll and pitch would be cut although a
 // different yaw would leave room for them. When the reduced matrix does not
 // deliver roll, pitch and thrust, this allocator mixes roll, pitch and thrust
-// with yaw left free (their least-norm mix, desaturated in the same priority
-// order), then adds as much of the demanded yaw as the range allows along the
-// direction that moves yaw alone. It keeps whichever of the two delivers the
-// demand better in priority order: roll and pitch, then thrust, then yaw.
+// with yaw left free (their least-norm mix) and moves along the direction
+// that changes yaw alone: if some yaw fits, roll, pitch and thrust are exact
+// and yaw is as close to the demand as the range allows (a one-dimensional
+// problem, solved in closed form). If no yaw fits, roll, pitch and thrust
+// are desaturated in their priority order on that basis first. That
+// one-dimensional search misses the commands that also move along the
+// directions no axis sees (a hexa with one motor out has one): when it does
+// not hold roll, pitch and thrust either, a bounded least-squares solve with
+// yaw weighted far below the others searches all of them. It keeps whichever
+// answer delivers the demand better in priority order: roll and pitch, then
+// thrust, then yaw.
 
 #include <motormix/allocation.hpp>
+#include <motormix/optimal_allocator.hpp>
 #include <motormix/prioritized_allocator.hpp>
 
 #include <memory>
@@ -28,8 +36,17 @@ class YawYieldingAllocator final : public Allocator {
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
  private:
+  struct Interval {
+    double lo;
+    double hi;
+    bool empty() const { return lo > hi; }
+  };
+  // The gains g for which every motor of u + g * yaw_alone_ is in range.
+  Interval room_along_yaw(const MotorVector& u) const;
+
   PrioritizedAllocator full_;
   PrioritizedAllocator yaw_free_;
+  OptimalAllocator least_squares_;  // roll, pitch >> thrust >> yaw
   MotorVector yaw_alone_;  // command change per unit of yaw, nothing else
   EffectivenessMatrix effectiveness_;
   CommandRange range_;

@@ -161,15 +161,15 @@ void PrioritizedAllocator::repair(AxisVector& effective, MotorVector& u) const {
 }
 
 bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
-                                                    const AxisVector& error_b) {
+                                                    const AxisVector& error_b, double tolerance) {
   const std::array<std::pair<double, double>, 3> in_order = {
       std::pair{std::hypot(error_a[index(Axis::kRoll)], error_a[index(Axis::kPitch)]),
                 std::hypot(error_b[index(Axis::kRoll)], error_b[index(Axis::kPitch)])},
       std::pair{std::abs(error_a[index(Axis::kThrust)]), std::abs(error_b[index(Axis::kThrust)])},
       std::pair{std::abs(error_a[index(Axis::kYaw)]), std::abs(error_b[index(Axis::kYaw)])}};
   for (const auto& [x, y] : in_order) {
-    if (x < y - kDeliveredTolerance) return true;
-    if (x > y + kDeliveredTolerance) return false;
+    if (x < y - tolerance) return true;
+    if (x > y + tolerance) return false;
   }
   return false;  // a tie keeps the repair
 }

@@ -21,7 +21,10 @@ inline void check_outputs(const Mixer& mixer, const MixerOutput& out) {
     const OutputChannel& ch = mixer.output_stage().channel(i);
     const double v = out.output[i];
     if (!std::isfinite(v)) violation("output not finite", i, v);
-    if (out.armed) {
+    if (out.armed && ((out.failed >> i) & 1U)) {
+      if (v != ch.disarmed) violation("failed motor not at its disarmed (stop) value", i, v);
+      if (out.command[i] != 0.0) violation("failed motor commanded", i, out.command[i]);
+    } else if (out.armed) {
       if (v < std::fmin(ch.min, ch.max) || v > std::fmax(ch.min, ch.max)) {
         violation("armed output outside [min, max]", i, v);
       }

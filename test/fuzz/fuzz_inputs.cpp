@@ -1,8 +1,11 @@
 // One channel's message decoder and input checks on arbitrary bytes, driving
-// the control loop. Built twice: MOTORMIX_FUZZ_SETPOINT decodes every chunk as
-// a setpoint_t (pid messages are well-formed, from the input too), otherwise
-// as a pid_t. Chunks: one length byte, then that many bytes. After every
-// chunk a control cycle runs 2.5 ms later, and its outputs must be in range.
+// the control loop. Built three times: MOTORMIX_FUZZ_SETPOINT decodes every
+// chunk as a setpoint_t (pid messages are well-formed, from the input too),
+// MOTORMIX_FUZZ_FAILURES decodes chunks alternately as a motor_status_t and a
+// battery_t (with well-formed setpoint and pid from the input, so the loop
+// arms and mixes with failure sets and compensation), otherwise as a pid_t.
+// Chunks: one length byte, then that many bytes. After every chunk a control
+// cycle runs 2.5 ms later, and its outputs must be in range.
 
 #include "fuzz_checks.hpp"
 #include "node/control_loop.hpp"
@@ -21,7 +24,8 @@ const motormix::config::Config& fuzz_config() {
   static const motormix::config::Config c = motormix::config::load_config_text(
       "geometry: {preset: hexa_x}\nmixer: {strategy: prioritized}\n"
       "output: {min: 1000, max: 2000, disarmed: 900, idle: 0.05, slew_per_s: 40000}\n"
-      "inputs: {yaw_source: pid, failsafe: hold_last}\n",
+      "inputs: {yaw_source: pid, failsafe: hold_last}\n"
+      "battery: {nominal_v: 16.8, max_gain: 2}\n",
       "fuzz");
   return c;
 }
@@ -48,6 +52,32 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     node::PidSample p;
     p.utime = now + wall_offset;
     p.roll = len > 0 ? (msg[0] - 128) / 128.0 : 0.0;
+    loop.on_pid(p, now, now + wall_offset);
+#elif defined(MOTORMIX_FUZZ_FAILURES)
+    if (at % 2 == 0) {
+      node::MotorStatusSample m;
+      if (node::decode_motor_status(msg, static_cast<int>(len), m)) {
+        loop.on_motor_status(m, now, now + wall_offset);
+      } else {
+        loop.on_undecodable();
+      }
+    } else {
+      node::BatterySample b;
+      if (node::decode_battery(msg, static_cast<int>(len), b)) {
+        loop.on_battery(b, now, now + wall_offset);
+      } else {
+        loop.on_undecodable();
+      }
+    }
+    node::SetpointSample s;
+    s.utime = now + wall_offset;
+    s.armed = len > 0 && (msg[0] & 1U);
+    s.throttle = len > 1 ? msg[1] / 255.0 : 0.0;
+    loop.on_setpoint(s, now, now + wall_offset);
+    node::PidSample p;
+    p.utime = now + wall_offset;
+    p.roll = len > 3 ? (msg[3] - 128) / 128.0 : 0.0;
+    p.pitch = len > 4 ? (msg[4] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #else
     node::PidSample p;

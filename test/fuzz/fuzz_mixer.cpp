@@ -79,7 +79,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     while (in.remaining_bytes() > 0) {
       AxisVector d;
       for (int a = 0; a < kNumAxes; ++a) d[a] = demand_value(in);
-      mixer.mix(d, out, in.ConsumeFloatingPointInRange<double>(0.0, 0.01));
+      const double dt = in.ConsumeFloatingPointInRange<double>(0.0, 0.01);
+      // Any failure set, prepared or not, including bits beyond the motors.
+      const MotorMask failed = in.ConsumeBool() ? in.ConsumeIntegral<std::uint32_t>() : 0;
+      mixer.mix(d, out, dt, failed);
       motormix::fuzz::check_outputs(mixer, out);
     }
   } catch (const config::ConfigError&) {

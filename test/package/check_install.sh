@@ -23,6 +23,8 @@ for f in bin/motormix \
     include/motormix/mixer.hpp include/motormix/embedded_mixer.hpp include/motormix/version.hpp \
     include/motormix/config/config.hpp include/motormix/motor_pwm_t.hpp \
     include/motormix/setpoint_t.hpp include/motormix/pid_t.hpp include/motormix/mixer_status_t.hpp \
+    include/motormix/motor_status_t.hpp include/motormix/battery_t.hpp include/motormix/motor_failure.hpp \
+    include/motormix/battery_compensation.hpp include/motormix/yaw_yielding_allocator.hpp \
     "$libdir/cmake/motormix/motormixConfig.cmake" "$libdir/cmake/motormix/motormixConfigVersion.cmake" \
     "$libdir/cmake/motormix/motormixTargets.cmake" "$libdir/pkgconfig/motormix.pc" \
     lib/python3/dist-packages/motormix/__init__.py lib/python3/dist-packages/motormix/motor_pwm_t.py \
@@ -95,12 +97,15 @@ pc_build "$prefix"
 
 step "Python message modules (from motormix import motor_pwm_t)"
 PYTHONPATH="$prefix/lib/python3/dist-packages" python3 - <<'PY'
-from motormix import motor_pwm_t, setpoint_t, pid_t, mixer_status_t
+from motormix import motor_pwm_t, setpoint_t, pid_t, mixer_status_t, motor_status_t, battery_t
 m = motor_pwm_t()
 m.utime, m.num_motors, m.command, m.pwm, m.direction, m.armed = 5, 2, [0.5, 1.0], [1500.0, 2000.0], [0, 0], True
 back = motor_pwm_t.decode(m.encode())
 assert list(back.pwm) == [1500.0, 2000.0] and back.armed, back.pwm
-print("python types ok:", [t.__name__ for t in (motor_pwm_t, setpoint_t, pid_t, mixer_status_t)])
+s = motor_status_t()
+s.utime, s.num_motors, s.failed = 1, 3, [False, True, False]
+assert list(motor_status_t.decode(s.encode()).failed) == [False, True, False]
+print("python types ok:", [t.__name__ for t in (motor_pwm_t, setpoint_t, pid_t, mixer_status_t, motor_status_t, battery_t)])
 PY
 
 step "relocated prefix"
