@@ -107,7 +107,8 @@ int mix(const MixCommand& cmd) {
   const int n = mixer.motors();
   const auto names_of = [&](MotorMask mask) {
     std::vector<std::string> names;
-    for (int i : motors_in(mask, n)) names.push_back(config->motor_names()[static_cast<std::size_t>(i)]);
+    for (int i : motors_in(mask, n))
+      names.push_back(config->motor_names()[static_cast<std::size_t>(i)]);
     return names;
   };
 
@@ -142,10 +143,11 @@ int mix(const MixCommand& cmd) {
             << "pwm\n";
   for (int i = 0; i < n; ++i) {
     std::cout << std::setw(8) << config->motor_names()[static_cast<std::size_t>(i)] << std::setw(12)
-              << out.command[i] << out.output[i] << (((out.failed >> i) & 1U) ? "  failed (stopped)" : "")
-              << "\n";
+              << out.command[i] << out.output[i]
+              << (((out.failed >> i) & 1U) ? "  failed (stopped)" : "") << "\n";
   }
-  if (cmd.battery_voltage) std::cout << "thrust gain " << gain << " at " << *cmd.battery_voltage << " V\n";
+  if (cmd.battery_voltage)
+    std::cout << "thrust gain " << gain << " at " << *cmd.battery_voltage << " V\n";
   if (out.failed != 0) {
     std::cout << "failure handling: " << to_string(out.failure) << "; axes held:";
     for (int a = 0; a < kNumAxes; ++a) {
@@ -187,8 +189,7 @@ int replay(const ReplayCommand& cmd) {
             << "not delivered   roll " << s.limited_s[0] << " s, pitch " << s.limited_s[1]
             << " s, yaw " << s.limited_s[2] << " s, thrust " << s.limited_s[3]
             << " s (armed time with that axis limited)\n"
-            << "failsafe events " << s.failsafe_events << "; rejected inputs " << s.rejected
-            << "\n"
+            << "failsafe events " << s.failsafe_events << "; rejected inputs " << s.rejected << "\n"
             << "motor failures  " << s.failed_s << " s armed with failed motors, "
             << s.failure_changes << " changes of the failure set\n"
             << "battery         " << s.compensated_s << " s compensated, largest thrust gain "

@@ -2,8 +2,8 @@
 
 #include "commands.hpp"
 
-#include <motormix/version.hpp>
 #include <motormix/config/matrix_export.hpp>
+#include <motormix/version.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -45,9 +45,10 @@ int main(int argc, char** argv) {
   mix_app->add_flag("--json", mix_cmd.json, "print one JSON object");
   mix_app->add_option("--battery-voltage", mix_cmd.battery_voltage,
                       "apply battery compensation for this pack voltage (unfiltered)");
-  mix_app->add_option("--failed", mix_cmd.failed,
-                      "treat these motors as failed: numbers as motormix matrix prints them, or "
-                      "names (added to mixer.failed_motors)")
+  mix_app
+      ->add_option("--failed", mix_cmd.failed,
+                   "treat these motors as failed: numbers as motormix matrix prints them, or "
+                   "names (added to mixer.failed_motors)")
       ->delimiter(',');
 
   MatrixCommand matrix_cmd;
@@ -86,7 +87,8 @@ int main(int argc, char** argv) {
       ->add_option("--config", monitor_cmd.config_path,
                    "configuration of the running mixer (channels, motor names, unit)")
       ->check(CLI::ExistingFile);
-  monitor_app->add_option("--set", monitor_cmd.overrides, "override a config value: key.path=value");
+  monitor_app->add_option("--set", monitor_cmd.overrides,
+                          "override a config value: key.path=value");
   monitor_app->add_option("--lcm-url", monitor_cmd.lcm_url,
                           "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   monitor_app->add_option("--status-channel", monitor_cmd.status_channel,

@@ -47,6 +47,9 @@ struct MixReport {
   MotorMask saturated_lower;         // bit i: motor i at its lower limit
   std::uint8_t axis_limited;         // bit(Axis): that axis was not fully delivered
   const AxisVector& unallocated;     // roll, pitch, yaw, thrust: demanded minus produced
+  MotorMask failed;                  // motors treated as failed (stopped) in this cycle
+  FailureHandling failure;           // how that set was handled
+  AxisMask held;                     // axes the working motors still command
 
   bool saturated(int motor) const { return ((saturated_upper | saturated_lower) >> motor) & 1U; }
   bool delivered(Axis axis) const { return (axis_limited & bit(axis)) == 0; }
@@ -66,8 +69,11 @@ class EmbeddedMixer {
   const Mixer& mixer() const { return mixer_; }
 
   // One cycle, armed. dt_s: time since the previous cycle, for the output
-  // stage's slew limit (0: no limit this cycle).
-  MixReport mix(const Demand& demand, double dt_s = 0.0);
+  // stage's slew limit (0: no limit this cycle). failed: motors to treat as
+  // failed in this cycle, on top of the configuration's mixer.failed_motors
+  // (bit i is motor i, m1 is bit 0); they are stopped and the others
+  // reallocated (see motor_failure.hpp).
+  MixReport mix(const Demand& demand, double dt_s = 0.0, MotorMask failed = 0);
   // Every output to its disarmed value.
   MixReport disarm();
 

@@ -31,7 +31,7 @@ struct MixerOutput {
   AllocationResult allocation;  // failed motors are neither saturated bit
   MotorMask failed = 0;         // motors treated as failed in this cycle (stopped)
   FailureHandling failure = FailureHandling::kNone;
-  AxisMask held = kAllAxes;                 // axes the working motors still command
+  AxisMask held = kAllAxes;                   // axes the working motors still command
   AxisVector authority = AxisVector::Zero();  // per axis, for the failure set in force
 };
 

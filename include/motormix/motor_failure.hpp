@@ -84,9 +84,8 @@ struct FailurePlan {
 };
 
 // Builds the strategy for one failure set from its derived matrices.
-using FailureAllocatorFactory =
-    std::function<std::unique_ptr<const Allocator>(const FailureMixing& failure,
-                                                   const MixingBasis& basis)>;
+using FailureAllocatorFactory = std::function<std::unique_ptr<const Allocator>(
+    const FailureMixing& failure, const MixingBasis& basis)>;
 
 // Every single failure and every pair of `healthy_mixing`'s motors (at most
 // 16 + 120 sets), each with its allocator from `make` (none when `make` is

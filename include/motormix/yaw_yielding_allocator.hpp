@@ -47,7 +47,7 @@ class YawYieldingAllocator final : public Allocator {
   PrioritizedAllocator full_;
   PrioritizedAllocator yaw_free_;
   OptimalAllocator least_squares_;  // roll, pitch >> thrust >> yaw
-  MotorVector yaw_alone_;  // command change per unit of yaw, nothing else
+  MotorVector yaw_alone_;           // command change per unit of yaw, nothing else
   EffectivenessMatrix effectiveness_;
   CommandRange range_;
   AxisMask controlled_;

@@ -26,10 +26,10 @@ EmbeddedMixer EmbeddedMixer::from_yaml(const std::string& yaml_text,
   return EmbeddedMixer(std::move(c), std::move(m));
 }
 
-MixReport EmbeddedMixer::mix(const Demand& demand, double dt_s) {
+MixReport EmbeddedMixer::mix(const Demand& demand, double dt_s, MotorMask failed) {
   AxisVector d;
   d << demand.roll, demand.pitch, demand.yaw, demand.thrust;
-  return report(mixer_.mix(d, out_, dt_s));
+  return report(mixer_.mix(d, out_, dt_s, failed | config_.failed_motors));
 }
 
 MixReport EmbeddedMixer::disarm() {
@@ -46,7 +46,10 @@ MixReport EmbeddedMixer::report(MixStatus status) const {
                    out_.allocation.saturated_upper,
                    out_.allocation.saturated_lower,
                    out_.allocation.axis_limited,
-                   out_.allocation.unallocated};
+                   out_.allocation.unallocated,
+                   out_.failed,
+                   out_.failure,
+                   out_.held};
 }
 
 }  // namespace motormix

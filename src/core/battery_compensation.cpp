@@ -43,8 +43,9 @@ BatteryCompensation::Reading BatteryCompensation::add(double voltage, std::int64
     return Reading::kImplausible;
   }
   last_implausible_ = false;
-  const bool restart = last_plausible_us_ == kNever || now_us < last_plausible_us_ ||
-                       now_us - last_plausible_us_ > static_cast<std::int64_t>(settings_.timeout_s * 1e6);
+  const bool restart =
+      last_plausible_us_ == kNever || now_us < last_plausible_us_ ||
+      now_us - last_plausible_us_ > static_cast<std::int64_t>(settings_.timeout_s * 1e6);
   if (restart) {
     // First reading, or after a gap longer than the timeout: the old state
     // says nothing about the pack any more.

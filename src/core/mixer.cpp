@@ -45,14 +45,14 @@ const Allocator& Mixer::allocator_for(MotorMask failed) const {
 }
 
 const PreparedFailure* Mixer::prepared(MotorMask failed) const {
-  const auto it = std::lower_bound(
-      failures_.prepared.begin(), failures_.prepared.end(), failed,
-      [](const PreparedFailure& p, MotorMask mask) { return p.failed < mask; });
+  const auto it =
+      std::lower_bound(failures_.prepared.begin(), failures_.prepared.end(), failed,
+                       [](const PreparedFailure& p, MotorMask mask) { return p.failed < mask; });
   return it != failures_.prepared.end() && it->failed == failed ? &*it : nullptr;
 }
 
 MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out, double dt_s,
-                      MotorMask failed) const {
+                     MotorMask failed) const {
   if (!demand.allFinite()) {
     disarm(out);
     return MixStatus::kNonFiniteDemand;

@@ -29,9 +29,8 @@ bool holds_roll_pitch_thrust(const AxisVector& unallocated) {
 }
 }  // namespace
 
-YawYieldingAllocator::YawYieldingAllocator(const MixingBasis& reduced,
-                                           const MixingMatrix& yaw_free, CommandRange range,
-                                           Airmode airmode, double yaw_headroom)
+YawYieldingAllocator::YawYieldingAllocator(const MixingBasis& reduced, const MixingMatrix& yaw_free,
+                                           CommandRange range, Airmode airmode, double yaw_headroom)
     : full_(reduced, range, airmode, yaw_headroom),
       yaw_free_(MixingBasis(yaw_free, reduced.effectiveness, reduced.controlled), range, airmode,
                 yaw_headroom),
@@ -41,8 +40,7 @@ YawYieldingAllocator::YawYieldingAllocator(const MixingBasis& reduced,
       range_(range),
       controlled_(reduced.controlled) {}
 
-YawYieldingAllocator::Interval YawYieldingAllocator::room_along_yaw(
-    const MotorVector& u) const {
+YawYieldingAllocator::Interval YawYieldingAllocator::room_along_yaw(const MotorVector& u) const {
   Interval k{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   for (Eigen::Index i = 0; i < u.size(); ++i) {
     const double d = yaw_alone_[i];
@@ -86,9 +84,8 @@ AllocationResult YawYieldingAllocator::allocate(const AxisVector& demand,
   }
   const AllocationResult yielded =
       describe_allocation(effectiveness_, demand, free_commands, range_, controlled_);
-  const bool yielded_better =
-      PrioritizedAllocator::closer_in_priority_order(yielded.unallocated, full.unallocated,
-                                                      kCandidateTie);
+  const bool yielded_better = PrioritizedAllocator::closer_in_priority_order(
+      yielded.unallocated, full.unallocated, kCandidateTie);
   const AllocationResult& best = yielded_better ? yielded : full;
   if (yielded_better && holds_roll_pitch_thrust(yielded.unallocated)) {
     commands = free_commands;

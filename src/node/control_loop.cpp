@@ -123,8 +123,7 @@ Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us, std::in
 Rejection ControlLoop::on_motor_status(const MotorStatusSample& sample, std::int64_t now_us,
                                        std::int64_t wall_us) {
   if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
-  const Rejection rejection =
-      check_motor_status(sample, mixer_.motors(), last_motor_status_utime_);
+  const Rejection rejection = check_motor_status(sample, mixer_.motors(), last_motor_status_utime_);
   count(rejection);
   if (rejection != Rejection::kNone) return rejection;
   ++counters_.motor_status_received;
@@ -167,7 +166,8 @@ void ControlLoop::describe_failures(std::int64_t now_us) {
   result_.held = report.held;
   result_.authority = report.authority;
   result_.battery = battery_ ? battery_->state(now_us) : BatteryState::kOff;
-  result_.battery_v = battery_ && std::isfinite(battery_->filtered_v()) ? battery_->filtered_v() : 0.0;
+  result_.battery_v =
+      battery_ && std::isfinite(battery_->filtered_v()) ? battery_->filtered_v() : 0.0;
   result_.thrust_gain = battery_ ? battery_->gain(now_us) : 1.0;
   const auto age = [&](std::int64_t received) {
     return received == kNever ? -1.0 : static_cast<double>(now_us - received) / 1e3;
@@ -189,8 +189,7 @@ void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us) {
       last_cycle_us_ == kNever ? 0.0 : static_cast<double>(now_us - last_cycle_us_) / 1e6;
   AxisVector compensated = demand;
   compensated[index(Axis::kThrust)] *= result_.thrust_gain;
-  if (mixer_.mix(compensated, result_.mix, dt_s, result_.failed) ==
-      MixStatus::kNonFiniteDemand) {
+  if (mixer_.mix(compensated, result_.mix, dt_s, result_.failed) == MixStatus::kNonFiniteDemand) {
     // Unreachable while message checks hold; kept so the promise does not
     // depend on them.
     if (result_.state == LoopState::kArmed) enter_failsafe(FailsafeReason::kInvalidInput, now_us);

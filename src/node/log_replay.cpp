@@ -191,8 +191,8 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       // One event whose timestamp is off while the next one carries on the
       // timeline is a damaged timestamp: skip that event alone.
       const LogEventView* after = in.peek();
-      const bool outlier = after && plausible(after->timestamp) &&
-                           after->timestamp >= previous && after->timestamp - previous <= max_gap_us;
+      const bool outlier = after && plausible(after->timestamp) && after->timestamp >= previous &&
+                           after->timestamp - previous <= max_gap_us;
       log << "motormix replay: warning: event " << ev->eventnum << " (byte " << ev->offset
           << ", channel " << ev->channel << ") jumps " << static_cast<double>(jump) / 1e6
           << " s in time; "

@@ -38,9 +38,9 @@ struct ReplaySummary {
   std::int64_t failure_changes = 0;  // times the failure set in force changed
   double compensated_s = 0.0;        // armed time with battery compensation (gain > 1)
   double max_thrust_gain = 1.0;
-  std::int64_t rejected = 0;         // all rejection counters together
-  std::int64_t discontinuities = 0;  // timestamps that jumped back or beyond max_gap_s
-  std::int64_t skipped_events = 0;   // of those, single events skipped as damaged timestamps
+  std::int64_t rejected = 0;          // all rejection counters together
+  std::int64_t discontinuities = 0;   // timestamps that jumped back or beyond max_gap_s
+  std::int64_t skipped_events = 0;    // of those, single events skipped as damaged timestamps
   std::vector<SkippedRange> skipped;  // byte ranges of the input that held no valid event
   bool damaged() const { return !skipped.empty(); }
 };

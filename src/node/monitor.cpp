@@ -123,8 +123,7 @@ std::string bar(double command, bool bipolar, int width) {
 
 std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o, int bar_width) {
   std::ostringstream s;
-  s << "motormix monitor: status '" << o.status_channel << "', outputs '" << o.pwm_channel
-    << "'\n";
+  s << "motormix monitor: status '" << o.status_channel << "', outputs '" << o.pwm_channel << "'\n";
   if (!snap.status) {
     s << "no mixer_status received yet\n";
     return s.str();
@@ -137,12 +136,12 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   char hash[32];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(st.config_hash));
   s << "state     " << state_name(st.state);
-  if (st.state == mixer_status_t::STATE_FAILSAFE) s << " (" << reason_name(st.failsafe_reason) << ")";
+  if (st.state == mixer_status_t::STATE_FAILSAFE)
+    s << " (" << reason_name(st.failsafe_reason) << ")";
   s << "    config " << hash << "    status " << fixed(snap.status_age_s * 1e3, 0) << " ms ago\n";
   s << "inputs    setpoint " << age(st.input_age_ms[0]) << (st.setpoint_stale ? " STALE" : "")
-    << "   pid " << age(st.input_age_ms[1]) << (st.pid_stale ? " STALE" : "")
-    << "   motor_status " << age(st.input_age_ms[3]) << "   battery " << age(st.input_age_ms[2])
-    << "\n";
+    << "   pid " << age(st.input_age_ms[1]) << (st.pid_stale ? " STALE" : "") << "   motor_status "
+    << age(st.input_age_ms[3]) << "   battery " << age(st.input_age_ms[2]) << "\n";
   s << "battery   " << battery_name(st.battery_state);
   if (st.battery_state != mixer_status_t::BATTERY_OFF) {
     s << ", " << fixed(st.battery_voltage, 2) << " V, thrust x" << fixed(st.thrust_gain, 3);
@@ -193,8 +192,8 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   if (have_pwm && !snap.pwm->armed) s << "  (outputs disarmed)\n";
   s << "\nunallocated";
   for (int a = 0; a < 4; ++a) {
-    s << "  " << kAxes[a] << " " << (st.unallocated[a] >= 0 ? "+" : "") << fixed(st.unallocated[a], 3)
-      << (st.axis_limited[a] ? "!" : "");
+    s << "  " << kAxes[a] << " " << (st.unallocated[a] >= 0 ? "+" : "")
+      << fixed(st.unallocated[a], 3) << (st.axis_limited[a] ? "!" : "");
   }
   s << "   (! = not fully delivered)\n";
   s << "loop      period us min/mean/max/p99 " << fixed(st.period_us[0], 0) << "/"

@@ -47,8 +47,8 @@ TEST_F(FailuresLive, MotorStatusStopsTheMotorAndTheOthersTakeOver) {
   bool seen = false;
   for (int k = 0; k < 200 && !seen; ++k) {
     send_status({0, 0, 1, 0, 0, 0});
-    seen = fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed && m.failed_motors == 0b100; },
-                     5);
+    seen = fly_until(
+        true, 0.5, [](const motor_pwm_t& m) { return m.armed && m.failed_motors == 0b100; }, 5);
   }
   ASSERT_TRUE(seen);
   const motor_pwm_t out = bus_->pwm().back();
@@ -79,7 +79,8 @@ TEST_F(FailuresLive, MotorStatusStopsTheMotorAndTheOthersTakeOver) {
   bool cleared = false;
   for (int k = 0; k < 200 && !cleared; ++k) {
     send_status({0, 0, 0, 0, 0, 0});
-    cleared = fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.failed_motors == 0; }, 5);
+    cleared = fly_until(
+        true, 0.5, [](const motor_pwm_t& m) { return m.failed_motors == 0; }, 5);
   }
   EXPECT_TRUE(cleared);
   stop_and_expect_disarmed_exit();
@@ -107,9 +108,8 @@ TEST_F(FailuresLive, BatteryCompensatesAndStopsWhenTheVoltageGoesStale) {
       },
       2s));
   // The monitor goes silent: after its timeout, no compensation.
-  ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) {
-    return std::abs(m.command[0] - 0.5F) < 1e-5F;
-  }, 400));
+  ASSERT_TRUE(fly_until(
+      true, 0.5, [](const motor_pwm_t& m) { return std::abs(m.command[0] - 0.5F) < 1e-5F; }, 400));
   ASSERT_TRUE(bus_->wait_until(
       [](const auto&, const auto& s) {
         return !s.empty() && s.back().battery_state == mixer_status_t::BATTERY_STALE &&
@@ -154,7 +154,8 @@ TEST(BatteryReplay, SaggingPackIsCompensatedAndFailuresOfTheMonitorAreNot) {
   const std::string cmd = std::string(MOTORMIX_BINARY) + " replay --config " +
                           source_path("config/quad_x.yaml") +
                           " --set battery.nominal_v=16.8 --set status_rate_hz=400 --set "
-                          "mixer.strategy=clip " + in + " " + out + " > /dev/null 2>&1";
+                          "mixer.strategy=clip " +
+                          in + " " + out + " > /dev/null 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   lcm::LogFile file(out, "r");
   ASSERT_TRUE(file.good());

@@ -103,5 +103,37 @@ TEST(Cli, MatrixFormatsOfOtherStacks) {
   EXPECT_TRUE(table.out.empty());
 }
 
+TEST(Cli, MixWithFailedMotorsAndBatteryVoltage) {
+  const std::string hexa = "--config " + source_path("config/hexa_x.yaml");
+  Result r = run("mix " + hexa + " --throttle 0.5 --failed 1,m4 --json");
+  ASSERT_EQ(r.exit_code, 0);
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["failed_motors"], nlohmann::json::array({"m1", "m4"}));
+  EXPECT_EQ(j["failure_handling"], "reallocated");
+  EXPECT_EQ(j["command"][0].get<double>(), 0.0);
+  EXPECT_EQ(j["pwm"][3].get<double>(), 900.0) << "stopped at the disarmed value";
+  EXPECT_TRUE(j["axes_held"]["yaw"].get<bool>());
+  EXPECT_TRUE(j["authority"].contains("roll"));
+  // A quad with a motor out: yaw is lost, and said to be.
+  r = run("mix --config " + source_path("config/quad_x.yaml") +
+          " --throttle 0.5 --failed 2 --json");
+  ASSERT_EQ(r.exit_code, 0);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["failure_handling"], "axes lost");
+  EXPECT_FALSE(j["axes_held"]["yaw"].get<bool>());
+  EXPECT_EQ(run("mix " + hexa + " --failed 7").exit_code, 2);
+  EXPECT_EQ(run("mix " + hexa + " --failed m9").exit_code, 2);
+  // Battery: unfiltered gain for one evaluation; needs the section.
+  EXPECT_EQ(run("mix " + hexa + " --throttle 0.5 --battery-voltage 14").exit_code, 2);
+  r = run("mix " + hexa +
+          " --set battery.nominal_v=16.8 --set mixer.strategy=clip --throttle 0.5 "
+          "--battery-voltage 14 --json");
+  ASSERT_EQ(r.exit_code, 0);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["thrust_gain"].get<double>(), 1.2, 1e-12);
+  EXPECT_NEAR(j["command"][0].get<double>(), 0.6, 1e-9);
+  EXPECT_EQ(run("mix " + hexa + " --set battery.nominal_v=16.8 --battery-voltage 2").exit_code, 2);
+}
+
 }  // namespace
 }  // namespace motormix::test

@@ -88,3 +88,23 @@ TEST(EmbeddedMixer, ReadmeShowsTheExampleThatIsBuilt) {
 
 }  // namespace
 }  // namespace motormix::test
+
+namespace motormix::test {
+namespace {
+
+TEST(EmbeddedMixer, FailedMotorsPerCallAndFromTheConfiguration) {
+  EmbeddedMixer m =
+      EmbeddedMixer::from_file(source_path("config/hexa_x.yaml"), {"mixer.failed_motors=[6]"});
+  Demand hover;
+  hover.thrust = 0.5;
+  const MixReport r = m.mix(hover, 0.0, MotorMask{1});  // m1 now, m6 from the file
+  EXPECT_EQ(r.failed, 0b100001U);
+  EXPECT_EQ(r.command[0], 0.0);
+  EXPECT_EQ(r.command[5], 0.0);
+  EXPECT_EQ(r.pwm[0], m.config().outputs[0].disarmed);
+  EXPECT_NE(r.failure, FailureHandling::kNone);
+  EXPECT_EQ(m.mix(hover).failed, 0b100000U);
+}
+
+}  // namespace
+}  // namespace motormix::test

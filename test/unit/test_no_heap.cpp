@@ -9,19 +9,19 @@
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
 #include <motormix/motor_failure.hpp>
-#include <motormix/yaw_yielding_allocator.hpp>
 #include <motormix/optimal_allocator.hpp>
 #include <motormix/presets.hpp>
 #include <motormix/prioritized_allocator.hpp>
 #include <motormix/shift_allocator.hpp>
+#include <motormix/yaw_yielding_allocator.hpp>
 
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <new>
-#include <functional>
 #include <optional>
 #include <random>
 
@@ -61,19 +61,20 @@ std::vector<std::unique_ptr<Mixer>> mixers_for(const MixingMatrix& m, bool wheel
         m, range, wheels ? 0.0 : 0.5,
         [&](const FailureMixing& f, const MixingBasis& basis) -> std::unique_ptr<const Allocator> {
           if (yaw_yielding && f.yaw_free) {
-            return std::make_unique<YawYieldingAllocator>(basis, *f.yaw_free, range,
-                                                          *yaw_yielding, 0.15);
+            return std::make_unique<YawYieldingAllocator>(basis, *f.yaw_free, range, *yaw_yielding,
+                                                          0.15);
           }
           return make(basis);
         });
-    out.push_back(
-        std::make_unique<Mixer>(make(MixingBasis(m)), OutputStage(outputs), thrust, std::move(plan)));
+    out.push_back(std::make_unique<Mixer>(make(MixingBasis(m)), OutputStage(outputs), thrust,
+                                          std::move(plan)));
   };
   const auto add = [&](std::unique_ptr<const Allocator> a) {
     out.push_back(std::make_unique<Mixer>(std::move(a), OutputStage(outputs), thrust));
   };
   add_reallocating([&](const MixingBasis& b) { return std::make_unique<ClipAllocator>(b, range); });
-  add_reallocating([&](const MixingBasis& b) { return std::make_unique<ShiftAllocator>(b, range); });
+  add_reallocating(
+      [&](const MixingBasis& b) { return std::make_unique<ShiftAllocator>(b, range); });
   for (Airmode am : {Airmode::kOff, Airmode::kRollPitch, Airmode::kRollPitchYaw}) {
     add_reallocating(
         [&](const MixingBasis& b) {
