@@ -16,6 +16,7 @@
 #include <iomanip>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 namespace motormix::app {
 
@@ -100,10 +101,6 @@ int mix(const MixCommand& cmd) {
     gain = battery_gain(*config->battery, *cmd.battery_voltage);
   }
   const Mixer mixer = config::build_mixer(*config);
-  AxisVector demand;
-  demand << cmd.roll, cmd.pitch, cmd.yaw, cmd.throttle * gain;
-  MixerOutput out;
-  const MixStatus status = mixer.mix(demand, out, 0.0, failed);
   const int n = mixer.motors();
   const auto names_of = [&](MotorMask mask) {
     std::vector<std::string> names;
@@ -111,8 +108,11 @@ int mix(const MixCommand& cmd) {
       names.push_back(config->motor_names()[static_cast<std::size_t>(i)]);
     return names;
   };
-
-  if (cmd.json) {
+  MixerOutput out;
+  const auto evaluate = [&](double roll, double pitch, double yaw, double throttle) {
+    AxisVector demand;
+    demand << roll, pitch, yaw, throttle * gain;
+    const MixStatus status = mixer.mix(demand, out, 0.0, failed);
     nlohmann::json j;
     j["motors"] = config->motor_names();
     j["strategy"] = config::to_string(config->strategy);
@@ -136,6 +136,41 @@ int mix(const MixCommand& cmd) {
     }
     j["axes_held"] = held;
     j["authority"] = authority;
+    j["iterations"] = out.allocation.iterations;
+    return j;
+  };
+
+  if (cmd.batch) {
+    // One demand per input line, "roll pitch yaw throttle"; one JSON object
+    // per line out. A line that is not four numbers in range gets an
+    // {"error": ...} line, and the exit status says so at the end.
+    int bad = 0;
+    long line_number = 0;
+    for (std::string line; std::getline(std::cin, line);) {
+      ++line_number;
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream in(line);
+      double v[4];
+      bool ok = static_cast<bool>(in >> v[0] >> v[1] >> v[2] >> v[3]);
+      std::string rest;
+      ok = ok && !(in >> rest);
+      ok = ok && std::isfinite(v[0]) && std::abs(v[0]) <= 1.0 && std::isfinite(v[1]) &&
+           std::abs(v[1]) <= 1.0 && std::isfinite(v[2]) && std::abs(v[2]) <= 1.0 &&
+           std::isfinite(v[3]) && v[3] >= throttle_low && v[3] <= 1.0;
+      if (!ok) {
+        ++bad;
+        std::cout << nlohmann::json{{"error", "line " + std::to_string(line_number) +
+                                                  ": expected 'roll pitch yaw throttle' in range"}}
+                         .dump()
+                  << "\n";
+        continue;
+      }
+      std::cout << evaluate(v[0], v[1], v[2], v[3]).dump() << "\n";
+    }
+    return bad == 0 ? kExitOk : kExitUsage;
+  }
+  const nlohmann::json j = evaluate(cmd.roll, cmd.pitch, cmd.yaw, cmd.throttle);
+  if (cmd.json) {
     std::cout << j.dump() << "\n";
     return kExitOk;
   }

@@ -36,6 +36,7 @@ struct MixCommand {
   double pitch = 0.0;
   double yaw = 0.0;
   bool json = false;
+  bool batch = false;  // demands from stdin, one JSON line out per demand
   std::optional<double> battery_voltage;  // applied unfiltered, needs a battery section
   std::vector<std::string> failed;        // motor numbers or names, added to mixer.failed_motors
 };

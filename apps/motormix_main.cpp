@@ -43,6 +43,9 @@ int main(int argc, char** argv) {
   mix_app->add_option("--pitch", mix_cmd.pitch, "pitch demand -1..1");
   mix_app->add_option("--yaw", mix_cmd.yaw, "yaw demand -1..1");
   mix_app->add_flag("--json", mix_cmd.json, "print one JSON object");
+  mix_app->add_flag("--batch", mix_cmd.batch,
+                    "read demands from standard input, one 'roll pitch yaw throttle' per line, and "
+                    "print one JSON object per line");
   mix_app->add_option("--battery-voltage", mix_cmd.battery_voltage,
                       "apply battery compensation for this pack voltage (unfiltered)");
   mix_app

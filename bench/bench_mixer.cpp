@@ -9,6 +9,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <random>
 #include <string>
 #include <vector>
@@ -135,6 +136,48 @@ MOTORMIX_PX4_PRESET(octo_x);
 MOTORMIX_ALLOCATE_PRESET(quad_x);
 MOTORMIX_ALLOCATE_PRESET(hexa_x);
 MOTORMIX_ALLOCATE_PRESET(octo_x);
+
+// Scaling: the allocation step against motor count, 4 to 16, for every
+// strategy, on a ring of rotors with alternating spin (a quad X at 4).
+std::string ring_yaml(int n) {
+  std::string y = "geometry:\n  normalization: px4\n  rotors:\n";
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * 3.141592653589793 * (i + 0.5) / n;
+    y += "    - {position: [" + std::to_string(std::cos(a)) + ", " + std::to_string(std::sin(a)) +
+         "], spin: " + (i % 2 ? "cw" : "ccw") + "}\n";
+  }
+  return y;
+}
+
+void BM_Scaling(benchmark::State& state, std::string strategy, int motors) {
+  const auto config = motormix::config::load_config_text(
+      ring_yaml(motors) + "mixer: {strategy: " + strategy + "}\n", "bench");
+  const motormix::Mixer built = motormix::config::build_mixer(config);
+  const motormix::Allocator& allocator = built.allocator();
+  const auto inputs = demands();
+  motormix::MotorVector commands;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    auto result = allocator.allocate(inputs[i++ & 1023U], commands);
+    benchmark::DoNotOptimize(result);
+    benchmark::DoNotOptimize(commands.data());
+  }
+}
+
+const bool kScalingRegistered = [] {
+  for (const char* strategy : {"clip", "shift", "prioritized", "optimal"}) {
+    for (int n = 4; n <= 16; n += 2) {
+      benchmark::RegisterBenchmark(
+          ("BM_Scaling/" + std::string(strategy) + "/" + std::to_string(n)).c_str(),
+          [strategy, n](benchmark::State& st) { BM_Scaling(st, strategy, n); });
+    }
+  }
+  return true;
+}();
+BENCHMARK_TEMPLATE(BM_BareProduct, 10);
+BENCHMARK_TEMPLATE(BM_BareProduct, 12);
+BENCHMARK_TEMPLATE(BM_BareProduct, 14);
+BENCHMARK_TEMPLATE(BM_BareProduct, 16);
 
 }  // namespace
 

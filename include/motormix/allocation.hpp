@@ -17,6 +17,7 @@ struct AllocationResult {
   MotorMask saturated_lower = 0;  // bit i: motor i at its lower limit
   std::uint8_t axis_limited = 0;  // bit(Axis): demand on that axis not fully delivered
   AxisVector unallocated = AxisVector::Zero();  // target minus produced, per axis
+  std::uint16_t iterations = 0;  // solver iterations (optimal); 0 for closed-form strategies
 };
 
 // Limits every strategy keeps motor commands within.

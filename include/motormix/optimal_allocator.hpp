@@ -27,6 +27,7 @@ class OptimalAllocator final : public MatrixAllocator {
 
  private:
   OptimalSettings settings_;
+  EffectivenessMatrix weighted_;  // W E: the effectiveness with each axis row weighted
 };
 
 // The weighted squared error |W (E u - d)|^2 that `optimal` minimizes, for

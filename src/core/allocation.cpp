@@ -1,5 +1,7 @@
 #include <motormix/allocation.hpp>
 
+#include "fixed_size.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,24 +16,27 @@ constexpr double kSaturationTolerance = 1e-9;
 AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
                                      CommandRange range, AxisMask controlled) {
-  AllocationResult result;
-  for (Eigen::Index i = 0; i < commands.size(); ++i) {
-    if (commands[i] >= range.upper - kSaturationTolerance) {
-      result.saturated_upper |= MotorMask{1} << i;
+  return detail::with_motor_count(commands.size(), [&](auto size) {
+    constexpr int N = decltype(size)::value;
+    const Eigen::Index n = commands.size();
+    const detail::ConstMotorsView<N> u(commands.data(), n);
+    const detail::ConstEffectivenessView<N> e(effectiveness.data(), kNumAxes, n);
+    AllocationResult result;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      result.saturated_upper |= static_cast<MotorMask>(u[i] >= range.upper - kSaturationTolerance)
+                                << i;
+      result.saturated_lower |= static_cast<MotorMask>(u[i] <= range.lower + kSaturationTolerance)
+                                << i;
     }
-    if (commands[i] <= range.lower + kSaturationTolerance) {
-      result.saturated_lower |= MotorMask{1} << i;
+    result.unallocated.noalias() = target - e * u;
+    for (int a = 0; a < kNumAxes; ++a) {
+      if (!((controlled >> a) & 1U)) result.unallocated[a] = 0.0;
+      if (std::abs(result.unallocated[a]) > kDeliveredTolerance) {
+        result.axis_limited |= static_cast<std::uint8_t>(1U << a);
+      }
     }
-  }
-  const AxisVector produced = effectiveness * commands;
-  result.unallocated = target - produced;
-  for (int a = 0; a < kNumAxes; ++a) {
-    if (!((controlled >> a) & 1U)) result.unallocated[a] = 0.0;
-    if (std::abs(result.unallocated[a]) > kDeliveredTolerance) {
-      result.axis_limited |= static_cast<std::uint8_t>(1U << a);
-    }
-  }
-  return result;
+    return result;
+  });
 }
 
 ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, CommandRange range) {
@@ -61,7 +66,13 @@ MatrixAllocator::MatrixAllocator(const MixingBasis& basis, CommandRange range)
       controlled_(basis.controlled) {}
 
 void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands) const {
-  commands.noalias() = mixing_ * demand;
+  const Eigen::Index n = mixing_.rows();
+  commands.resize(n);
+  detail::with_motor_count(n, [&](auto size) {
+    constexpr int N = decltype(size)::value;
+    detail::MotorsView<N>(commands.data(), n).noalias() =
+        detail::ConstMixingView<N>(mixing_.data(), n, kNumAxes) * demand;
+  });
 }
 
 AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& commands) const {

@@ -1,6 +1,6 @@
 #include <motormix/optimal_allocator.hpp>
 
-#include <Eigen/QR>
+#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cmath>
@@ -8,11 +8,6 @@
 namespace motormix {
 
 namespace {
-
-constexpr int kRowsMax = kNumAxes + kMaxMotors;
-using StackedMatrix =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kRowsMax, kMaxMotors>;
-using StackedVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kRowsMax, 1>;
 
 // Attitude error weight against the tie-break term.
 constexpr double kGamma = 1e6;
@@ -25,7 +20,10 @@ enum : signed char { kFree = 0, kAtLower = -1, kAtUpper = 1 };
 
 OptimalAllocator::OptimalAllocator(const MixingBasis& basis, CommandRange range,
                                    OptimalSettings settings)
-    : MatrixAllocator(basis, range), settings_(settings) {}
+    : MatrixAllocator(basis, range), settings_(settings) {
+  weighted_ = effectiveness_;
+  for (int r = 0; r < kNumAxes; ++r) weighted_.row(r) *= settings_.weights[r];
+}
 
 double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector& weights,
                       const AxisVector& demand, const MotorVector& commands) {
@@ -35,22 +33,12 @@ double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector
 
 AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index n = mixing_.rows();
-  const double sqrt_gamma = std::sqrt(kGamma);
-
-  // Stacked least squares: A u ~ b with A = [sqrt(g) W E; I], b = [sqrt(g) W d; u_p].
-  MotorVector preferred = mixing_ * demand;
+  // Preferred commands: the plain linear mix clipped to the limits.
+  mix_linear(demand, commands);
+  MotorVector preferred(n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    preferred[i] = std::clamp(preferred[i], range_.lower, range_.upper);
+    preferred[i] = std::clamp(commands[i], range_.lower, range_.upper);
   }
-  StackedMatrix a(kNumAxes + n, n);
-  StackedVector b(kNumAxes + n);
-  for (int r = 0; r < kNumAxes; ++r) {
-    a.row(r) = sqrt_gamma * settings_.weights[r] * effectiveness_.row(r);
-    b[r] = sqrt_gamma * settings_.weights[r] * demand[r];
-  }
-  a.bottomRows(n).setIdentity();
-  b.tail(n) = preferred;
-
   // Start feasible: the clipped linear mix, with motors on a limit active.
   commands = preferred;
   Eigen::Matrix<signed char, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxMotors, 1> active(n);
@@ -59,26 +47,38 @@ AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVecto
                 : commands[i] >= range_.upper ? kAtUpper
                                               : kFree;
   }
-  StackedVector residual = b - a * commands;
+  // The cost is gamma |e|^2 + |q|^2 with e = W (d - E u) and q = u_p - u.
+  // Both residuals are kept up to date as u moves.
+  AxisVector e = settings_.weights.cwiseProduct(demand) - weighted_ * commands;
+  MotorVector q = MotorVector::Zero(n);
 
-  StackedMatrix a_free;
-  MotorVector step_free;
-  MotorVector step(n);
   Eigen::Matrix<int, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxMotors, 1> free_index(n);
-  Eigen::ColPivHouseholderQR<StackedMatrix> qr(kNumAxes + n, n);
-
-  for (int iteration = 0; iteration < settings_.max_iterations; ++iteration) {
+  MotorVector step(n);
+  MotorVector g(n);  // gamma B^T e + q: the descent direction of the cost, per motor
+  int iteration = 0;
+  for (; iteration < settings_.max_iterations; ++iteration) {
+    // Newton step on the free motors: (I + gamma B_f^T B_f) s_f = gamma B_f^T e + q_f
+    // (B = W E), solved through its 4 x 4 dual (Woodbury) in the form that
+    // never multiplies by gamma:
+    //   s_f = q_f + B_f^T z,   (B_f B_f^T + I / gamma) z = e - B_f q_f,
+    // so an iteration costs the same small solve for any motor count.
+    Eigen::Matrix4d dual = Eigen::Matrix4d::Identity() / kGamma;
+    AxisVector rhs = e;
     Eigen::Index nf = 0;
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (active[i] == kFree) free_index[nf++] = static_cast<int>(i);
+      if (active[i] != kFree) continue;
+      free_index[nf++] = static_cast<int>(i);
+      const auto b = weighted_.col(i);
+      dual.noalias() += b * b.transpose();
+      rhs -= b * q[i];
     }
     step.setZero();
     if (nf > 0) {
-      a_free.resize(kNumAxes + n, nf);
-      for (Eigen::Index j = 0; j < nf; ++j) a_free.col(j) = a.col(free_index[j]);
-      qr.compute(a_free);
-      step_free = qr.solve(residual);
-      for (Eigen::Index j = 0; j < nf; ++j) step[free_index[j]] = step_free[j];
+      const AxisVector z = dual.ldlt().solve(rhs);
+      for (Eigen::Index j = 0; j < nf; ++j) {
+        const Eigen::Index i = free_index[j];
+        step[i] = q[i] + weighted_.col(i).dot(z);
+      }
     }
     // Largest fraction of the step that keeps every free motor in range.
     double alpha = 1.0;
@@ -95,27 +95,34 @@ AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVecto
       }
     }
     commands += alpha * step;
-    residual -= alpha * (a * step);
+    e.noalias() -= alpha * (weighted_ * step);
+    q -= alpha * step;
     if (blocking >= 0) {
       active[blocking] = step[blocking] > 0.0 ? kAtUpper : kAtLower;
-      commands[blocking] = active[blocking] == kAtUpper ? range_.upper : range_.lower;
+      const double limit = active[blocking] == kAtUpper ? range_.upper : range_.lower;
+      q[blocking] += commands[blocking] - limit;
+      e += weighted_.col(blocking) * (commands[blocking] - limit);
+      commands[blocking] = limit;
       continue;
     }
     // Full step taken: optimal on this working set. Release the constraint
     // whose multiplier says the error would drop by leaving it, if any.
-    const MotorVector gradient = a.transpose() * residual;  // descent direction per motor
+    g.noalias() = kGamma * (weighted_.transpose() * e);
+    g += q;  // descent direction per motor
     Eigen::Index release = -1;
     double most_negative = -kMultiplierTolerance;
     for (Eigen::Index i = 0; i < n; ++i) {
       if (active[i] == kFree) continue;
-      // At the upper limit the error would drop by moving down: gradient < 0.
-      const double multiplier = active[i] == kAtUpper ? gradient[i] : -gradient[i];
+      // At the upper limit the error would drop by moving down: g < 0.
+      const double multiplier = active[i] == kAtUpper ? g[i] : -g[i];
       if (multiplier < most_negative) most_negative = multiplier, release = i;
     }
     if (release < 0) break;
     active[release] = kFree;
   }
-  return finish(demand, commands);
+  AllocationResult result = finish(demand, commands);
+  result.iterations = static_cast<std::uint16_t>(std::min(iteration + 1, settings_.max_iterations));
+  return result;
 }
 
 }  // namespace motormix

@@ -5,16 +5,19 @@
 // loops keep their rate within a stated bound, and the CPU of each process is
 // reported.
 
-#include "integration/bus_recorder.hpp"
 #include "integration/process.hpp"
 #include "test_support.hpp"
 
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
 
 #include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
 
 #include <unistd.h>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -33,9 +36,14 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kVehicles = 20;
 constexpr auto kFlight = 8s;
-// Stated bound: every loop delivers at least this share of its cycles while
-// twenty of them, their publishers and this recorder share two cores.
-constexpr double kMinDeliveredShare = 0.85;
+// Stated bounds, while twenty mixers, their twenty publishers and this
+// recorder share two cores, and every one of those processes receives all
+// of the bus's traffic (multicast): each loop runs at least this share of its
+// cycles (its own count, from its status)...
+constexpr double kMinCycleShare = 0.85;
+// ...and at least this share of its outputs reaches this recorder through a
+// saturated machine (seen: 82-97 % on the CI machine, where the loops ran 96-99 %).
+constexpr double kMinDeliveredShare = 0.70;
 
 std::int64_t wall_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -58,13 +66,78 @@ double cpu_seconds(::pid_t pid) {
 
 std::string channel(const char* kind, int v) { return std::string(kind) + "_" + std::to_string(v); }
 
+// Every vehicle's outputs through one LCM instance on one thread. (One
+// recorder per vehicle would make this process receive all of the bus's
+// traffic twenty times over, and measure its own receive capacity instead of
+// the mixers' loops.) Checks each output as it arrives: it must name its own
+// vehicle's inputs and stay in range.
+class FleetRecorder {
+ public:
+  FleetRecorder() {
+    lcm_.subscribe("PWM_[0-9]+", &FleetRecorder::on_pwm, this)->setQueueCapacity(1000000);
+    lcm_.subscribe("STATUS_[0-9]+", &FleetRecorder::on_status, this)->setQueueCapacity(100000);
+    thread_ = std::thread([this] {
+      while (!stop_) lcm_.handleTimeout(20);
+    });
+  }
+  ~FleetRecorder() {
+    stop_ = true;
+    thread_.join();
+  }
+  FleetRecorder(const FleetRecorder&) = delete;
+  FleetRecorder& operator=(const FleetRecorder&) = delete;
+
+  struct Vehicle {
+    std::atomic<long> outputs{0};
+    std::atomic<long> armed{0};
+    std::atomic<long> cross_talk{0};
+    std::atomic<long> out_of_range{0};
+    std::atomic<long> undecodable{0};
+    std::atomic<long> cycles{0};  // the mixer's own cycle count, from its latest status
+  };
+  Vehicle& operator[](int v) { return vehicles_[static_cast<std::size_t>(v)]; }
+
+ private:
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+    const int v = std::atoi(ch.c_str() + 7);
+    if (v < 0 || v >= kVehicles) return;
+    mixer_status_t m{};
+    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0) {
+      vehicles_[static_cast<std::size_t>(v)].cycles = m.cycles;
+    }
+  }
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+    const int v = std::atoi(ch.c_str() + 4);
+    if (v < 0 || v >= kVehicles) return;
+    Vehicle& vehicle = vehicles_[static_cast<std::size_t>(v)];
+    motor_pwm_t m{};
+    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) <= 0) {
+      ++vehicle.undecodable;
+      return;
+    }
+    ++vehicle.outputs;
+    vehicle.armed += m.armed ? 1 : 0;
+    if ((m.setpoint_utime != 0 && m.setpoint_utime % 1000 != v) ||
+        (m.pid_utime != 0 && m.pid_utime % 1000 != v)) {
+      ++vehicle.cross_talk;
+    }
+    for (float p : m.pwm) {
+      if (!(m.armed ? p >= 1150.0F && p <= 1924.0F : p == 1000.0F)) ++vehicle.out_of_range;
+    }
+  }
+
+  lcm::LCM lcm_;
+  std::array<Vehicle, kVehicles> vehicles_{};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   const char* flag = std::getenv("MOTORMIX_PRIVATE_BUS");
   ASSERT_TRUE(flag && std::string(flag) == "1") << "run through scripts/private-bus";
-  std::vector<std::unique_ptr<BusRecorder>> buses;
+  FleetRecorder fleet;
   std::vector<std::unique_ptr<ChildProcess>> mixers;
   for (int v = 0; v < kVehicles; ++v) {
-    buses.push_back(std::make_unique<BusRecorder>(channel("PWM", v), channel("STATUS", v)));
     mixers.push_back(std::make_unique<ChildProcess>(std::vector<std::string>{
         MOTORMIX_BINARY, "run", "--config", source_path("config/team_quad.yaml"), "--set",
         "channels.setpoint=" + channel("SETPOINT", v), "--set", "channels.pid=" + channel("PID", v),
@@ -77,8 +150,9 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
         "--set", "inputs.setpoint_timeout_ms=500", "--set", "inputs.pid_timeout_ms=500"}));
   }
   for (int v = 0; v < kVehicles; ++v) {
-    ASSERT_TRUE(buses[v]->wait_until([](const auto& p, const auto&) { return !p.empty(); }, 20s))
-        << "vehicle " << v << " never published";
+    const auto deadline = Clock::now() + 20s;
+    while (fleet[v].outputs == 0 && Clock::now() < deadline) std::this_thread::sleep_for(10ms);
+    ASSERT_GT(fleet[v].outputs, 0) << "vehicle " << v << " never published";
   }
 
   // One publisher per vehicle at 400 Hz: utimes = k * 1000 + vehicle, so any
@@ -110,10 +184,14 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   }
 
   std::this_thread::sleep_for(1s);  // armed and flying
-  std::vector<std::size_t> count0;
+  std::vector<long> count0;
+  std::vector<long> cycles0;
+  std::vector<long> armed0;
   std::vector<double> cpu0;
   for (int v = 0; v < kVehicles; ++v) {
-    count0.push_back(buses[v]->pwm_count());
+    count0.push_back(fleet[v].outputs);
+    cycles0.push_back(fleet[v].cycles);
+    armed0.push_back(fleet[v].armed);
     cpu0.push_back(cpu_seconds(mixers[v]->pid()));
   }
   const auto t0 = Clock::now();
@@ -121,9 +199,11 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   std::vector<double> cpu_share;
   std::vector<double> delivered;
+  std::vector<double> cycled;
   for (int v = 0; v < kVehicles; ++v) {
     cpu_share.push_back((cpu_seconds(mixers[v]->pid()) - cpu0[v]) / seconds);
-    delivered.push_back(static_cast<double>(buses[v]->pwm_count() - count0[v]) / (400.0 * seconds));
+    delivered.push_back(static_cast<double>(fleet[v].outputs - count0[v]) / (400.0 * seconds));
+    cycled.push_back(static_cast<double>(fleet[v].cycles - cycles0[v]) / (400.0 * seconds));
   }
   stop = true;
   for (auto& t : pilots) t.join();
@@ -132,23 +212,16 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   for (int v = 0; v < kVehicles; ++v) {
     SCOPED_TRACE("vehicle " + std::to_string(v));
     cpu_total += cpu_share[v];
-    std::printf("vehicle %2d: %.1f %% of its cycles delivered, CPU %.2f %% of a core\n", v,
-                100.0 * delivered[v], 100.0 * cpu_share[v]);
+    std::printf("vehicle %2d: %.1f %% of its cycles run, %.1f %% of its outputs received, CPU %.2f %% of a core\n",
+                v, 100.0 * cycled[v], 100.0 * delivered[v], 100.0 * cpu_share[v]);
+    EXPECT_GE(cycled[v], kMinCycleShare);
+    EXPECT_LE(cycled[v], 1.05);
     EXPECT_GE(delivered[v], kMinDeliveredShare);
     EXPECT_LE(delivered[v], 1.05);
-    int armed = 0;
-    for (const auto& m : buses[v]->pwm()) {
-      if (m.setpoint_utime != 0) {
-        ASSERT_EQ(m.setpoint_utime % 1000, v) << "cross-talk on setpoint";
-      }
-      if (m.pid_utime != 0) {
-        ASSERT_EQ(m.pid_utime % 1000, v) << "cross-talk on pid";
-      }
-      for (float p : m.pwm) ASSERT_TRUE(m.armed ? p >= 1150.0F && p <= 1924.0F : p == 1000.0F);
-      armed += m.armed;
-    }
-    EXPECT_GT(armed, 400 * 4);
-    EXPECT_EQ(buses[v]->undecodable(), 0);
+    EXPECT_EQ(fleet[v].cross_talk, 0) << "outputs computed from another vehicle's inputs";
+    EXPECT_EQ(fleet[v].out_of_range, 0);
+    EXPECT_GT(fleet[v].armed - armed0[v], 400 * 4) << "armed outputs during the flight window";
+    EXPECT_EQ(fleet[v].undecodable, 0);
   }
   std::printf("20 mixers at 400 Hz: %.1f %% of one core in all (%.2f %% each on average)\n",
               100.0 * cpu_total, 100.0 * cpu_total / kVehicles);

@@ -1,0 +1,39 @@
+#pragma once
+// Motor counts the per-cycle kernels are compiled for. Matrices keep a
+// dynamic size with a fixed capacity (so one type serves 1..16 motors), but
+// their storage is contiguous, so a kernel can view it at a size known at
+// compile time: the products unroll and vectorize like a bare fixed-size
+// product. Quads, hexas and octos, the vehicles flown most, get their own
+// instantiation; any other count runs the same code at dynamic size.
+
+#include <Eigen/Core>
+
+#include <type_traits>
+
+namespace motormix::detail {
+
+template <typename Kernel>
+decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel) {
+  switch (motors) {
+    case 4:
+      return kernel(std::integral_constant<int, 4>{});
+    case 6:
+      return kernel(std::integral_constant<int, 6>{});
+    case 8:
+      return kernel(std::integral_constant<int, 8>{});
+    default:
+      return kernel(std::integral_constant<int, Eigen::Dynamic>{});
+  }
+}
+
+// Views of the contiguous storage at N motors (Eigen::Dynamic: `motors`).
+template <int N>
+using MotorsView = Eigen::Map<Eigen::Matrix<double, N, 1>>;
+template <int N>
+using ConstMotorsView = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
+template <int N>
+using ConstMixingView = Eigen::Map<const Eigen::Matrix<double, N, 4, Eigen::RowMajor>>;
+template <int N>
+using ConstEffectivenessView = Eigen::Map<const Eigen::Matrix<double, 4, N>>;
+
+}  // namespace motormix::detail
