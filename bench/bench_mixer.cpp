@@ -78,19 +78,20 @@ void BM_Allocate(benchmark::State& state, const char* preset, const char* mixer)
 }
 #define MOTORMIX_ALLOCATE_BENCH(preset, label, mixer) \
   BENCHMARK_CAPTURE(BM_Allocate, preset##_##label, #preset, mixer)
-#define MOTORMIX_ALLOCATE_PRESET(preset)                                                         \
-  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_off,                                               \
-                          "{strategy: prioritized, prioritized: {airmode: off}}");               \
-  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_rp,                                                \
-                          "{strategy: prioritized, prioritized: {airmode: roll_pitch}}");        \
-  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_rpy,                                               \
-                          "{strategy: prioritized, prioritized: {airmode: roll_pitch_yaw}}");    \
-  MOTORMIX_ALLOCATE_BENCH(preset, clip, "{strategy: clip}");                                     \
-  MOTORMIX_ALLOCATE_BENCH(preset, shift, "{strategy: shift}");                                   \
+#define MOTORMIX_ALLOCATE_PRESET(preset)                                                      \
+  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_off,                                            \
+                          "{strategy: prioritized, prioritized: {airmode: off}}");            \
+  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_rp,                                             \
+                          "{strategy: prioritized, prioritized: {airmode: roll_pitch}}");     \
+  MOTORMIX_ALLOCATE_BENCH(preset, prioritized_rpy,                                            \
+                          "{strategy: prioritized, prioritized: {airmode: roll_pitch_yaw}}"); \
+  MOTORMIX_ALLOCATE_BENCH(preset, clip, "{strategy: clip}");                                  \
+  MOTORMIX_ALLOCATE_BENCH(preset, shift, "{strategy: shift}");                                \
   MOTORMIX_ALLOCATE_BENCH(preset, optimal, "{strategy: optimal}")
 // The PX4-style baseline (test/reference, float as PX4 runs it, clip and
 // allocated-control report included) on the same matrix and demands.
-void BM_Px4Baseline(benchmark::State& state, const char* preset, motormix::reference::Px4Airmode mode) {
+void BM_Px4Baseline(benchmark::State& state, const char* preset,
+                    motormix::reference::Px4Airmode mode) {
   const auto config = motormix::config::load_config_text(
       std::string("geometry: {preset: ") + preset + ", normalization: px4}\n", "bench");
   motormix::reference::Px4SequentialDesaturation px4(config.mixing, mode);
@@ -105,12 +106,12 @@ void BM_Px4Baseline(benchmark::State& state, const char* preset, motormix::refer
     benchmark::DoNotOptimize(px4.allocated().data());
   }
 }
-#define MOTORMIX_PX4_PRESET(preset)                                                       \
-  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_off, #preset,                                \
-                    motormix::reference::Px4Airmode::kDisabled);                          \
-  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rp, #preset,                                 \
-                    motormix::reference::Px4Airmode::kRollPitch);                         \
-  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rpy, #preset,                                \
+#define MOTORMIX_PX4_PRESET(preset)                               \
+  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_off, #preset,        \
+                    motormix::reference::Px4Airmode::kDisabled);  \
+  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rp, #preset,         \
+                    motormix::reference::Px4Airmode::kRollPitch); \
+  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rpy, #preset,        \
                     motormix::reference::Px4Airmode::kRollPitchYaw)
 // The floor: a bare fixed-size matrix-vector product of the same size
 // (motors x 4 times 4), what a mixer without limits or report would cost.

@@ -62,10 +62,12 @@ int main(int argc, char** argv) {
     const auto t1 = Clock::now();
     e = std::chrono::duration<double, std::nano>(t1 - t0).count();
   }
-  std::printf("Timer overhead (two steady_clock reads, included in every figure below): p50 %.0f ns, "
-              "p99.9 %.0f ns\n\n",
-              percentile(empty, 0.5), percentile(empty, 0.999));
-  std::printf("| vehicle | strategy | p50 ns | p99 ns | p99.9 ns | max ns | iterations (optimal) |\n");
+  std::printf(
+      "Timer overhead (two steady_clock reads, included in every figure below): p50 %.0f ns, "
+      "p99.9 %.0f ns\n\n",
+      percentile(empty, 0.5), percentile(empty, 0.999));
+  std::printf(
+      "| vehicle | strategy | p50 ns | p99 ns | p99.9 ns | max ns | iterations (optimal) |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   const std::vector<std::pair<std::string, std::string>> vehicles = {
       {"quad_x", "geometry: {preset: quad_x, normalization: px4}\n"},
@@ -84,7 +86,8 @@ int main(int argc, char** argv) {
       std::map<int, long> iterations;
       for (long k = 0; k < calls; ++k) {
         const auto t0 = Clock::now();
-        const motormix::AllocationResult r = allocator.allocate(demands[static_cast<std::size_t>(k)], u);
+        const motormix::AllocationResult r =
+            allocator.allocate(demands[static_cast<std::size_t>(k)], u);
         const auto t1 = Clock::now();
         ns[static_cast<std::size_t>(k)] = std::chrono::duration<double, std::nano>(t1 - t0).count();
         ++iterations[r.iterations];
@@ -102,8 +105,8 @@ int main(int argc, char** argv) {
       const double p99 = percentile(ns, 0.99);
       const double p999 = percentile(ns, 0.999);
       const double max = *std::max_element(ns.begin(), ns.end());
-      std::printf("| %s | %s | %.0f | %.0f | %.0f | %.0f | %s |\n", name.c_str(), strategy, p50, p99,
-                  p999, max, hist.c_str());
+      std::printf("| %s | %s | %.0f | %.0f | %.0f | %.0f | %s |\n", name.c_str(), strategy, p50,
+                  p99, p999, max, hist.c_str());
     }
   }
   return 0;

@@ -89,10 +89,14 @@ int main(int argc, char** argv) {
                        static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) / 1e6;
   std::sort(periods.begin(), periods.end());
   const auto at = [&](double p) {
-    return periods.empty() ? 0.0 : periods[static_cast<std::size_t>(p * static_cast<double>(periods.size() - 1))];
+    return periods.empty()
+               ? 0.0
+               : periods[static_cast<std::size_t>(p * static_cast<double>(periods.size() - 1))];
   };
-  std::printf("raw_loop rate %.0f Hz cycles %ld cpu_s %.3f period_us p50 %.1f p99 %.1f max %.1f overruns %ld\n",
-              rate, cycles, cpu_s, at(0.5), at(0.99), periods.empty() ? 0.0 : periods.back(), overruns);
+  std::printf(
+      "raw_loop rate %.0f Hz cycles %ld cpu_s %.3f period_us p50 %.1f p99 %.1f max %.1f overruns "
+      "%ld\n",
+      rate, cycles, cpu_s, at(0.5), at(0.99), periods.empty() ? 0.0 : periods.back(), overruns);
   close(timer);
   return 0;
 }

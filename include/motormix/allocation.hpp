@@ -72,6 +72,8 @@ class MatrixAllocator : public Allocator {
   void mix_linear(const AxisVector& demand, MotorVector& commands) const;
   // Clamps into the range and reports against `target`.
   AllocationResult finish(const AxisVector& target, MotorVector& commands) const;
+  // mix_linear() then finish(), in one pass at the motor count's fixed size.
+  AllocationResult mix_and_clip(const AxisVector& demand, MotorVector& commands) const;
 
   MixingMatrix mixing_;
   EffectivenessMatrix effectiveness_;

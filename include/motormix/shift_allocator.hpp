@@ -20,6 +20,7 @@ class ShiftAllocator final : public MatrixAllocator {
 
  private:
   MotorVector direction_;  // shift direction: the thrust column scaled to max 1 (or all ones)
+  MotorVector inverse_direction_;  // 1 / direction where it is positive, else 0
 };
 
 }  // namespace motormix

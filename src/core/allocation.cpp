@@ -1,6 +1,7 @@
 #include <motormix/allocation.hpp>
 
 #include "fixed_size.hpp"
+#include "report_kernel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,34 +9,12 @@
 
 namespace motormix {
 
-namespace {
-// A command within this distance of a limit counts as sitting on it.
-constexpr double kSaturationTolerance = 1e-9;
-}  // namespace
-
 AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
                                      CommandRange range, AxisMask controlled) {
   return detail::with_motor_count(commands.size(), [&](auto size) {
-    constexpr int N = decltype(size)::value;
-    const Eigen::Index n = commands.size();
-    const detail::ConstMotorsView<N> u(commands.data(), n);
-    const detail::ConstEffectivenessView<N> e(effectiveness.data(), kNumAxes, n);
-    AllocationResult result;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      result.saturated_upper |= static_cast<MotorMask>(u[i] >= range.upper - kSaturationTolerance)
-                                << i;
-      result.saturated_lower |= static_cast<MotorMask>(u[i] <= range.lower + kSaturationTolerance)
-                                << i;
-    }
-    result.unallocated.noalias() = target - e * u;
-    for (int a = 0; a < kNumAxes; ++a) {
-      if (!((controlled >> a) & 1U)) result.unallocated[a] = 0.0;
-      if (std::abs(result.unallocated[a]) > kDeliveredTolerance) {
-        result.axis_limited |= static_cast<std::uint8_t>(1U << a);
-      }
-    }
-    return result;
+    return detail::describe_fixed<decltype(size)::value>(effectiveness, target, commands.data(),
+                                                         commands.size(), range, controlled);
   });
 }
 
@@ -76,12 +55,33 @@ void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands
 }
 
 AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& commands) const {
-  for (Eigen::Index i = 0; i < commands.size(); ++i) {
+  const Eigen::Index n = commands.size();
+  return detail::with_motor_count(n, [&](auto size) {
+    constexpr int N = decltype(size)::value;
+    detail::MotorsView<N> u(commands.data(), n);
     // NaN cannot come from finite inputs; if it ever did, the safe end.
-    commands[i] = std::isnan(commands[i]) ? range_.lower
-                                          : std::clamp(commands[i], range_.lower, range_.upper);
-  }
-  return describe_allocation(effectiveness_, target, commands, range_, controlled_);
+    for (Eigen::Index i = 0; i < detail::count<N>(n); ++i) {
+      u[i] = std::isnan(u[i]) ? range_.lower : std::clamp(u[i], range_.lower, range_.upper);
+    }
+    return detail::describe_fixed<N>(effectiveness_, target, commands.data(), n, range_,
+                                     controlled_);
+  });
+}
+
+AllocationResult MatrixAllocator::mix_and_clip(const AxisVector& demand,
+                                               MotorVector& commands) const {
+  const Eigen::Index n = mixing_.rows();
+  commands.resize(n);
+  const CommandRange range = range_;
+  return detail::with_motor_count(n, [&](auto size) {
+    constexpr int N = decltype(size)::value;
+    detail::LocalMotors<N> u(n);
+    u.noalias() = detail::ConstMixingView<N>(mixing_.data(), n, kNumAxes) * demand;
+    // Finite demand and matrix give finite commands: a plain clamp.
+    u = u.cwiseMax(range.lower).cwiseMin(range.upper);
+    detail::MotorsView<N>(commands.data(), n) = u;
+    return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
+  });
 }
 
 }  // namespace motormix

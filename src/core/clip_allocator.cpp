@@ -3,8 +3,7 @@
 namespace motormix {
 
 AllocationResult ClipAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
-  mix_linear(demand, commands);
-  return finish(demand, commands);
+  return mix_and_clip(demand, commands);
 }
 
 }  // namespace motormix

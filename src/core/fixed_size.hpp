@@ -26,6 +26,19 @@ decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel) {
   }
 }
 
+// A per-motor vector held locally (in registers where it fits) at N motors.
+// Kernels compute into one of these and store the result once: writing
+// element by element through a view and reading it back as packets would
+// stall on store forwarding.
+template <int N>
+using LocalMotors = Eigen::Matrix<double, N, 1, Eigen::ColMajor, N == Eigen::Dynamic ? 16 : N, 1>;
+
+// The loop bound at N motors: a constant the compiler unrolls when N is fixed.
+template <int N>
+constexpr Eigen::Index count(Eigen::Index motors) {
+  return N == Eigen::Dynamic ? motors : N;
+}
+
 // Views of the contiguous storage at N motors (Eigen::Dynamic: `motors`).
 template <int N>
 using MotorsView = Eigen::Map<Eigen::Matrix<double, N, 1>>;

@@ -212,8 +212,10 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   for (int v = 0; v < kVehicles; ++v) {
     SCOPED_TRACE("vehicle " + std::to_string(v));
     cpu_total += cpu_share[v];
-    std::printf("vehicle %2d: %.1f %% of its cycles run, %.1f %% of its outputs received, CPU %.2f %% of a core\n",
-                v, 100.0 * cycled[v], 100.0 * delivered[v], 100.0 * cpu_share[v]);
+    std::printf(
+        "vehicle %2d: %.1f %% of its cycles run, %.1f %% of its outputs received, CPU %.2f %% of a "
+        "core\n",
+        v, 100.0 * cycled[v], 100.0 * delivered[v], 100.0 * cpu_share[v]);
     EXPECT_GE(cycled[v], kMinCycleShare);
     EXPECT_LE(cycled[v], 1.05);
     EXPECT_GE(delivered[v], kMinDeliveredShare);
