@@ -42,12 +42,20 @@ std::uint64_t LogReader::skipped_bytes() const {
 bool LogReader::read_at(std::uint64_t offset, LogEventView& ev) {
   if (offset + kHeaderSize > size_) return false;
   std::array<std::uint8_t, kHeaderSize> h{};
-  // Events are read in order: seek only after damage (a seek drops stdio's buffer).
-  const bool there = std::ftell(file_) == static_cast<long>(offset);
-  if ((!there && std::fseek(file_, static_cast<long>(offset), SEEK_SET) != 0) ||
-      std::fread(h.data(), 1, h.size(), file_) != h.size()) {
+  // Events are read in order: seek only after damage (a seek drops stdio's
+  // buffer). The position is tracked here: ftell() is a system call.
+  if (stream_at_ != offset) {
+    if (std::fseek(file_, static_cast<long>(offset), SEEK_SET) != 0) {
+      stream_at_ = kUnknownPosition;
+      return false;
+    }
+    stream_at_ = offset;
+  }
+  if (std::fread(h.data(), 1, h.size(), file_) != h.size()) {
+    stream_at_ = kUnknownPosition;
     return false;
   }
+  stream_at_ += h.size();
   if (big_endian(h.data(), 4) != kSyncWord) return false;
   const auto channel_len = static_cast<std::int32_t>(big_endian(h.data() + 20, 4));
   const auto data_len = static_cast<std::int32_t>(big_endian(h.data() + 24, 4));
@@ -62,8 +70,10 @@ bool LogReader::read_at(std::uint64_t offset, LogEventView& ev) {
   ev.data.resize(static_cast<std::size_t>(data_len));
   if (std::fread(ev.channel.data(), 1, ev.channel.size(), file_) != ev.channel.size() ||
       std::fread(ev.data.data(), 1, ev.data.size(), file_) != ev.data.size()) {
+    stream_at_ = kUnknownPosition;
     return false;
   }
+  stream_at_ += ev.channel.size() + ev.data.size();
   // Channel names are printable: a "header" found inside message data rarely is.
   if (!std::all_of(ev.channel.begin(), ev.channel.end(),
                    [](char c) { return c > ' ' && c < 0x7f; })) {
@@ -87,8 +97,12 @@ bool LogReader::fill(LogEventView& ev) {
   for (std::uint64_t base = damage + 1; base < size_; base += kScanChunk) {
     const std::size_t want =
         static_cast<std::size_t>(std::min<std::uint64_t>(kScanChunk + 3, size_ - base));
-    if (std::fseek(file_, static_cast<long>(base), SEEK_SET) != 0) break;
+    if (std::fseek(file_, static_cast<long>(base), SEEK_SET) != 0) {
+      stream_at_ = kUnknownPosition;
+      break;
+    }
     const std::size_t got = std::fread(chunk.data(), 1, want, file_);
+    stream_at_ = got == want ? base + got : kUnknownPosition;
     for (std::size_t i = 0; i + 4 <= got; ++i) {
       if (big_endian(chunk.data() + i, 4) != kSyncWord) continue;
       if (read_at(base + i, ev)) {

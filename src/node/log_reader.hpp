@@ -62,6 +62,9 @@ class LogReader {
 
   std::FILE* file_ = nullptr;
   std::uint64_t size_ = 0;
+  // Where the stdio stream stands (kUnknownPosition after a failed read).
+  static constexpr std::uint64_t kUnknownPosition = ~std::uint64_t{0};
+  std::uint64_t stream_at_ = 0;
   std::uint64_t position_ = 0;  // where the next event is expected
   LogEventView current_;
   LogEventView lookahead_;
