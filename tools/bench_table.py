@@ -11,6 +11,28 @@ MOTORS = {"quad_x": 4, "hexa_x": 6, "octo_x": 8}
 PX4_MODE = {"prioritized_off": "off", "prioritized_rp": "rp", "prioritized_rpy": "rpy"}
 
 
+def scaling(median):
+    """Allocation step against motor count (BM_Scaling/<strategy>/<n>) next to the bare product."""
+    rows = {}
+    for name, t in median.items():
+        if name.startswith("BM_Scaling/"):
+            _, strategy, n = name.split("/")
+            rows.setdefault(strategy, {})[int(n)] = t
+    if not rows:
+        return
+    counts = sorted({n for r in rows.values() for n in r})
+    print()
+    print("### Scaling with the motor count (a ring of rotors, alternating spin; ns per call)")
+    print()
+    print("| strategy | " + " | ".join(f"{n} motors" for n in counts) + " |")
+    print("|---|" + "---|" * len(counts))
+    for strategy in ("clip", "shift", "prioritized", "optimal"):
+        if strategy in rows:
+            print(f"| {strategy} | " + " | ".join(f"{rows[strategy].get(n, float('nan')):.1f}" for n in counts) + " |")
+    bare = [median.get(f"BM_BareProduct<{n}>") for n in counts]
+    print("| bare product | " + " | ".join("-" if b is None else f"{b:.1f}" for b in bare) + " |")
+
+
 def main():
     data = json.load(open(sys.argv[1]))
     median = {}
@@ -31,6 +53,7 @@ def main():
                      f"{bare:.1f}" if bare else "-", f"{t / bare:.1f}x" if bare else "-",
                      f"{px4:.1f}" if px4 else "-", f"{t / px4:.2f}x" if px4 else "-"]
             print("| " + " | ".join(cells) + " |")
+    scaling(median)
 
 
 if __name__ == "__main__":
