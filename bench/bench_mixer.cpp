@@ -58,9 +58,8 @@ BENCHMARK_CAPTURE(BM_Octo, optimal, "optimal");
 // The allocation step alone, as the prioritized strategy's cost is compared
 // with other stacks': saturating demands in every axis (roll, pitch, yaw in
 // -1..1, thrust 0..1) on the normalized matrix of PX4's normalization.
-void allocate_loop(benchmark::State& state, const std::string& preset, const std::string& mixer) {
-  const auto config = motormix::config::load_config_text(
-      "geometry: {preset: " + preset + ", normalization: px4}\nmixer: " + mixer + "\n", "bench");
+void allocate_yaml(benchmark::State& state, const std::string& yaml) {
+  const auto config = motormix::config::load_config_text(yaml, "bench");
   const motormix::Mixer built = motormix::config::build_mixer(config);
   const motormix::Allocator& allocator = built.allocator();
   const auto inputs = demands();
@@ -74,7 +73,8 @@ void allocate_loop(benchmark::State& state, const std::string& preset, const std
 }
 
 void BM_Allocate(benchmark::State& state, const char* preset, const char* mixer) {
-  allocate_loop(state, preset, mixer);
+  allocate_yaml(state, "geometry: {preset: " + std::string(preset) +
+                           ", normalization: px4}\nmixer: " + mixer + "\n");
 }
 #define MOTORMIX_ALLOCATE_BENCH(preset, label, mixer) \
   BENCHMARK_CAPTURE(BM_Allocate, preset##_##label, #preset, mixer)
@@ -150,19 +150,8 @@ std::string ring_yaml(int n) {
   return y;
 }
 
-void BM_Scaling(benchmark::State& state, std::string strategy, int motors) {
-  const auto config = motormix::config::load_config_text(
-      ring_yaml(motors) + "mixer: {strategy: " + strategy + "}\n", "bench");
-  const motormix::Mixer built = motormix::config::build_mixer(config);
-  const motormix::Allocator& allocator = built.allocator();
-  const auto inputs = demands();
-  motormix::MotorVector commands;
-  std::size_t i = 0;
-  for (auto _ : state) {
-    auto result = allocator.allocate(inputs[i++ & 1023U], commands);
-    benchmark::DoNotOptimize(result);
-    benchmark::DoNotOptimize(commands.data());
-  }
+void BM_Scaling(benchmark::State& state, const std::string& strategy, int motors) {
+  allocate_yaml(state, ring_yaml(motors) + "mixer: {strategy: " + strategy + "}\n");
 }
 
 const bool kScalingRegistered = [] {

@@ -214,37 +214,28 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
 
 namespace {
 
+// A whole message of the type, or nothing (the type's fingerprint and the
+// length must both match); never throws.
+template <typename Message>
+std::optional<Message> decode_message(const lcm::ReceiveBuffer* rbuf) {
+  Message m;
+  try {
+    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
+        static_cast<int>(rbuf->data_size)) {
+      return m;
+    }
+  } catch (...) {
+  }
+  return std::nullopt;
+}
+
 class Listener {
  public:
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    mixer_status_t m;
-    try {
-      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
-          static_cast<int>(rbuf->data_size)) {
-        ++undecodable;
-        return;
-      }
-    } catch (...) {
-      ++undecodable;
-      return;
-    }
-    status = m;
-    status_at = Clock::now();
+    status_at = keep(decode_message<mixer_status_t>(rbuf), status, status_at);
   }
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    motor_pwm_t m;
-    try {
-      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
-          static_cast<int>(rbuf->data_size)) {
-        ++undecodable;
-        return;
-      }
-    } catch (...) {
-      ++undecodable;
-      return;
-    }
-    pwm = m;
-    pwm_at = Clock::now();
+    pwm_at = keep(decode_message<motor_pwm_t>(rbuf), pwm, pwm_at);
   }
   MonitorSnapshot snapshot() const {
     MonitorSnapshot s;
@@ -261,6 +252,19 @@ class Listener {
   Clock::time_point status_at;
   Clock::time_point pwm_at;
   long undecodable = 0;
+
+ private:
+  // Keeps a decoded message with its arrival time; counts one that was not.
+  template <typename Message>
+  Clock::time_point keep(std::optional<Message> decoded, std::optional<Message>& last,
+                         Clock::time_point at) {
+    if (!decoded) {
+      ++undecodable;
+      return at;
+    }
+    last = std::move(decoded);
+    return Clock::now();
+  }
 };
 
 }  // namespace

@@ -30,6 +30,17 @@ const motormix::config::Config& fuzz_config() {
   return c;
 }
 
+// Well-formed inputs the other channels get, made from the chunk's bytes so
+// the fuzzer also steers arming, throttle, roll and pitch.
+motormix::node::SetpointSample setpoint_from(const std::uint8_t* msg, std::size_t len,
+                                             std::int64_t utime) {
+  motormix::node::SetpointSample s;
+  s.utime = utime;
+  s.armed = len > 0 && (msg[0] & 1U);
+  s.throttle = len > 1 ? msg[1] / 255.0 : 0.0;
+  return s;
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -69,11 +80,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         loop.on_undecodable();
       }
     }
-    node::SetpointSample s;
-    s.utime = now + wall_offset;
-    s.armed = len > 0 && (msg[0] & 1U);
-    s.throttle = len > 1 ? msg[1] / 255.0 : 0.0;
-    loop.on_setpoint(s, now, now + wall_offset);
+    loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
     node::PidSample p;
     p.utime = now + wall_offset;
     p.roll = len > 3 ? (msg[3] - 128) / 128.0 : 0.0;
@@ -86,11 +93,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } else {
       loop.on_undecodable();
     }
-    node::SetpointSample s;
-    s.utime = now + wall_offset;
-    s.armed = len > 0 && (msg[0] & 1U);
-    s.throttle = len > 1 ? msg[1] / 255.0 : 0.0;
-    loop.on_setpoint(s, now, now + wall_offset);
+    loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
 #endif
     now += len > 2 && msg[2] == 0xFF ? 200'000 : 2'500;  // sometimes long enough to go stale
     const node::CycleResult& r = loop.cycle(now);
