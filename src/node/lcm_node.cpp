@@ -191,46 +191,22 @@ class Node {
 
   // No exception may leave an LCM callback: decoding reports failure as a
   // value, and nothing else here throws.
+  bool receive(InputKind kind, const lcm::ReceiveBuffer* rbuf) {
+    const std::int64_t wall = wall_us();
+    return deliver_input(loop_, kind, rbuf->data, static_cast<int>(rbuf->data_size),
+                         received_us(rbuf, monotonic_us(), wall), wall);
+  }
   void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    SetpointSample sample;
-    if (!decode_setpoint(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
-      loop_.on_undecodable();
-      return;
-    }
-    const std::int64_t wall = wall_us();
-    loop_.on_setpoint(sample, received_us(rbuf, monotonic_us(), wall), wall);
+    receive(InputKind::kSetpoint, rbuf);
   }
-
   void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    PidSample sample;
-    if (!decode_pid(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
-      loop_.on_undecodable();
-      return;
-    }
-    const std::int64_t wall = wall_us();
-    if (loop_.on_pid(sample, received_us(rbuf, monotonic_us(), wall), wall) == Rejection::kNone) {
-      new_pid_ = true;
-    }
+    if (receive(InputKind::kPid, rbuf)) new_pid_ = true;
   }
-
   void on_motor_status(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    MotorStatusSample sample;
-    if (!decode_motor_status(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
-      loop_.on_undecodable();
-      return;
-    }
-    const std::int64_t wall = wall_us();
-    loop_.on_motor_status(sample, received_us(rbuf, monotonic_us(), wall), wall);
+    receive(InputKind::kMotorStatus, rbuf);
   }
-
   void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    BatterySample sample;
-    if (!decode_battery(rbuf->data, static_cast<int>(rbuf->data_size), sample)) {
-      loop_.on_undecodable();
-      return;
-    }
-    const std::int64_t wall = wall_us();
-    loop_.on_battery(sample, received_us(rbuf, monotonic_us(), wall), wall);
+    receive(InputKind::kBattery, rbuf);
   }
 
   void publish_pwm(const CycleResult& r) {

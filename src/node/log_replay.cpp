@@ -8,8 +8,8 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <ostream>
 #include <vector>
@@ -203,6 +203,15 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     summary.duration_s += static_cast<double>(last + tail_us - segment_first) / 1e6;
   };
 
+  // Which input, if any, a channel carries (battery only when configured).
+  const auto input_kind = [&config](const std::string& channel) -> std::optional<InputKind> {
+    if (channel == config.channels.setpoint) return InputKind::kSetpoint;
+    if (channel == config.channels.pid) return InputKind::kPid;
+    if (channel == config.channels.motor_status) return InputKind::kMotorStatus;
+    if (config.battery && channel == config.channels.battery) return InputKind::kBattery;
+    return std::nullopt;
+  };
+
   start_segment(first_event->timestamp);
   std::int64_t previous = first_event->timestamp;
   int last_drawn = -1;
@@ -235,50 +244,14 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     }
     previous = ev->timestamp;
     run_ticks_until(ev->timestamp);
-    const bool is_setpoint = ev->channel == config.channels.setpoint;
-    const bool is_pid = ev->channel == config.channels.pid;
-    const bool is_motor_status = ev->channel == config.channels.motor_status;
-    const bool is_battery = config.battery && ev->channel == config.channels.battery;
     const int size = static_cast<int>(ev->data.size());
     out.raw(ev->channel, ev->timestamp, ev->data.data(), size);
-    if (is_motor_status || is_battery) {
+    if (const std::optional<InputKind> kind = input_kind(ev->channel)) {
       ++summary.input_events;
-      if (is_motor_status) {
-        MotorStatusSample m;
-        if (decode_motor_status(ev->data.data(), size, m)) {
-          loop->on_motor_status(m, ev->timestamp, ev->timestamp);
-        } else {
-          loop->on_undecodable();
-        }
-      } else {
-        BatterySample b;
-        if (decode_battery(ev->data.data(), size, b)) {
-          loop->on_battery(b, ev->timestamp, ev->timestamp);
-        } else {
-          loop->on_undecodable();
-        }
-      }
-      if (options.cycle_on_every_input) cycle_at(ev->timestamp);
-    } else if (is_setpoint || is_pid) {
-      ++summary.input_events;
-      bool accepted = false;
-      if (is_setpoint) {
-        SetpointSample sp;
-        if (decode_setpoint(ev->data.data(), size, sp)) {
-          loop->on_setpoint(sp, ev->timestamp, ev->timestamp);
-        } else {
-          loop->on_undecodable();
-        }
-      } else {
-        PidSample p;
-        if (decode_pid(ev->data.data(), size, p)) {
-          accepted = loop->on_pid(p, ev->timestamp, ev->timestamp) == Rejection::kNone;
-        } else {
-          loop->on_undecodable();
-        }
-      }
-      if (options.cycle_on_every_input ||
-          (accepted && config.publish == config::PublishMode::kOnInput)) {
+      const bool accepted =
+          deliver_input(*loop, *kind, ev->data.data(), size, ev->timestamp, ev->timestamp);
+      if (options.cycle_on_every_input || (accepted && *kind == InputKind::kPid &&
+                                           config.publish == config::PublishMode::kOnInput)) {
         cycle_at(ev->timestamp);
       }
     } else {

@@ -123,4 +123,27 @@ bool decode_pid(const void* data, int size, PidSample& out) {
   return true;
 }
 
+bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size,
+                   std::int64_t now_us, std::int64_t wall_us) {
+  // Decodes into `sample` and hands it over with `on`; undecodable bytes are counted.
+  const auto hand_over = [&](auto sample, auto decode, auto on) {
+    if (!decode(data, size, sample)) {
+      loop.on_undecodable();
+      return false;
+    }
+    return (loop.*on)(sample, now_us, wall_us) == Rejection::kNone;
+  };
+  switch (kind) {
+    case InputKind::kSetpoint:
+      return hand_over(SetpointSample{}, decode_setpoint, &ControlLoop::on_setpoint);
+    case InputKind::kPid:
+      return hand_over(PidSample{}, decode_pid, &ControlLoop::on_pid);
+    case InputKind::kMotorStatus:
+      return hand_over(MotorStatusSample{}, decode_motor_status, &ControlLoop::on_motor_status);
+    case InputKind::kBattery:
+      return hand_over(BatterySample{}, decode_battery, &ControlLoop::on_battery);
+  }
+  return false;
+}
+
 }  // namespace motormix::node

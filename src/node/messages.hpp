@@ -42,4 +42,13 @@ bool decode_pid(const void* data, int size, PidSample& out);
 bool decode_motor_status(const void* data, int size, MotorStatusSample& out);
 bool decode_battery(const void* data, int size, BatterySample& out);
 
+// The input channels a mixer reads.
+enum class InputKind : std::uint8_t { kSetpoint, kPid, kMotorStatus, kBattery };
+
+// Decodes one input message of `kind` and hands it to the loop, which counts
+// it if it does not decode or is rejected. True when the loop accepted it.
+// Shared by the live node and the offline replay, so both read inputs alike.
+bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size,
+                   std::int64_t now_us, std::int64_t wall_us);
+
 }  // namespace motormix::node

@@ -1,5 +1,7 @@
 #include "node/monitor.hpp"
 
+#include "node/control_loop.hpp"
+
 #include <lcm/lcm-cpp.hpp>
 
 #include <poll.h>
@@ -8,6 +10,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,35 +24,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-const char* state_name(int8_t s) {
-  switch (s) {
-    case mixer_status_t::STATE_DISARMED:
-      return "DISARMED";
-    case mixer_status_t::STATE_ARMED:
-      return "ARMED";
-    case mixer_status_t::STATE_FAILSAFE:
-      return "FAILSAFE";
-    default:
-      return "?";
-  }
+// The wire's codes carry the control loop's own enums: their names are the
+// ones the mixer logs (a code this build does not know reads "?").
+std::string state_name(int8_t s) {
+  std::string name = to_string(static_cast<LoopState>(s));
+  for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return name;
 }
 
-const char* reason_name(int8_t r) {
-  switch (r) {
-    case mixer_status_t::REASON_NONE:
-      return "none";
-    case mixer_status_t::REASON_SETPOINT_STALE:
-      return "setpoint stale";
-    case mixer_status_t::REASON_PID_STALE:
-      return "pid stale";
-    case mixer_status_t::REASON_INVALID_INPUT:
-      return "invalid input";
-    case mixer_status_t::REASON_LOOP_STALLED:
-      return "loop stalled";
-    default:
-      return "?";
-  }
-}
+const char* reason_name(int8_t r) { return to_string(static_cast<FailsafeReason>(r)); }
 
 const char* failure_name(int8_t f) {
   switch (f) {
@@ -66,22 +49,7 @@ const char* failure_name(int8_t f) {
   }
 }
 
-const char* battery_name(int8_t b) {
-  switch (b) {
-    case mixer_status_t::BATTERY_OFF:
-      return "off";
-    case mixer_status_t::BATTERY_OK:
-      return "ok";
-    case mixer_status_t::BATTERY_MISSING:
-      return "missing";
-    case mixer_status_t::BATTERY_STALE:
-      return "stale";
-    case mixer_status_t::BATTERY_IMPLAUSIBLE:
-      return "implausible";
-    default:
-      return "?";
-  }
-}
+const char* battery_name(int8_t b) { return to_string(static_cast<BatteryState>(b)); }
 
 constexpr const char* kAxes[4] = {"roll", "pitch", "yaw", "thrust"};
 
