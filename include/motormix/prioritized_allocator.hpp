@@ -26,6 +26,8 @@
 
 #include <motormix/allocation.hpp>
 
+#include <array>
+
 namespace motormix {
 
 enum class Airmode : std::uint8_t { kOff, kRollPitch, kRollPitchYaw };
@@ -45,24 +47,19 @@ class PrioritizedAllocator final : public MatrixAllocator {
                                        double tolerance = kDeliveredTolerance);
 
  private:
-  enum class Direction { kBoth, kDecreaseOnly };
-  // Gain along `v` that removes as much of the range violation as possible.
-  double desaturation_gain(const MotorVector& u, const MotorVector& v, CommandRange range) const;
-  // Moves u along the column of `axis`, and the effective demand with it.
-  void desaturate(MotorVector& u, AxisVector& effective, Axis axis, CommandRange range,
-                  Direction direction = Direction::kBoth) const;
-  void mix_yaw(double yaw, MotorVector& u, AxisVector& effective) const;
-  void repair(AxisVector& effective, MotorVector& u) const;
-  // Largest s in [0, 1] for which base + s * part can be shifted along the
-  // thrust column into range (only downward unless may_raise); -1 when not
-  // even s = 0 fits. Closed form: each repair step is one-dimensional.
-  double largest_fitting_scale(const MotorVector& base, const MotorVector& part,
-                               bool may_raise) const;
-  const MotorVector& column(Axis axis) const;
+  // The per-cycle work at a motor count fixed at compile time (4, 6, 8, or
+  // any other at dynamic size); defined in prioritized_allocator.cpp.
+  template <int N>
+  class Kernel;
 
   Airmode airmode_;
   double yaw_headroom_;
-  MotorVector roll_, pitch_, yaw_, thrust_;  // columns of the mixing matrix
+  std::array<MotorVector, kNumAxes> columns_;  // the mixing matrix, column by column
+  // 1 / column where the column moves a motor (|entry| >= float epsilon),
+  // else 0: the desaturation gains without a division per motor.
+  std::array<MotorVector, kNumAxes> gain_inverse_;
+  MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)
+  bool all_motors_lift_;      // no motor the thrust shift leaves in place
 };
 
 }  // namespace motormix

@@ -1,170 +1,287 @@
 #include <motormix/prioritized_allocator.hpp>
 
+#include "fixed_size.hpp"
+#include "report_kernel.hpp"
+#include "shift_kernel.hpp"
+
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 
 namespace motormix {
 
+namespace {
+
+// Column entries smaller than this do not move a motor (the sequence's
+// gains ignore them rather than divide by them).
+constexpr double kNegligibleEntry = std::numeric_limits<float>::epsilon();
+
+MotorVector gain_inverse_of(const MotorVector& v) {
+  MotorVector inverse(v.size());
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    inverse[i] = std::abs(v[i]) < kNegligibleEntry ? 0.0 : 1.0 / v[i];
+  }
+  return inverse;
+}
+
+}  // namespace
+
 PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRange range,
                                            Airmode airmode, double yaw_headroom)
-    : MatrixAllocator(basis, range),
-      airmode_(airmode),
-      yaw_headroom_(yaw_headroom),
-      roll_(mixing_.col(index(Axis::kRoll))),
-      pitch_(mixing_.col(index(Axis::kPitch))),
-      yaw_(mixing_.col(index(Axis::kYaw))),
-      thrust_(mixing_.col(index(Axis::kThrust))) {}
-
-double PrioritizedAllocator::desaturation_gain(const MotorVector& u, const MotorVector& v,
-                                               CommandRange range) const {
-  // The smallest and largest gains that each bring one violating motor back
-  // to its limit; their sum moves the worst violations symmetrically when
-  // both limits are exceeded, and fully when only one is.
-  double k_min = 0.0;
-  double k_max = 0.0;
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    if (std::abs(v[i]) < std::numeric_limits<float>::epsilon()) continue;
-    double k = 0.0;
-    if (u[i] < range.lower) {
-      k = (range.lower - u[i]) / v[i];
-    } else if (u[i] > range.upper) {
-      k = (range.upper - u[i]) / v[i];
-    } else {
-      continue;
-    }
-    k_min = std::min(k_min, k);
-    k_max = std::max(k_max, k);
+    : MatrixAllocator(basis, range), airmode_(airmode), yaw_headroom_(yaw_headroom) {
+  for (int a = 0; a < kNumAxes; ++a) {
+    columns_[static_cast<std::size_t>(a)] = mixing_.col(a);
+    gain_inverse_[static_cast<std::size_t>(a)] = gain_inverse_of(mixing_.col(a));
   }
-  return k_min + k_max;
+  const MotorVector& thrust = columns_[index(Axis::kThrust)];
+  lift_inverse_ = detail::positive_inverse(thrust);
+  all_motors_lift_ = thrust.size() == 0 || thrust.minCoeff() > 0.0;
 }
 
-const MotorVector& PrioritizedAllocator::column(Axis axis) const {
-  switch (axis) {
-    case Axis::kRoll:
-      return roll_;
-    case Axis::kPitch:
-      return pitch_;
-    case Axis::kYaw:
-      return yaw_;
-    case Axis::kThrust:
-      break;
-  }
-  return thrust_;
-}
+// One allocation at N motors, every per-motor vector a local of fixed size.
+template <int N>
+class PrioritizedAllocator::Kernel {
+ public:
+  using Motors = detail::LocalMotors<N>;
+  using View = detail::ConstMotorsView<N>;
 
-void PrioritizedAllocator::desaturate(MotorVector& u, AxisVector& effective, Axis axis,
-                                      CommandRange range, Direction direction) const {
-  const MotorVector& v = column(axis);
-  double gain = desaturation_gain(u, v, range);
-  if (direction == Direction::kDecreaseOnly && gain > 0.0) return;
-  u += gain * v;
-  effective[index(axis)] += gain;
-  // A second, half step balances what remains between the two limits.
-  gain = 0.5 * desaturation_gain(u, v, range);
-  u += gain * v;
-  effective[index(axis)] += gain;
-}
+  explicit Kernel(const PrioritizedAllocator& a) : a_(a), n_(a.mixing_.rows()), range_(a.range_) {}
 
-void PrioritizedAllocator::mix_yaw(double yaw, MotorVector& u, AxisVector& effective) const {
-  u += yaw * yaw_;
-  effective[index(Axis::kYaw)] = yaw;
-  // Yaw gives way on its own axis (roll and pitch untouched), with some room
-  // above the top so that full thrust still leaves yaw authority...
-  CommandRange widened = range_;
-  widened.upper += (range_.upper - range_.lower) * yaw_headroom_;
-  desaturate(u, effective, Axis::kYaw, widened);
-  // ...which thrust then pays for, only downward.
-  desaturate(u, effective, Axis::kThrust, range_, Direction::kDecreaseOnly);
-}
-
-double PrioritizedAllocator::largest_fitting_scale(const MotorVector& base, const MotorVector& part,
-                                                   bool may_raise) const {
-  // Motor i stays in range after a thrust shift k when
-  //   lower <= base_i + s part_i + k thrust_i <= upper.
-  // Motors with thrust_i > 0 give bounds on k that are linear in s:
-  //   L_i(s) = (lower - base_i - s part_i) / thrust_i <= k <= U_i(s) = (upper - ...) / thrust_i.
-  // A k exists iff every L_i(s) <= every U_j(s) (and L_i(s) <= 0 when thrust
-  // may not rise); motors that thrust does not move must fit on their own.
-  // Each condition is a half-line a s <= c, so the scales that fit form an
-  // interval, and its top is the answer: exact, with no search.
-  double lo = 0.0;
-  double hi = 1.0;
-  const auto keep = [&](double a, double c) {  // a s <= c
-    if (a > 0.0) {
-      hi = std::min(hi, c / a);
-    } else if (a < 0.0) {
-      lo = std::max(lo, c / a);
-    } else if (c < 0.0) {
-      hi = -1.0;  // no scale at all
+  AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const {
+    Motors u(n_);
+    u.noalias() = mixing() * demand;
+    if (u.minCoeff() >= range_.lower && u.maxCoeff() <= range_.upper) {
+      return deliver(demand, u, commands);  // nothing saturates: nothing to prioritize
     }
-  };
-  const Eigen::Index n = base.size();
-  std::array<double, kMaxMotors> rate{};     // part_i / thrust_i
-  std::array<double, kMaxMotors> low_at0{};  // L_i(0)
-  std::array<double, kMaxMotors> up_at0{};   // U_i(0)
-  int moving = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (thrust_[i] <= 0.0) {
-      keep(part[i], range_.upper - base[i]);
-      keep(-part[i], base[i] - range_.lower);
-      continue;
+    const double yaw = demand[index(Axis::kYaw)];
+    AxisVector effective = demand;
+    effective[index(Axis::kYaw)] = 0.0;
+    switch (a_.airmode_) {
+      case Airmode::kOff:
+        u.noalias() = mixing() * effective;
+        desaturate(u, effective, Axis::kThrust, range_.upper, kDecreaseOnly);
+        desaturate(u, effective, Axis::kRoll, range_.upper);
+        desaturate(u, effective, Axis::kPitch, range_.upper);
+        mix_yaw(yaw, u, effective);
+        break;
+      case Airmode::kRollPitch:
+        u.noalias() = mixing() * effective;
+        desaturate(u, effective, Axis::kThrust, range_.upper);
+        mix_yaw(yaw, u, effective);
+        break;
+      case Airmode::kRollPitchYaw:
+        effective = demand;
+        u.noalias() = mixing() * demand;
+        desaturate(u, effective, Axis::kThrust, range_.upper);
+        desaturate(u, effective, Axis::kYaw, range_.upper);
+        break;
     }
-    const double inv = 1.0 / thrust_[i];
-    rate[static_cast<std::size_t>(moving)] = part[i] * inv;
-    low_at0[static_cast<std::size_t>(moving)] = (range_.lower - base[i]) * inv;
-    up_at0[static_cast<std::size_t>(moving)] = (range_.upper - base[i]) * inv;
-    ++moving;
+    constexpr double kRangeSlack = 1e-12;  // the sequence's own rounding
+    if (u.minCoeff() >= range_.lower - kRangeSlack && u.maxCoeff() <= range_.upper + kRangeSlack) {
+      return deliver(demand, u, commands);
+    }
+    // Two ways to bring the sequence's result into range: the repair (scale
+    // yaw, then roll and pitch, along their demanded directions, with the
+    // best thrust shift), or clipping each motor as sequential desaturation
+    // does elsewhere. Clipping can change the direction of the delivered
+    // torque yet land closer to the demand. Keep whichever delivers the
+    // demand better in priority order: roll and pitch, then thrust, then yaw.
+    Motors clipped = u;
+    clamp(clipped);
+    repair(effective, u);
+    clamp(u);
+    const AllocationResult repaired = report(demand, u);
+    const AllocationResult clip = report(demand, clipped);
+    if (closer_in_priority_order(clip.unallocated, repaired.unallocated)) {
+      store(clipped, commands);
+      return clip;
+    }
+    store(u, commands);
+    return repaired;
   }
-  for (int i = 0; i < moving; ++i) {
-    const auto a = static_cast<std::size_t>(i);
-    if (!may_raise) keep(-rate[a], -low_at0[a]);  // L_i(s) <= 0
-    for (int j = 0; j < moving; ++j) {            // L_i(s) <= U_j(s)
-      const auto b = static_cast<std::size_t>(j);
-      keep(rate[b] - rate[a], up_at0[b] - low_at0[a]);
+
+ private:
+  static constexpr bool kDecreaseOnly = true;
+
+  detail::ConstMixingView<N> mixing() const {
+    return detail::ConstMixingView<N>(a_.mixing_.data(), n_, kNumAxes);
+  }
+  View column(Axis axis) const { return View(a_.columns_[index(axis)].data(), n_); }
+  View gain_inverse(Axis axis) const { return View(a_.gain_inverse_[index(axis)].data(), n_); }
+
+  // Into the range; NaN (which finite inputs cannot produce) to the safe end.
+  void clamp(Motors& u) const {
+    for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
+      u[i] = u[i] >= range_.lower ? (u[i] <= range_.upper ? u[i] : range_.upper) : range_.lower;
     }
   }
-  return lo <= hi ? hi : -1.0;
-}
+  void store(const Motors& u, MotorVector& commands) const {
+    commands.resize(n_);
+    detail::MotorsView<N>(commands.data(), n_) = u;
+  }
+  AllocationResult report(const AxisVector& target, const Motors& u) const {
+    return detail::describe_fixed<N>(a_.effectiveness_, target, u.data(), n_, range_,
+                                     a_.controlled_);
+  }
+  AllocationResult deliver(const AxisVector& target, Motors& u, MotorVector& commands) const {
+    clamp(u);
+    store(u, commands);
+    return report(target, u);
+  }
 
-void PrioritizedAllocator::repair(AxisVector& effective, MotorVector& u) const {
-  const bool may_raise = airmode_ != Airmode::kOff;
-  const double roll = effective[index(Axis::kRoll)];
-  const double pitch = effective[index(Axis::kPitch)];
-  const double yaw = effective[index(Axis::kYaw)];
-  const MotorVector thrust_part = thrust_ * effective[index(Axis::kThrust)];
-  const MotorVector rp_part = roll_ * roll + pitch_ * pitch;
-  // Yaw gives way first: the largest share of it that fits with all of roll
-  // and pitch. Only when none fits do roll and pitch give way, without yaw.
-  double yaw_scale = largest_fitting_scale(thrust_part + rp_part, yaw_ * yaw, may_raise);
-  double rp_scale = 1.0;
-  if (yaw_scale < 0.0) {
-    yaw_scale = 0.0;
-    rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, rp_part, may_raise));
+  // The gain along a column (given as its gain inverse) that removes as much
+  // of the range violation as possible: the smallest and largest gains that
+  // each bring one violating motor back to its limit, summed. The sum moves
+  // the worst violations symmetrically when both limits are exceeded, and
+  // fully when only one is. clamp(u) - u is the distance back into range
+  // (zero inside), so no motor needs a branch.
+  double desaturation_gain(const Motors& u, const View& inverse, double upper) const {
+    const Motors k = (u.cwiseMax(range_.lower).cwiseMin(upper) - u).cwiseProduct(inverse);
+    return std::min(0.0, k.minCoeff()) + std::max(0.0, k.maxCoeff());
   }
-  u = thrust_part + yaw_scale * (yaw_ * yaw) + rp_scale * rp_part;
-  ShiftInterval k = feasible_shifts(u, thrust_, range_);
-  if (!may_raise) k.hi = std::min(k.hi, 0.0);
-  // At the largest scale some motor sits exactly on its limit: rounding may
-  // leave the interval a few ulps wide of empty.
-  constexpr double kRounding = 1e-12;
-  if (k.empty() && k.lo - k.hi < kRounding) k.lo = k.hi = 0.5 * (k.lo + k.hi);
-  if (!k.empty()) {
-    const double shift = k.smallest();
-    u += shift * thrust_;
-    effective[index(Axis::kThrust)] += shift;
+
+  // Moves u along the column of `axis`, and the effective demand with it.
+  void desaturate(Motors& u, AxisVector& effective, Axis axis, double upper,
+                  bool decrease_only = false) const {
+    const View v = column(axis);
+    const View inverse = gain_inverse(axis);
+    double gain = desaturation_gain(u, inverse, upper);
+    if (decrease_only && gain > 0.0) return;
+    u += gain * v;
+    effective[index(axis)] += gain;
+    // A second, half step balances what remains between the two limits.
+    gain = 0.5 * desaturation_gain(u, inverse, upper);
+    u += gain * v;
+    effective[index(axis)] += gain;
   }
-  effective[index(Axis::kYaw)] *= yaw_scale;
-  effective[index(Axis::kRoll)] *= rp_scale;
-  effective[index(Axis::kPitch)] *= rp_scale;
-}
+
+  void mix_yaw(double yaw, Motors& u, AxisVector& effective) const {
+    u += yaw * column(Axis::kYaw);
+    effective[index(Axis::kYaw)] = yaw;
+    // Yaw gives way on its own axis (roll and pitch untouched), with some
+    // room above the top so that full thrust still leaves yaw authority...
+    const double widened = range_.upper + (range_.upper - range_.lower) * a_.yaw_headroom_;
+    desaturate(u, effective, Axis::kYaw, widened);
+    // ...which thrust then pays for, only downward.
+    desaturate(u, effective, Axis::kThrust, range_.upper, kDecreaseOnly);
+  }
+
+  // Largest s in [0, 1] for which base + s * part can be shifted along the
+  // thrust column into range (only downward unless may_raise); -1 when none.
+  //
+  // In thrust units (divided by thrust_i), motor i allows the shifts k in
+  //   L_i(s) = (lower - base_i - s part_i) / thrust_i <= k <= U_i(s) = (upper - ...) / thrust_i,
+  // so a shift exists iff the excess G(s) = max_i L_i(s) - min_j U_j(s) is
+  // <= 0 (and max_i L_i(s) <= 0 when thrust may not rise). G is the maximum
+  // of lines minus the minimum of lines: convex and piecewise linear, so the
+  // scales that fit form an interval and the answer is its top. From s = 1,
+  // each step solves the piece in force (the two motors that set the excess)
+  // exactly; the tangent of a convex function lies below it, so no step
+  // passes the answer, and each step leaves one piece for good. G has fewer
+  // than 3n pieces, so the loop ends within them; the cap only guards
+  // against rounding, and gives up the scale (-1: a safe answer) if reached.
+  // Motors that thrust does not move are linear in s on their own.
+  double largest_fitting_scale(const Motors& base, const Motors& part, bool may_raise) const {
+    const View lift(a_.lift_inverse_.data(), n_);
+    double bottom = 0.0;
+    double top = 1.0;
+    Motors low = (range_.lower - base.array()).matrix().cwiseProduct(lift);  // L_i(0)
+    Motors up = (range_.upper - base.array()).matrix().cwiseProduct(lift);   // U_i(0)
+    const Motors rate = part.cwiseProduct(lift);
+    if (!a_.all_motors_lift_) {
+      for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
+        if (lift[i] != 0.0) continue;
+        // lower <= base_i + s part_i <= upper, and no say in the shift.
+        const double room_up = range_.upper - base[i];
+        const double room_down = base[i] - range_.lower;
+        if (part[i] > 0.0) {
+          top = std::min(top, room_up / part[i]);
+          bottom = std::max(bottom, -room_down / part[i]);
+        } else if (part[i] < 0.0) {
+          top = std::min(top, -room_down / part[i]);
+          bottom = std::max(bottom, room_up / part[i]);
+        } else if (room_up < 0.0 || room_down < 0.0) {
+          return -1.0;
+        }
+        low[i] = -std::numeric_limits<double>::infinity();
+        up[i] = std::numeric_limits<double>::infinity();
+      }
+      if (bottom > top) return -1.0;
+    }
+    constexpr double kFits = 1e-13;  // excess within rounding of a motor on its limit
+    double s = top;
+    for (Eigen::Index step = 0; step < 4 * n_ + 4; ++step) {
+      Eigen::Index i = 0;
+      Eigen::Index j = 0;
+      const double highest_low = (low - s * rate).maxCoeff(&i);
+      const double lowest_up = (up - s * rate).minCoeff(&j);
+      double excess = highest_low - lowest_up;
+      double slope = rate[j] - rate[i];  // d excess / ds on this piece
+      if (!may_raise && highest_low > excess) {
+        excess = highest_low;
+        slope = -rate[i];
+      }
+      if (excess <= kFits) return s;
+      // Rising toward s = 0 (or flat): every smaller scale exceeds too.
+      if (slope <= 0.0) return -1.0;
+      s -= excess / slope;
+      if (s < bottom) return -1.0;
+    }
+    return -1.0;
+  }
+
+  // Keeps the promise of the priorities exactly: thrust moves first (only
+  // downward without airmode), then yaw is scaled down, and roll and pitch
+  // only when yaw alone cannot make room.
+  void repair(AxisVector& effective, Motors& u) const {
+    const bool may_raise = a_.airmode_ != Airmode::kOff;
+    const View thrust = column(Axis::kThrust);
+    const Motors thrust_part = thrust * effective[index(Axis::kThrust)];
+    const Motors rp_part = column(Axis::kRoll) * effective[index(Axis::kRoll)] +
+                           column(Axis::kPitch) * effective[index(Axis::kPitch)];
+    const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
+    // Yaw gives way first: the largest share of it that fits with all of
+    // roll and pitch. Only when none fits do roll and pitch give way,
+    // without yaw.
+    double yaw_scale = largest_fitting_scale(thrust_part + rp_part, yaw_part, may_raise);
+    double rp_scale = 1.0;
+    if (yaw_scale < 0.0) {
+      yaw_scale = 0.0;
+      rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, rp_part, may_raise));
+    }
+    u = thrust_part + yaw_scale * yaw_part + rp_scale * rp_part;
+    ShiftInterval k =
+        detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_);
+    if (!may_raise) k.hi = std::min(k.hi, 0.0);
+    // At the largest scale some motor sits exactly on its limit: rounding
+    // may leave the interval a few ulps wide of empty.
+    constexpr double kRounding = 1e-12;
+    if (k.empty() && k.lo - k.hi < kRounding) k.lo = k.hi = 0.5 * (k.lo + k.hi);
+    if (!k.empty()) {
+      const double shift = k.smallest();
+      u += shift * thrust;
+      effective[index(Axis::kThrust)] += shift;
+    }
+    effective[index(Axis::kYaw)] *= yaw_scale;
+    effective[index(Axis::kRoll)] *= rp_scale;
+    effective[index(Axis::kPitch)] *= rp_scale;
+  }
+
+  const PrioritizedAllocator& a_;
+  Eigen::Index n_;
+  CommandRange range_;
+};
 
 bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
                                                     const AxisVector& error_b, double tolerance) {
+  // Errors are at most a few units: a plain root is exact enough and much
+  // cheaper than hypot's overflow guards.
+  const auto roll_pitch = [](const AxisVector& e) {
+    return std::sqrt(e[index(Axis::kRoll)] * e[index(Axis::kRoll)] +
+                     e[index(Axis::kPitch)] * e[index(Axis::kPitch)]);
+  };
   const std::array<std::pair<double, double>, 3> in_order = {
-      std::pair{std::hypot(error_a[index(Axis::kRoll)], error_a[index(Axis::kPitch)]),
-                std::hypot(error_b[index(Axis::kRoll)], error_b[index(Axis::kPitch)])},
+      std::pair{roll_pitch(error_a), roll_pitch(error_b)},
       std::pair{std::abs(error_a[index(Axis::kThrust)]), std::abs(error_b[index(Axis::kThrust)])},
       std::pair{std::abs(error_a[index(Axis::kYaw)]), std::abs(error_b[index(Axis::kYaw)])}};
   for (const auto& [x, y] : in_order) {
@@ -176,54 +293,9 @@ bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
 
 AllocationResult PrioritizedAllocator::allocate(const AxisVector& demand,
                                                 MotorVector& commands) const {
-  mix_linear(demand, commands);
-  if (commands.minCoeff() >= range_.lower && commands.maxCoeff() <= range_.upper) {
-    return finish(demand, commands);  // nothing saturates: nothing to prioritize
-  }
-  const double yaw = demand[index(Axis::kYaw)];
-  AxisVector without_yaw = demand;
-  without_yaw[index(Axis::kYaw)] = 0.0;
-  AxisVector effective = without_yaw;
-  switch (airmode_) {
-    case Airmode::kOff:
-      mix_linear(without_yaw, commands);
-      desaturate(commands, effective, Axis::kThrust, range_, Direction::kDecreaseOnly);
-      desaturate(commands, effective, Axis::kRoll, range_);
-      desaturate(commands, effective, Axis::kPitch, range_);
-      mix_yaw(yaw, commands, effective);
-      break;
-    case Airmode::kRollPitch:
-      mix_linear(without_yaw, commands);
-      desaturate(commands, effective, Axis::kThrust, range_);
-      mix_yaw(yaw, commands, effective);
-      break;
-    case Airmode::kRollPitchYaw:
-      effective = demand;
-      mix_linear(demand, commands);
-      desaturate(commands, effective, Axis::kThrust, range_);
-      desaturate(commands, effective, Axis::kYaw, range_);
-      break;
-  }
-  const bool out_of_range =
-      commands.minCoeff() < range_.lower - 1e-12 || commands.maxCoeff() > range_.upper + 1e-12;
-  if (out_of_range) {
-    // Two ways to bring the sequence's result into range: the repair (scale
-    // yaw, then roll and pitch, along their demanded directions, with the
-    // best thrust shift), or clipping each motor as sequential desaturation
-    // does elsewhere. Clipping can change the direction of the delivered
-    // torque yet land closer to the demand. Keep whichever delivers the
-    // demand better in priority order: roll and pitch, then thrust, then yaw.
-    MotorVector clipped = commands.cwiseMax(range_.lower).cwiseMin(range_.upper);
-    repair(effective, commands);
-    const AllocationResult repaired = finish(demand, commands);
-    const AllocationResult clip = finish(demand, clipped);
-    if (closer_in_priority_order(clip.unallocated, repaired.unallocated)) {
-      commands = clipped;
-      return clip;
-    }
-    return repaired;
-  }
-  return finish(demand, commands);
+  return detail::with_motor_count(mixing_.rows(), [&](auto size) {
+    return Kernel<decltype(size)::value>(*this).allocate(demand, commands);
+  });
 }
 
 }  // namespace motormix

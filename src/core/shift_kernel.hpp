@@ -1,0 +1,42 @@
+#pragma once
+// The shifts along one direction (the thrust column, for the strategies that
+// move all motors together) that keep every motor in range, at a motor count
+// fixed at compile time. Shared by `shift` and `prioritized`'s repair.
+
+#include <motormix/allocation.hpp>
+
+#include "fixed_size.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace motormix::detail {
+
+// 1 / d where d > 0 and 0 elsewhere: the per-cycle kernels multiply, they do
+// not divide, and a zero marks a motor the shift cannot move.
+inline MotorVector positive_inverse(const MotorVector& d) {
+  MotorVector inverse(d.size());
+  for (Eigen::Index i = 0; i < d.size(); ++i) inverse[i] = d[i] > 0.0 ? 1.0 / d[i] : 0.0;
+  return inverse;
+}
+
+// feasible_shifts() at N motors, on local values: the k for which u + k d is
+// in range, given `inverse` = positive_inverse(d). A motor the shift cannot
+// move that is out of range makes the interval empty.
+template <int N, typename U, typename D>
+ShiftInterval shifts_that_fit(const U& u, const D& inverse, Eigen::Index n, CommandRange range) {
+  ShiftInterval k{-std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};
+  bool stuck = false;
+  for (Eigen::Index i = 0; i < detail::count<N>(n); ++i) {
+    if (inverse[i] == 0.0) {
+      stuck = stuck || u[i] < range.lower || u[i] > range.upper;
+      continue;
+    }
+    k.lo = std::max(k.lo, (range.lower - u[i]) * inverse[i]);
+    k.hi = std::min(k.hi, (range.upper - u[i]) * inverse[i]);
+  }
+  return stuck ? ShiftInterval{1.0, -1.0} : k;
+}
+
+}  // namespace motormix::detail
