@@ -52,12 +52,21 @@ class PrioritizedAllocator final : public MatrixAllocator {
   template <int N>
   class Kernel;
 
+  // The gains along one column that keep each motor in a range, as affine
+  // functions of its command u_i: every gain in
+  // [lowest_i - u_i inverse_i, highest_i - u_i inverse_i] does. A motor the
+  // column barely moves (|entry| < float epsilon) gets (-inf, inf): it never
+  // asks for a gain. Precomputed, so a desaturation step needs no division.
+  struct InRangeGains {
+    MotorVector inverse, lowest, highest;
+  };
+  static InRangeGains in_range_gains(const MotorVector& column, CommandRange range);
+
   Airmode airmode_;
   double yaw_headroom_;
-  std::array<MotorVector, kNumAxes> columns_;  // the mixing matrix, column by column
-  // 1 / column where the column moves a motor (|entry| >= float epsilon),
-  // else 0: the desaturation gains without a division per motor.
-  std::array<MotorVector, kNumAxes> gain_inverse_;
+  std::array<MotorVector, kNumAxes> columns_;   // the mixing matrix, column by column
+  std::array<InRangeGains, kNumAxes> gains_;    // per column, for the command range
+  InRangeGains yaw_gains_with_headroom_;        // yaw, with yaw_headroom above the top
   MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)
   bool all_motors_lift_;      // no motor the thrust shift leaves in place
 };

@@ -15,24 +15,41 @@ namespace {
 // Column entries smaller than this do not move a motor (the sequence's
 // gains ignore them rather than divide by them).
 constexpr double kNegligibleEntry = std::numeric_limits<float>::epsilon();
-
-MotorVector gain_inverse_of(const MotorVector& v) {
-  MotorVector inverse(v.size());
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    inverse[i] = std::abs(v[i]) < kNegligibleEntry ? 0.0 : 1.0 / v[i];
-  }
-  return inverse;
-}
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 }  // namespace
+
+PrioritizedAllocator::InRangeGains PrioritizedAllocator::in_range_gains(const MotorVector& v,
+                                                                        CommandRange range) {
+  InRangeGains g{MotorVector(v.size()), MotorVector(v.size()), MotorVector(v.size())};
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (std::abs(v[i]) < kNegligibleEntry) {
+      g.inverse[i] = 0.0;
+      g.lowest[i] = -kInf;
+      g.highest[i] = kInf;
+      continue;
+    }
+    // Motor i reaches bound b at the gain (b - u_i) / v_i; which bound
+    // comes first depends on the entry's sign.
+    g.inverse[i] = 1.0 / v[i];
+    const double at_lower = range.lower * g.inverse[i];
+    const double at_upper = range.upper * g.inverse[i];
+    g.lowest[i] = std::min(at_lower, at_upper);
+    g.highest[i] = std::max(at_lower, at_upper);
+  }
+  return g;
+}
 
 PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRange range,
                                            Airmode airmode, double yaw_headroom)
     : MatrixAllocator(basis, range), airmode_(airmode), yaw_headroom_(yaw_headroom) {
   for (int a = 0; a < kNumAxes; ++a) {
     columns_[static_cast<std::size_t>(a)] = mixing_.col(a);
-    gain_inverse_[static_cast<std::size_t>(a)] = gain_inverse_of(mixing_.col(a));
+    gains_[static_cast<std::size_t>(a)] = in_range_gains(mixing_.col(a), range_);
   }
+  CommandRange widened = range_;
+  widened.upper += (range_.upper - range_.lower) * yaw_headroom_;
+  yaw_gains_with_headroom_ = in_range_gains(columns_[index(Axis::kYaw)], widened);
   const MotorVector& thrust = columns_[index(Axis::kThrust)];
   lift_inverse_ = detail::positive_inverse(thrust);
   all_motors_lift_ = thrust.size() == 0 || thrust.minCoeff() > 0.0;
@@ -59,21 +76,21 @@ class PrioritizedAllocator::Kernel {
     switch (a_.airmode_) {
       case Airmode::kOff:
         u.noalias() = mixing() * effective;
-        desaturate(u, effective, Axis::kThrust, range_.upper, kDecreaseOnly);
-        desaturate(u, effective, Axis::kRoll, range_.upper);
-        desaturate(u, effective, Axis::kPitch, range_.upper);
+        desaturate(u, effective, Axis::kThrust, kDecreaseOnly);
+        desaturate(u, effective, Axis::kRoll);
+        desaturate(u, effective, Axis::kPitch);
         mix_yaw(yaw, u, effective);
         break;
       case Airmode::kRollPitch:
         u.noalias() = mixing() * effective;
-        desaturate(u, effective, Axis::kThrust, range_.upper);
+        desaturate(u, effective, Axis::kThrust);
         mix_yaw(yaw, u, effective);
         break;
       case Airmode::kRollPitchYaw:
         effective = demand;
         u.noalias() = mixing() * demand;
-        desaturate(u, effective, Axis::kThrust, range_.upper);
-        desaturate(u, effective, Axis::kYaw, range_.upper);
+        desaturate(u, effective, Axis::kThrust);
+        desaturate(u, effective, Axis::kYaw);
         break;
     }
     constexpr double kRangeSlack = 1e-12;  // the sequence's own rounding
@@ -90,14 +107,14 @@ class PrioritizedAllocator::Kernel {
     clamp(clipped);
     repair(effective, u);
     clamp(u);
-    const AllocationResult repaired = report(demand, u);
-    const AllocationResult clip = report(demand, clipped);
-    if (closer_in_priority_order(clip.unallocated, repaired.unallocated)) {
+    const AxisVector repair_left = undelivered(demand, u);
+    const AxisVector clip_left = undelivered(demand, clipped);
+    if (closer_in_priority_order(clip_left, repair_left)) {
       store(clipped, commands);
-      return clip;
+      return detail::describe_with<N>(clip_left, clipped.data(), n_, range_);
     }
     store(u, commands);
-    return repaired;
+    return detail::describe_with<N>(repair_left, u.data(), n_, range_);
   }
 
  private:
@@ -107,7 +124,6 @@ class PrioritizedAllocator::Kernel {
     return detail::ConstMixingView<N>(a_.mixing_.data(), n_, kNumAxes);
   }
   View column(Axis axis) const { return View(a_.columns_[index(axis)].data(), n_); }
-  View gain_inverse(Axis axis) const { return View(a_.gain_inverse_[index(axis)].data(), n_); }
 
   // Into the range; NaN (which finite inputs cannot produce) to the safe end.
   void clamp(Motors& u) const {
@@ -119,6 +135,9 @@ class PrioritizedAllocator::Kernel {
     commands.resize(n_);
     detail::MotorsView<N>(commands.data(), n_) = u;
   }
+  AxisVector undelivered(const AxisVector& target, const Motors& u) const {
+    return detail::undelivered<N>(a_.effectiveness_, target, u.data(), n_, a_.controlled_);
+  }
   AllocationResult report(const AxisVector& target, const Motors& u) const {
     return detail::describe_fixed<N>(a_.effectiveness_, target, u.data(), n_, range_,
                                      a_.controlled_);
@@ -129,29 +148,30 @@ class PrioritizedAllocator::Kernel {
     return report(target, u);
   }
 
-  // The gain along a column (given as its gain inverse) that removes as much
-  // of the range violation as possible: the smallest and largest gains that
-  // each bring one violating motor back to its limit, summed. The sum moves
-  // the worst violations symmetrically when both limits are exceeded, and
-  // fully when only one is. clamp(u) - u is the distance back into range
-  // (zero inside), so no motor needs a branch.
-  double desaturation_gain(const Motors& u, const View& inverse, double upper) const {
-    const Motors k = (u.cwiseMax(range_.lower).cwiseMin(upper) - u).cwiseProduct(inverse);
-    return std::min(0.0, k.minCoeff()) + std::max(0.0, k.maxCoeff());
+  // Moves u along the column of `axis` (and the effective demand with it)
+  // by the gain that removes as much of the range violation as possible:
+  // the smallest and largest gains that each bring one violating motor back
+  // to its limit, summed. The sum moves the worst violations symmetrically
+  // when both limits are exceeded, and fully when only one is. Then a second,
+  // half step balances what remains between the two limits.
+  //
+  // Every motor keeps to the range for the gains in an interval
+  // [a_i, b_i] (in_range_gains); motor i asks for max(a_i, 0) upward or
+  // min(b_i, 0) downward, so the step is max(0, max a) + min(0, min b). A
+  // step g moves every interval by -g, so the second step comes from the
+  // same two extremes: one pass over the motors for both steps.
+  void desaturate(Motors& u, AxisVector& effective, Axis axis, bool decrease_only = false) const {
+    desaturate_along(u, effective, axis, a_.gains_[index(axis)], decrease_only);
   }
-
-  // Moves u along the column of `axis`, and the effective demand with it.
-  void desaturate(Motors& u, AxisVector& effective, Axis axis, double upper,
-                  bool decrease_only = false) const {
-    const View v = column(axis);
-    const View inverse = gain_inverse(axis);
-    double gain = desaturation_gain(u, inverse, upper);
+  void desaturate_along(Motors& u, AxisVector& effective, Axis axis, const InRangeGains& g,
+                        bool decrease_only) const {
+    const Motors position = u.cwiseProduct(View(g.inverse.data(), n_));
+    const double need_up = (View(g.lowest.data(), n_) - position).maxCoeff();     // max a_i
+    const double need_down = (View(g.highest.data(), n_) - position).minCoeff();  // min b_i
+    double gain = std::max(0.0, need_up) + std::min(0.0, need_down);
     if (decrease_only && gain > 0.0) return;
-    u += gain * v;
-    effective[index(axis)] += gain;
-    // A second, half step balances what remains between the two limits.
-    gain = 0.5 * desaturation_gain(u, inverse, upper);
-    u += gain * v;
+    gain += 0.5 * (std::max(0.0, need_up - gain) + std::min(0.0, need_down - gain));
+    u += gain * column(axis);
     effective[index(axis)] += gain;
   }
 
@@ -160,10 +180,9 @@ class PrioritizedAllocator::Kernel {
     effective[index(Axis::kYaw)] = yaw;
     // Yaw gives way on its own axis (roll and pitch untouched), with some
     // room above the top so that full thrust still leaves yaw authority...
-    const double widened = range_.upper + (range_.upper - range_.lower) * a_.yaw_headroom_;
-    desaturate(u, effective, Axis::kYaw, widened);
+    desaturate_along(u, effective, Axis::kYaw, a_.yaw_gains_with_headroom_, false);
     // ...which thrust then pays for, only downward.
-    desaturate(u, effective, Axis::kThrust, range_.upper, kDecreaseOnly);
+    desaturate(u, effective, Axis::kThrust, kDecreaseOnly);
   }
 
   // Largest s in [0, 1] for which base + s * part can be shifted along the
@@ -203,23 +222,35 @@ class PrioritizedAllocator::Kernel {
         } else if (room_up < 0.0 || room_down < 0.0) {
           return -1.0;
         }
-        low[i] = -std::numeric_limits<double>::infinity();
-        up[i] = std::numeric_limits<double>::infinity();
+        low[i] = -kInf;
+        up[i] = kInf;
       }
       if (bottom > top) return -1.0;
     }
     constexpr double kFits = 1e-13;  // excess within rounding of a motor on its limit
     double s = top;
     for (Eigen::Index step = 0; step < 4 * n_ + 4; ++step) {
-      Eigen::Index i = 0;
-      Eigen::Index j = 0;
-      const double highest_low = (low - s * rate).maxCoeff(&i);
-      const double lowest_up = (up - s * rate).minCoeff(&j);
+      // The two motors that set the excess at s and, among ties, the ones
+      // that stay binding just below s (the slope of the piece to the left).
+      double highest_low = -kInf;
+      double lowest_up = kInf;
+      double rate_low = -kInf;
+      double rate_up = kInf;
+      for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
+        const double l = low[i] - s * rate[i];
+        const double h = up[i] - s * rate[i];
+        const bool sets_low = l > highest_low || (l == highest_low && rate[i] > rate_low);
+        const bool sets_up = h < lowest_up || (h == lowest_up && rate[i] < rate_up);
+        highest_low = sets_low ? l : highest_low;
+        rate_low = sets_low ? rate[i] : rate_low;
+        lowest_up = sets_up ? h : lowest_up;
+        rate_up = sets_up ? rate[i] : rate_up;
+      }
       double excess = highest_low - lowest_up;
-      double slope = rate[j] - rate[i];  // d excess / ds on this piece
+      double slope = rate_up - rate_low;  // d excess / ds
       if (!may_raise && highest_low > excess) {
         excess = highest_low;
-        slope = -rate[i];
+        slope = -rate_low;
       }
       if (excess <= kFits) return s;
       // Rising toward s = 0 (or flat): every smaller scale exceeds too.

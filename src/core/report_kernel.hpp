@@ -14,17 +14,34 @@ namespace motormix::detail {
 // A command within this distance of a limit counts as sitting on it.
 inline constexpr double kSaturationTolerance = 1e-9;
 
-// Inlined into each caller: the report is most of a simple strategy's cost,
-// and a call would pass the result through memory.
-template <int N>
 #if defined(__GNUC__)
-__attribute__((always_inline))
+#define MOTORMIX_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#define MOTORMIX_ALWAYS_INLINE inline
 #endif
-inline AllocationResult
-describe_fixed(const EffectivenessMatrix& effectiveness, const AxisVector& target,
-               const double* commands, Eigen::Index n, CommandRange range, AxisMask controlled) {
+
+// What `commands` leave undelivered of `target`, per axis; axes the vehicle
+// is not commanded in are zero.
+template <int N>
+MOTORMIX_ALWAYS_INLINE AxisVector undelivered(const EffectivenessMatrix& effectiveness,
+                                              const AxisVector& target, const double* commands,
+                                              Eigen::Index n, AxisMask controlled) {
   const detail::ConstMotorsView<N> u(commands, n);
   const detail::ConstEffectivenessView<N> e(effectiveness.data(), kNumAxes, n);
+  AxisVector unallocated;
+  unallocated.noalias() = target - e * u;
+  for (int a = 0; a < kNumAxes; ++a) {
+    if (!((controlled >> a) & 1U)) unallocated[a] = 0.0;
+  }
+  return unallocated;
+}
+
+// The report for `commands`, given what they leave undelivered.
+template <int N>
+MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unallocated,
+                                                      const double* commands, Eigen::Index n,
+                                                      CommandRange range) {
+  const detail::ConstMotorsView<N> u(commands, n);
   AllocationResult result;
   MotorMask upper = 0;
   MotorMask lower = 0;
@@ -36,15 +53,26 @@ describe_fixed(const EffectivenessMatrix& effectiveness, const AxisVector& targe
   }
   result.saturated_upper = upper;
   result.saturated_lower = lower;
-  result.unallocated.noalias() = target - e * u;
+  result.unallocated = unallocated;
   std::uint8_t limited = 0;
   for (int a = 0; a < kNumAxes; ++a) {
-    if (!((controlled >> a) & 1U)) result.unallocated[a] = 0.0;
-    limited |=
-        static_cast<std::uint8_t>((std::abs(result.unallocated[a]) > kDeliveredTolerance) << a);
+    limited |= static_cast<std::uint8_t>((std::abs(unallocated[a]) > kDeliveredTolerance) << a);
   }
   result.axis_limited = limited;
   return result;
 }
 
+// Inlined into each caller: the report is most of a simple strategy's cost,
+// and a call would pass the result through memory.
+template <int N>
+MOTORMIX_ALWAYS_INLINE AllocationResult describe_fixed(const EffectivenessMatrix& effectiveness,
+                                                       const AxisVector& target,
+                                                       const double* commands, Eigen::Index n,
+                                                       CommandRange range, AxisMask controlled) {
+  return describe_with<N>(undelivered<N>(effectiveness, target, commands, n, controlled), commands,
+                          n, range);
+}
+
 }  // namespace motormix::detail
+
+#undef MOTORMIX_ALWAYS_INLINE
