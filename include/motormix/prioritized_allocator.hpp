@@ -69,6 +69,7 @@ class PrioritizedAllocator final : public MatrixAllocator {
   InRangeGains yaw_gains_with_headroom_;        // yaw, with yaw_headroom above the top
   MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)
   bool all_motors_lift_;      // no motor the thrust shift leaves in place
+  bool equal_lift_;           // every motor the same share of thrust (symmetric multirotors)
 };
 
 }  // namespace motormix

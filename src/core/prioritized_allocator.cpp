@@ -1,5 +1,6 @@
 #include <motormix/prioritized_allocator.hpp>
 
+#include "fitting_scale.hpp"
 #include "fixed_size.hpp"
 #include "report_kernel.hpp"
 #include "shift_kernel.hpp"
@@ -53,6 +54,10 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
   const MotorVector& thrust = columns_[index(Axis::kThrust)];
   lift_inverse_ = detail::positive_inverse(thrust);
   all_motors_lift_ = thrust.size() == 0 || thrust.minCoeff() > 0.0;
+  // Equal within rounding: the repair's shift still uses the column itself.
+  constexpr double kSameLift = 1e-12;
+  equal_lift_ = thrust.size() > 0 && all_motors_lift_ &&
+                thrust.maxCoeff() - thrust.minCoeff() <= kSameLift * thrust.maxCoeff();
 }
 
 // One allocation at N motors, every per-motor vector a local of fixed size.
@@ -185,80 +190,14 @@ class PrioritizedAllocator::Kernel {
     desaturate(u, effective, Axis::kThrust, kDecreaseOnly);
   }
 
-  // Largest s in [0, 1] for which base + s * part can be shifted along the
-  // thrust column into range (only downward unless may_raise); -1 when none.
-  //
-  // In thrust units (divided by thrust_i), motor i allows the shifts k in
-  //   L_i(s) = (lower - base_i - s part_i) / thrust_i <= k <= U_i(s) = (upper - ...) / thrust_i,
-  // so a shift exists iff the excess G(s) = max_i L_i(s) - min_j U_j(s) is
-  // <= 0 (and max_i L_i(s) <= 0 when thrust may not rise). G is the maximum
-  // of lines minus the minimum of lines: convex and piecewise linear, so the
-  // scales that fit form an interval and the answer is its top. From s = 1,
-  // each step solves the piece in force (the two motors that set the excess)
-  // exactly; the tangent of a convex function lies below it, so no step
-  // passes the answer, and each step leaves one piece for good. G has fewer
-  // than 3n pieces, so the loop ends within them; the cap only guards
-  // against rounding, and gives up the scale (-1: a safe answer) if reached.
-  // Motors that thrust does not move are linear in s on their own.
+  // Largest s in [0, 1] for which base + s * part fits after a thrust shift
+  // (only downward unless may_raise); -1 when none (fitting_scale.hpp).
   double largest_fitting_scale(const Motors& base, const Motors& part, bool may_raise) const {
-    const View lift(a_.lift_inverse_.data(), n_);
-    double bottom = 0.0;
-    double top = 1.0;
-    Motors low = (range_.lower - base.array()).matrix().cwiseProduct(lift);  // L_i(0)
-    Motors up = (range_.upper - base.array()).matrix().cwiseProduct(lift);   // U_i(0)
-    const Motors rate = part.cwiseProduct(lift);
-    if (!a_.all_motors_lift_) {
-      for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
-        if (lift[i] != 0.0) continue;
-        // lower <= base_i + s part_i <= upper, and no say in the shift.
-        const double room_up = range_.upper - base[i];
-        const double room_down = base[i] - range_.lower;
-        if (part[i] > 0.0) {
-          top = std::min(top, room_up / part[i]);
-          bottom = std::max(bottom, -room_down / part[i]);
-        } else if (part[i] < 0.0) {
-          top = std::min(top, -room_down / part[i]);
-          bottom = std::max(bottom, room_up / part[i]);
-        } else if (room_up < 0.0 || room_down < 0.0) {
-          return -1.0;
-        }
-        low[i] = -kInf;
-        up[i] = kInf;
-      }
-      if (bottom > top) return -1.0;
+    if (a_.equal_lift_) {
+      return detail::largest_fitting_scale_equal_lift<N>(base, part, n_, range_, may_raise);
     }
-    constexpr double kFits = 1e-13;  // excess within rounding of a motor on its limit
-    double s = top;
-    for (Eigen::Index step = 0; step < 4 * n_ + 4; ++step) {
-      // The two motors that set the excess at s and, among ties, the ones
-      // that stay binding just below s (the slope of the piece to the left).
-      double highest_low = -kInf;
-      double lowest_up = kInf;
-      double rate_low = -kInf;
-      double rate_up = kInf;
-      for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
-        const double l = low[i] - s * rate[i];
-        const double h = up[i] - s * rate[i];
-        const bool sets_low = l > highest_low || (l == highest_low && rate[i] > rate_low);
-        const bool sets_up = h < lowest_up || (h == lowest_up && rate[i] < rate_up);
-        highest_low = sets_low ? l : highest_low;
-        rate_low = sets_low ? rate[i] : rate_low;
-        lowest_up = sets_up ? h : lowest_up;
-        rate_up = sets_up ? rate[i] : rate_up;
-      }
-      double excess = highest_low - lowest_up;
-      double slope = rate_up - rate_low;  // d excess / ds
-      if (!may_raise && highest_low > excess) {
-        excess = highest_low;
-        slope = -rate_low;
-      }
-      if (excess <= kFits) return s;
-      // Rising toward s = 0 (or flat): every smaller scale exceeds too.
-      if (slope <= 0.0) return -1.0;
-      s -= excess / slope;
-      if (s < bottom) return -1.0;
-    }
-    return -1.0;
+    return detail::largest_fitting_scale<N>(base, part, View(a_.lift_inverse_.data(), n_),
+                                            a_.all_motors_lift_, n_, range_, may_raise);
   }
 
   // Keeps the promise of the priorities exactly: thrust moves first (only
@@ -278,7 +217,14 @@ class PrioritizedAllocator::Kernel {
     double rp_scale = 1.0;
     if (yaw_scale < 0.0) {
       yaw_scale = 0.0;
-      rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, rp_part, may_raise));
+      // Thrust alone is the same on every motor when they lift alike: then
+      // the scale is closed form.
+      const double fits =
+          a_.equal_lift_
+              ? detail::largest_fitting_scale_uniform_base(
+                    thrust_part[0], rp_part.minCoeff(), rp_part.maxCoeff(), range_, may_raise)
+              : largest_fitting_scale(thrust_part, rp_part, may_raise);
+      rp_scale = std::max(0.0, fits);
     }
     u = thrust_part + yaw_scale * yaw_part + rp_scale * rp_part;
     ShiftInterval k =

@@ -20,9 +20,13 @@ inline MotorVector positive_inverse(const MotorVector& d) {
   return inverse;
 }
 
+// A motor the shift cannot move counts as in range this close to it: it
+// may have been put exactly on its limit, and the caller clamps afterwards.
+inline constexpr double kUnmovedSlack = 1e-12;
+
 // feasible_shifts() at N motors, on local values: the k for which u + k d is
 // in range, given `inverse` = positive_inverse(d). A motor the shift cannot
-// move that is out of range makes the interval empty.
+// move that is out of range (by more than rounding) makes the interval empty.
 template <int N, typename U, typename D>
 ShiftInterval shifts_that_fit(const U& u, const D& inverse, Eigen::Index n, CommandRange range) {
   ShiftInterval k{-std::numeric_limits<double>::infinity(),
@@ -30,7 +34,7 @@ ShiftInterval shifts_that_fit(const U& u, const D& inverse, Eigen::Index n, Comm
   bool stuck = false;
   for (Eigen::Index i = 0; i < detail::count<N>(n); ++i) {
     if (inverse[i] == 0.0) {
-      stuck = stuck || u[i] < range.lower || u[i] > range.upper;
+      stuck = stuck || u[i] < range.lower - kUnmovedSlack || u[i] > range.upper + kUnmovedSlack;
       continue;
     }
     k.lo = std::max(k.lo, (range.lower - u[i]) * inverse[i]);

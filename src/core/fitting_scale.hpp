@@ -1,0 +1,158 @@
+#pragma once
+// The one-dimensional problem `prioritized`'s repair solves for each axis
+// that gives way: the largest share s in [0, 1] of a part (yaw, or roll and
+// pitch) that still fits into the command range on top of a base, once all
+// motors are shifted together along the thrust column by the best amount
+// (only downward when thrust may not rise). At a motor count fixed at
+// compile time, on local values.
+//
+// Motor i allows the shifts k (in thrust units, divided by thrust_i) in
+//   L_i(s) = (lower - base_i - s part_i) / thrust_i <= k <= U_i(s) = (upper - ...) / thrust_i,
+// so a shift exists iff the excess G(s) = max_i L_i(s) - min_j U_j(s) is
+// <= 0, and also max_i L_i(s) <= 0 when thrust may not rise. G is a maximum
+// of lines minus a minimum of lines: convex and piecewise linear, so the
+// scales that fit form an interval and the answer is its top.
+//
+// From s = 1 each step solves the piece of G in force exactly (its root).
+// The tangent of a convex function lies below it, so no step passes the
+// answer, and each step leaves one piece for good; G has fewer than 3n
+// pieces, so the steps end within them. The cap only guards against
+// rounding, and gives the scale up (-1, a safe answer) if ever reached.
+// Motors that thrust does not move constrain s on their own, linearly.
+
+#include <motormix/allocation.hpp>
+
+#include "fixed_size.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace motormix::detail {
+
+// An excess within rounding of a motor sitting on its limit counts as a fit.
+inline constexpr double kFitTolerance = 1e-13;
+
+// What one step needs of G at s: its value and the slope of the piece just
+// below s.
+struct ExcessAt {
+  double excess;
+  double slope;
+};
+
+// Steps down from s = top to the largest s >= bottom with excess <= 0
+// (`excess_at(s)` gives G and its slope); -1 when there is none.
+template <typename ExcessOf>
+double top_of_fitting_scales(double bottom, double top, Eigen::Index motors,
+                             const ExcessOf& excess_at) {
+  double s = top;
+  for (Eigen::Index step = 0; step < 4 * motors + 4; ++step) {
+    const ExcessAt g = excess_at(s);
+    if (g.excess <= kFitTolerance) return s;
+    // Rising toward s = 0 (or flat): every smaller scale exceeds too.
+    if (g.slope <= 0.0) return -1.0;
+    s -= g.excess / g.slope;
+    if (s < bottom) return -1.0;
+  }
+  return -1.0;
+}
+
+// The general case: any thrust column. `lift` is positive_inverse(thrust)
+// (0 marks a motor the shift does not move); `all_lift` says there is none.
+template <int N, typename Motors, typename Lift>
+double largest_fitting_scale(const Motors& base, const Motors& part, const Lift& lift,
+                             bool all_lift, Eigen::Index n, CommandRange range, bool may_raise) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double bottom = 0.0;
+  double top = 1.0;
+  LocalMotors<N> low = (range.lower - base.array()).matrix().cwiseProduct(lift);  // L_i(0)
+  LocalMotors<N> up = (range.upper - base.array()).matrix().cwiseProduct(lift);   // U_i(0)
+  const LocalMotors<N> rate = part.cwiseProduct(lift);
+  if (!all_lift) {
+    for (Eigen::Index i = 0; i < count<N>(n); ++i) {
+      if (lift[i] != 0.0) continue;
+      // lower <= base_i + s part_i <= upper, and no say in the shift.
+      const double room_up = range.upper - base[i];
+      const double room_down = base[i] - range.lower;
+      if (part[i] > 0.0) {
+        top = std::min(top, room_up / part[i]);
+        bottom = std::max(bottom, -room_down / part[i]);
+      } else if (part[i] < 0.0) {
+        top = std::min(top, -room_down / part[i]);
+        bottom = std::max(bottom, room_up / part[i]);
+      } else if (room_up < 0.0 || room_down < 0.0) {
+        return -1.0;
+      }
+      low[i] = -kInf;
+      up[i] = kInf;
+    }
+    if (bottom > top) return -1.0;
+  }
+  return top_of_fitting_scales(bottom, top, n, [&](double s) {
+    // The motors that set the bounds at s and, among ties, the ones that
+    // stay binding just below s (the slope of the piece to the left).
+    double highest_low = -kInf;
+    double lowest_up = kInf;
+    double rate_low = -kInf;
+    double rate_up = kInf;
+    for (Eigen::Index i = 0; i < count<N>(n); ++i) {
+      const double l = low[i] - s * rate[i];
+      const double h = up[i] - s * rate[i];
+      const bool sets_low = l > highest_low || (l == highest_low && rate[i] > rate_low);
+      const bool sets_up = h < lowest_up || (h == lowest_up && rate[i] < rate_up);
+      highest_low = sets_low ? l : highest_low;
+      rate_low = sets_low ? rate[i] : rate_low;
+      lowest_up = sets_up ? h : lowest_up;
+      rate_up = sets_up ? rate[i] : rate_up;
+    }
+    ExcessAt g{highest_low - lowest_up, rate_up - rate_low};
+    if (!may_raise && highest_low > g.excess) g = {highest_low, -rate_low};
+    return g;
+  });
+}
+
+// Every motor with the same positive share of thrust (symmetric multirotors):
+// the common factor drops out, and G is, in command units, the spread of
+// base + s part beyond the range (and, when thrust may not rise, how far
+// its lowest motor sits below the bottom). One vector a step.
+template <int N, typename Motors>
+double largest_fitting_scale_equal_lift(const Motors& base, const Motors& part, Eigen::Index n,
+                                        CommandRange range, bool may_raise) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const double room = range.upper - range.lower;
+  return top_of_fitting_scales(0.0, 1.0, n, [&](double s) {
+    double highest = -kInf;
+    double lowest = kInf;
+    double part_high = kInf;  // slope of the highest motor just below s
+    double part_low = -kInf;  // slope of the lowest motor just below s
+    for (Eigen::Index i = 0; i < count<N>(n); ++i) {
+      const double w = base[i] + s * part[i];
+      const bool sets_high = w > highest || (w == highest && part[i] < part_high);
+      const bool sets_low = w < lowest || (w == lowest && part[i] > part_low);
+      highest = sets_high ? w : highest;
+      part_high = sets_high ? part[i] : part_high;
+      lowest = sets_low ? w : lowest;
+      part_low = sets_low ? part[i] : part_low;
+    }
+    ExcessAt g{highest - lowest - room, part_high - part_low};
+    const double below_bottom = range.lower - lowest;
+    if (!may_raise && below_bottom > g.excess) g = {below_bottom, -part_low};
+    return g;
+  });
+}
+
+// Equal lift and a base the same for every motor (thrust alone): G is
+// linear in s, so the answer is closed form. `part` spans [low, high].
+inline double largest_fitting_scale_uniform_base(double base, double part_low, double part_high,
+                                                 CommandRange range, bool may_raise) {
+  double top = 1.0;
+  const double spread = part_high - part_low;
+  if (spread > 0.0) top = std::min(top, (range.upper - range.lower) / spread);
+  if (!may_raise) {
+    // The lowest motor must not need a shift up: base + s part_low >= lower.
+    if (base < range.lower) return -1.0;
+    if (part_low < 0.0) top = std::min(top, (base - range.lower) / -part_low);
+  }
+  return top;
+}
+
+}  // namespace motormix::detail
