@@ -64,12 +64,20 @@ class PrioritizedAllocator final : public MatrixAllocator {
 
   Airmode airmode_;
   double yaw_headroom_;
-  std::array<MotorVector, kNumAxes> columns_;   // the mixing matrix, column by column
-  std::array<InRangeGains, kNumAxes> gains_;    // per column, for the command range
-  InRangeGains yaw_gains_with_headroom_;        // yaw, with yaw_headroom above the top
+  std::array<MotorVector, kNumAxes> columns_;  // the mixing matrix, column by column
+  std::array<InRangeGains, kNumAxes> gains_;   // per column, for the command range
+  InRangeGains yaw_gains_with_headroom_;       // yaw, with yaw_headroom above the top
   MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)
   bool all_motors_lift_;      // no motor the thrust shift leaves in place
   bool equal_lift_;           // every motor the same share of thrust (symmetric multirotors)
+  bool effectiveness_inverts_mixing_;  // E M = I on the controlled axes
+  // The yaw column takes two values, one per spin direction (multirotors
+  // with equal rotors): the repair's yaw scale is then closed form. The pads
+  // are 0 on the motors of a group and +inf elsewhere (masked extremes).
+  bool yaw_two_groups_ = false;
+  double yaw_value_a_ = 0.0;
+  double yaw_value_b_ = 0.0;
+  MotorVector yaw_pad_a_, yaw_pad_b_;
 };
 
 }  // namespace motormix

@@ -112,13 +112,16 @@ double largest_fitting_scale(const Motors& base, const Motors& part, const Lift&
 
 // Every motor with the same positive share of thrust (symmetric multirotors):
 // the common factor drops out, and G is, in command units, the spread of
-// base + s part beyond the range (and, when thrust may not rise, how far
-// its lowest motor sits below the bottom). One vector a step.
+// offset + base + s part beyond the range (and, when thrust may not rise,
+// how far its lowest motor sits below the bottom). `offset` is the part of
+// the base every motor shares (thrust): only the bottom sees it. One vector
+// a step.
 template <int N, typename Motors>
-double largest_fitting_scale_equal_lift(const Motors& base, const Motors& part, Eigen::Index n,
-                                        CommandRange range, bool may_raise) {
+double largest_fitting_scale_equal_lift(double offset, const Motors& base, const Motors& part,
+                                        Eigen::Index n, CommandRange range, bool may_raise) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   const double room = range.upper - range.lower;
+  const double bottom = range.lower - offset;
   return top_of_fitting_scales(0.0, 1.0, n, [&](double s) {
     double highest = -kInf;
     double lowest = kInf;
@@ -134,7 +137,7 @@ double largest_fitting_scale_equal_lift(const Motors& base, const Motors& part, 
       part_low = sets_low ? part[i] : part_low;
     }
     ExcessAt g{highest - lowest - room, part_high - part_low};
-    const double below_bottom = range.lower - lowest;
+    const double below_bottom = bottom - lowest;
     if (!may_raise && below_bottom > g.excess) g = {below_bottom, -part_low};
     return g;
   });
@@ -149,10 +152,55 @@ inline double largest_fitting_scale_uniform_base(double base, double part_low, d
   if (spread > 0.0) top = std::min(top, (range.upper - range.lower) / spread);
   if (!may_raise) {
     // The lowest motor must not need a shift up: base + s part_low >= lower.
-    if (base < range.lower) return -1.0;
+    if (base < range.lower - kFitTolerance) return -1.0;
     if (part_low < 0.0) top = std::min(top, (base - range.lower) / -part_low);
   }
   return top;
+}
+
+// The extremes of the base over each of two groups of motors.
+struct GroupExtremes {
+  double high_a, low_a, high_b, low_b;
+};
+
+// Equal lift, and a part that is `part_a` on one group of motors and
+// `part_b` on the other (yaw on a multirotor whose rotors spin two ways):
+// the spread of offset + base + s part is the largest of the spreads within
+// each group (s drops out) and of the two cross terms, which are linear in
+// s; the bottom, when thrust may not rise, is linear in s per group too. So
+// the scales that fit are an intersection of half-lines: closed form.
+inline double largest_fitting_scale_two_groups(double offset, const GroupExtremes& base,
+                                               double part_a, double part_b, CommandRange range,
+                                               bool may_raise) {
+  const double room = range.upper - range.lower;
+  double lo = 0.0;
+  double hi = 1.0;
+  bool none = false;
+  // a s <= c. The scales may narrow to a single point (a motor on each
+  // limit), which rounding of the small coefficients can leave wider than
+  // empty: the bounds from below allow the excess a step of
+  // top_of_fitting_scales() allows, in command units.
+  const auto keep = [&](double a, double c) {
+    if (a > 0.0) {
+      hi = std::min(hi, c / a);
+    } else if (a < 0.0) {
+      lo = std::max(lo, (c + kFitTolerance) / a);
+    } else if (c < -kFitTolerance) {
+      none = true;
+    }
+  };
+  // Within a group every motor moves alike: only the base's spread counts.
+  // An excess within rounding of a motor on its limit counts as a fit.
+  if (base.high_a - base.low_a > room + kFitTolerance) return -1.0;
+  if (base.high_b - base.low_b > room + kFitTolerance) return -1.0;
+  keep(part_a - part_b, room - (base.high_a - base.low_b));  // a's top over b's bottom
+  keep(part_b - part_a, room - (base.high_b - base.low_a));  // b's top over a's bottom
+  if (!may_raise) {
+    // offset + low + s part >= lower for both groups' lowest motors.
+    keep(-part_a, offset + base.low_a - range.lower);
+    keep(-part_b, offset + base.low_b - range.lower);
+  }
+  return !none && lo <= hi ? hi : -1.0;
 }
 
 }  // namespace motormix::detail

@@ -10,6 +10,15 @@
 
 #include <type_traits>
 
+// For the small steps of a kernel that must not become calls: a call passes
+// the per-motor vectors through memory, on the critical path of a chain of
+// dependent steps.
+#if defined(__GNUC__)
+#define MOTORMIX_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#define MOTORMIX_ALWAYS_INLINE inline
+#endif
+
 namespace motormix::detail {
 
 template <typename Kernel>

@@ -18,6 +18,14 @@ namespace {
 constexpr double kNegligibleEntry = std::numeric_limits<float>::epsilon();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The roll/pitch part of an error, Euclidean. Errors are at most a few
+// units: a plain root is exact enough and much cheaper than hypot's
+// overflow guards.
+double roll_pitch_norm(const AxisVector& e) {
+  return std::sqrt(e[index(Axis::kRoll)] * e[index(Axis::kRoll)] +
+                   e[index(Axis::kPitch)] * e[index(Axis::kPitch)]);
+}
+
 }  // namespace
 
 PrioritizedAllocator::InRangeGains PrioritizedAllocator::in_range_gains(const MotorVector& v,
@@ -54,6 +62,42 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
   const MotorVector& thrust = columns_[index(Axis::kThrust)];
   lift_inverse_ = detail::positive_inverse(thrust);
   all_motors_lift_ = thrust.size() == 0 || thrust.minCoeff() > 0.0;
+  // E M = I on the axes answered for: commands in range deliver exactly what
+  // they were mixed from (true of the healthy vehicle; after a failure the
+  // effectiveness is the healthy one's, and an axis given up is not).
+  Eigen::Matrix4d delivered = effectiveness_ * mixing_;
+  constexpr double kInverts = 1e-9;
+  effectiveness_inverts_mixing_ = true;
+  for (int row = 0; row < kNumAxes; ++row) {
+    for (int col = 0; col < kNumAxes; ++col) {
+      if (!((controlled_ >> row) & 1U)) continue;
+      const double expected = row == col ? 1.0 : 0.0;
+      if (std::abs(delivered(row, col) - expected) > kInverts)
+        effectiveness_inverts_mixing_ = false;
+    }
+  }
+  const MotorVector& yaw = columns_[index(Axis::kYaw)];
+  if (yaw.size() > 1) {
+    const double scale = yaw.cwiseAbs().maxCoeff();
+    const double same = 1e-12 * scale;  // equal within rounding
+    const double a = yaw[0];
+    double b = a;
+    for (Eigen::Index i = 0; i < yaw.size(); ++i) {
+      if (std::abs(yaw[i] - a) > same) b = yaw[i];
+    }
+    bool two = scale > 0.0 && std::abs(b - a) > same;
+    yaw_pad_a_.resize(yaw.size());
+    yaw_pad_b_.resize(yaw.size());
+    for (Eigen::Index i = 0; i < yaw.size() && two; ++i) {
+      const bool in_a = std::abs(yaw[i] - a) <= same;
+      two = in_a || std::abs(yaw[i] - b) <= same;
+      yaw_pad_a_[i] = in_a ? 0.0 : kInf;
+      yaw_pad_b_[i] = in_a ? kInf : 0.0;
+    }
+    yaw_two_groups_ = two;
+    yaw_value_a_ = a;
+    yaw_value_b_ = b;
+  }
   // Equal within rounding: the repair's shift still uses the column itself.
   constexpr double kSameLift = 1e-12;
   equal_lift_ = thrust.size() > 0 && all_motors_lift_ &&
@@ -92,8 +136,7 @@ class PrioritizedAllocator::Kernel {
         mix_yaw(yaw, u, effective);
         break;
       case Airmode::kRollPitchYaw:
-        effective = demand;
-        u.noalias() = mixing() * demand;
+        effective = demand;  // u is already the mix of the whole demand
         desaturate(u, effective, Axis::kThrust);
         desaturate(u, effective, Axis::kYaw);
         break;
@@ -110,10 +153,20 @@ class PrioritizedAllocator::Kernel {
     // demand better in priority order: roll and pitch, then thrust, then yaw.
     Motors clipped = u;
     clamp(clipped);
-    repair(effective, u);
+    const AxisVector clip_left = undelivered(demand, clipped);
+    const Repair r = repair_scales(effective);
+    // Most often the clip keeps more of roll and pitch than scaling them
+    // along their direction can. When the scales already show that (with
+    // a margin far above rounding), the repaired commands are not needed.
+    if (a_.effectiveness_inverts_mixing_ &&
+        roll_pitch_norm(clip_left) <
+            repair_roll_pitch_error(demand, effective, r) - 2.0 * kDeliveredTolerance) {
+      store(clipped, commands);
+      return detail::describe_with<N>(clip_left, clipped.data(), n_, range_);
+    }
+    apply(r, effective, u);
     clamp(u);
     const AxisVector repair_left = undelivered(demand, u);
-    const AxisVector clip_left = undelivered(demand, clipped);
     if (closer_in_priority_order(clip_left, repair_left)) {
       store(clipped, commands);
       return detail::describe_with<N>(clip_left, clipped.data(), n_, range_);
@@ -131,6 +184,8 @@ class PrioritizedAllocator::Kernel {
   View column(Axis axis) const { return View(a_.columns_[index(axis)].data(), n_); }
 
   // Into the range; NaN (which finite inputs cannot produce) to the safe end.
+  // Element by element: measured faster than the packet clamp plus a NaN
+  // test on these sizes.
   void clamp(Motors& u) const {
     for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
       u[i] = u[i] >= range_.lower ? (u[i] <= range_.upper ? u[i] : range_.upper) : range_.lower;
@@ -193,42 +248,74 @@ class PrioritizedAllocator::Kernel {
   // Largest s in [0, 1] for which base + s * part fits after a thrust shift
   // (only downward unless may_raise); -1 when none (fitting_scale.hpp).
   double largest_fitting_scale(const Motors& base, const Motors& part, bool may_raise) const {
-    if (a_.equal_lift_) {
-      return detail::largest_fitting_scale_equal_lift<N>(base, part, n_, range_, may_raise);
-    }
     return detail::largest_fitting_scale<N>(base, part, View(a_.lift_inverse_.data(), n_),
                                             a_.all_motors_lift_, n_, range_, may_raise);
   }
 
-  // Keeps the promise of the priorities exactly: thrust moves first (only
-  // downward without airmode), then yaw is scaled down, and roll and pitch
-  // only when yaw alone cannot make room.
-  void repair(AxisVector& effective, Motors& u) const {
+  // The repair keeps the promise of the priorities exactly: thrust moves
+  // first (only downward without airmode), then yaw is scaled down, and
+  // roll and pitch only when yaw alone cannot make room. First the scales...
+  struct Repair {
+    Motors rp_part, yaw_part;
+    double yaw_scale = 0.0;
+    double rp_scale = 1.0;
+  };
+  Repair repair_scales(const AxisVector& effective) const {
     const bool may_raise = a_.airmode_ != Airmode::kOff;
-    const View thrust = column(Axis::kThrust);
-    const Motors thrust_part = thrust * effective[index(Axis::kThrust)];
-    const Motors rp_part = column(Axis::kRoll) * effective[index(Axis::kRoll)] +
-                           column(Axis::kPitch) * effective[index(Axis::kPitch)];
-    const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
+    Repair r{column(Axis::kRoll) * effective[index(Axis::kRoll)] +
+                 column(Axis::kPitch) * effective[index(Axis::kPitch)],
+             column(Axis::kYaw) * effective[index(Axis::kYaw)]};
     // Yaw gives way first: the largest share of it that fits with all of
     // roll and pitch. Only when none fits do roll and pitch give way,
     // without yaw.
-    double yaw_scale = largest_fitting_scale(thrust_part + rp_part, yaw_part, may_raise);
-    double rp_scale = 1.0;
-    if (yaw_scale < 0.0) {
-      yaw_scale = 0.0;
-      // Thrust alone is the same on every motor when they lift alike: then
+    const double thrust = effective[index(Axis::kThrust)];
+    if (a_.equal_lift_) {
+      // Thrust is the same on every motor: an offset, and for thrust alone
       // the scale is closed form.
-      const double fits =
-          a_.equal_lift_
-              ? detail::largest_fitting_scale_uniform_base(
-                    thrust_part[0], rp_part.minCoeff(), rp_part.maxCoeff(), range_, may_raise)
-              : largest_fitting_scale(thrust_part, rp_part, may_raise);
-      rp_scale = std::max(0.0, fits);
+      const double offset = column(Axis::kThrust)[0] * thrust;
+      double rp_low = 0.0;
+      double rp_high = 0.0;
+      if (a_.yaw_two_groups_) {
+        // Yaw moves each spin direction's motors alike: closed form too.
+        const View pad_a(a_.yaw_pad_a_.data(), n_);
+        const View pad_b(a_.yaw_pad_b_.data(), n_);
+        const detail::GroupExtremes e{
+            (r.rp_part - pad_a).maxCoeff(), (r.rp_part + pad_a).minCoeff(),
+            (r.rp_part - pad_b).maxCoeff(), (r.rp_part + pad_b).minCoeff()};
+        const double yaw = effective[index(Axis::kYaw)];
+        r.yaw_scale = detail::largest_fitting_scale_two_groups(
+            offset, e, yaw * a_.yaw_value_a_, yaw * a_.yaw_value_b_, range_, may_raise);
+        rp_low = std::min(e.low_a, e.low_b);
+        rp_high = std::max(e.high_a, e.high_b);
+      } else {
+        r.yaw_scale = detail::largest_fitting_scale_equal_lift<N>(offset, r.rp_part, r.yaw_part, n_,
+                                                                  range_, may_raise);
+        rp_low = r.rp_part.minCoeff();
+        rp_high = r.rp_part.maxCoeff();
+      }
+      if (r.yaw_scale < 0.0) {
+        r.yaw_scale = 0.0;
+        r.rp_scale = std::max(0.0, detail::largest_fitting_scale_uniform_base(
+                                       offset, rp_low, rp_high, range_, may_raise));
+      }
+      return r;
     }
-    u = thrust_part + yaw_scale * yaw_part + rp_scale * rp_part;
-    ShiftInterval k =
-        detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_);
+    const Motors thrust_part = column(Axis::kThrust) * thrust;
+    r.yaw_scale = largest_fitting_scale(thrust_part + r.rp_part, r.yaw_part, may_raise);
+    if (r.yaw_scale < 0.0) {
+      r.yaw_scale = 0.0;
+      r.rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, r.rp_part, may_raise));
+    }
+    return r;
+  }
+
+  // ...then the commands: the scaled parts with the best thrust shift.
+  void apply(const Repair& r, AxisVector& effective, Motors& u) const {
+    const bool may_raise = a_.airmode_ != Airmode::kOff;
+    const View thrust = column(Axis::kThrust);
+    u = thrust * effective[index(Axis::kThrust)] + r.yaw_scale * r.yaw_part +
+        r.rp_scale * r.rp_part;
+    ShiftInterval k = detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_);
     if (!may_raise) k.hi = std::min(k.hi, 0.0);
     // At the largest scale some motor sits exactly on its limit: rounding
     // may leave the interval a few ulps wide of empty.
@@ -239,9 +326,25 @@ class PrioritizedAllocator::Kernel {
       u += shift * thrust;
       effective[index(Axis::kThrust)] += shift;
     }
-    effective[index(Axis::kYaw)] *= yaw_scale;
-    effective[index(Axis::kRoll)] *= rp_scale;
-    effective[index(Axis::kPitch)] *= rp_scale;
+    effective[index(Axis::kYaw)] *= r.yaw_scale;
+    effective[index(Axis::kRoll)] *= r.rp_scale;
+    effective[index(Axis::kPitch)] *= r.rp_scale;
+  }
+
+  // The roll/pitch error the repair will leave, known from its scales
+  // alone: in range, the commands deliver exactly the scaled effective
+  // demand (when the effectiveness inverts the mixing matrix).
+  double repair_roll_pitch_error(const AxisVector& demand, const AxisVector& effective,
+                                 const Repair& r) const {
+    AxisVector left = demand - effective;
+    left[index(Axis::kRoll)] =
+        demand[index(Axis::kRoll)] - r.rp_scale * effective[index(Axis::kRoll)];
+    left[index(Axis::kPitch)] =
+        demand[index(Axis::kPitch)] - r.rp_scale * effective[index(Axis::kPitch)];
+    for (int axis = 0; axis < kNumAxes; ++axis) {
+      if (!((a_.controlled_ >> axis) & 1U)) left[axis] = 0.0;
+    }
+    return roll_pitch_norm(left);
   }
 
   const PrioritizedAllocator& a_;
@@ -251,14 +354,8 @@ class PrioritizedAllocator::Kernel {
 
 bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
                                                     const AxisVector& error_b, double tolerance) {
-  // Errors are at most a few units: a plain root is exact enough and much
-  // cheaper than hypot's overflow guards.
-  const auto roll_pitch = [](const AxisVector& e) {
-    return std::sqrt(e[index(Axis::kRoll)] * e[index(Axis::kRoll)] +
-                     e[index(Axis::kPitch)] * e[index(Axis::kPitch)]);
-  };
   const std::array<std::pair<double, double>, 3> in_order = {
-      std::pair{roll_pitch(error_a), roll_pitch(error_b)},
+      std::pair{roll_pitch_norm(error_a), roll_pitch_norm(error_b)},
       std::pair{std::abs(error_a[index(Axis::kThrust)]), std::abs(error_b[index(Axis::kThrust)])},
       std::pair{std::abs(error_a[index(Axis::kYaw)]), std::abs(error_b[index(Axis::kYaw)])}};
   for (const auto& [x, y] : in_order) {

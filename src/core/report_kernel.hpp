@@ -14,12 +14,6 @@ namespace motormix::detail {
 // A command within this distance of a limit counts as sitting on it.
 inline constexpr double kSaturationTolerance = 1e-9;
 
-#if defined(__GNUC__)
-#define MOTORMIX_ALWAYS_INLINE __attribute__((always_inline)) inline
-#else
-#define MOTORMIX_ALWAYS_INLINE inline
-#endif
-
 // What `commands` leave undelivered of `target`, per axis; axes the vehicle
 // is not commanded in are zero.
 template <int N>
@@ -74,5 +68,3 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_fixed(const EffectivenessMatrix
 }
 
 }  // namespace motormix::detail
-
-#undef MOTORMIX_ALWAYS_INLINE

@@ -71,7 +71,10 @@ double equal_lift_kernel(const MotorVector& base, const MotorVector& part, Comma
                          bool may_raise) {
   const detail::LocalMotors<N> b = base;
   const detail::LocalMotors<N> p = part;
-  return detail::largest_fitting_scale_equal_lift<N>(b, p, base.size(), r, may_raise);
+  // The shared part of the base as an offset, as the repair passes thrust.
+  const double offset = base.mean();
+  const detail::LocalMotors<N> rest = (b.array() - offset).matrix();
+  return detail::largest_fitting_scale_equal_lift<N>(offset, rest, p, base.size(), r, may_raise);
 }
 
 struct Case {
@@ -97,10 +100,9 @@ Case random_case(std::mt19937_64& rng, int n, bool equal_lift, bool some_fixed) 
 bool shift_fits_at(const Case& c, double s, CommandRange r, bool may_raise) {
   const MotorVector u = c.base + s * c.part;
   const MotorVector lift = detail::positive_inverse(c.thrust);
-  ShiftInterval shift =
-      detail::with_motor_count(u.size(), [&](auto size) {
-        return detail::shifts_that_fit<decltype(size)::value>(u, lift, u.size(), r);
-      });
+  ShiftInterval shift = detail::with_motor_count(u.size(), [&](auto size) {
+    return detail::shifts_that_fit<decltype(size)::value>(u, lift, u.size(), r);
+  });
   if (!may_raise) shift.hi = std::min(shift.hi, 0.0);
   constexpr double kRounding = 1e-12;  // as the repair allows
   return shift.hi - shift.lo >= -kRounding;
@@ -131,11 +133,10 @@ void agree_on_random_cases(int n) {
         continue;
       }
       ++found;
-      ASSERT_NEAR(got, expected, kScaleTolerance) << "n " << n << " case " << k << " raise "
-                                                  << may_raise;
+      ASSERT_NEAR(got, expected, kScaleTolerance)
+          << "n " << n << " case " << k << " raise " << may_raise;
       if (equal_lift) {
-        ASSERT_NEAR(equal_lift_kernel<N>(c.base, c.part, r, may_raise), expected,
-                    kScaleTolerance)
+        ASSERT_NEAR(equal_lift_kernel<N>(c.base, c.part, r, may_raise), expected, kScaleTolerance)
             << "equal lift, n " << n << " case " << k;
       }
     }
@@ -186,10 +187,107 @@ TEST(FittingScale, UniformBaseClosedFormMatchesTheReference) {
     const MotorVector lift = MotorVector::Ones(6);
     for (const bool may_raise : {false, true}) {
       const double expected = pairwise_reference(base, part, lift, r, may_raise);
-      const double got = detail::largest_fitting_scale_uniform_base(
-          thrust, part.minCoeff(), part.maxCoeff(), r, may_raise);
+      const double got = detail::largest_fitting_scale_uniform_base(thrust, part.minCoeff(),
+                                                                    part.maxCoeff(), r, may_raise);
       ASSERT_NEAR(got, expected, kScaleTolerance) << "case " << k;
     }
+  }
+}
+
+// Equal lift and a part with one value per group of motors (yaw on rotors
+// spinning two ways): the closed form against the pairwise reference.
+TEST(FittingScale, TwoGroupClosedFormMatchesTheReference) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const CommandRange r{0.0, 1.0};
+  int found = 0;
+  for (int k = 0; k < 40000; ++k) {
+    const int n = 4 + 2 * static_cast<int>(rng() % 3);
+    const double offset = (unit(rng) + 1.0) / 2.0;
+    // Small parts (a little yaw) amplify rounding where the scales narrow
+    // to a point; bases that fill the range exactly make such points.
+    const double size = k % 4 == 0 ? 0.01 : 1.0;
+    const double part_a = size * unit(rng);
+    const double part_b = k % 2 == 0 ? -part_a : size * unit(rng);
+    MotorVector rest(n);
+    MotorVector part(n);
+    detail::GroupExtremes e{-1e300, 1e300, -1e300, 1e300};
+    for (int i = 0; i < n; ++i) {
+      rest[i] = 0.5 * unit(rng);
+      const bool in_a = i % 2 == 0;
+      part[i] = in_a ? part_a : part_b;
+      if (in_a) {
+        e.high_a = std::max(e.high_a, rest[i]);
+        e.low_a = std::min(e.low_a, rest[i]);
+      } else {
+        e.high_b = std::max(e.high_b, rest[i]);
+        e.low_b = std::min(e.low_b, rest[i]);
+      }
+    }
+    if (k % 5 == 0) {
+      // Group a spans the range exactly.
+      rest[0] = 0.5;
+      rest[2] = -0.5;
+      e.high_a = std::max(e.high_a, 0.5);
+      e.low_a = std::min(e.low_a, -0.5);
+    }
+    const MotorVector base = (rest.array() + offset).matrix();
+    const MotorVector lift = MotorVector::Ones(n);
+    for (const bool may_raise : {false, true}) {
+      const double expected = pairwise_reference(base, part, lift, r, may_raise);
+      const double got =
+          detail::largest_fitting_scale_two_groups(offset, e, part_a, part_b, r, may_raise);
+      // The stepping kernel on the same motors finds the same scale, single
+      // points included (the repair uses either, by geometry).
+      const double stepped = detail::largest_fitting_scale_equal_lift<Eigen::Dynamic>(
+          offset, detail::LocalMotors<Eigen::Dynamic>(rest),
+          detail::LocalMotors<Eigen::Dynamic>(part), n, r, may_raise);
+      ASSERT_EQ(got >= 0.0, stepped >= 0.0)
+          << "case " << k << " two groups " << got << " stepped " << stepped;
+      if (got >= 0.0) {
+        ASSERT_NEAR(got, stepped, kScaleTolerance) << "case " << k;
+      }
+      if (expected < 0.0 && got >= 0.0) {
+        // A single fitting point the reference's rounding loses.
+        Case c{base, part, lift};
+        ASSERT_TRUE(shift_fits_at(c, got, r, may_raise)) << "case " << k;
+        continue;
+      }
+      ASSERT_NEAR(got, expected, kScaleTolerance)
+          << "case " << k << " raise " << may_raise << " offset " << offset << " parts " << part_a
+          << " " << part_b << " rest " << rest.transpose();
+      found += expected >= 0.0;
+    }
+  }
+  EXPECT_GT(found, 5000);
+}
+
+// Scales that narrow to a single point s*: group a spans the whole range,
+// its lowest motor reaches the bottom at s* from below, and the cross bound
+// closes at s* from above (thrust may not rise). A little yaw (small parts)
+// amplifies the rounding of such points; both kernels must still find s*.
+TEST(FittingScale, SinglePointScalesAreFound) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const CommandRange r{0.0, 1.0};
+  for (int k = 0; k < 5000; ++k) {
+    const double offset = 0.3 + 0.4 * unit(rng);
+    const double alpha = 0.001 + 0.05 * unit(rng);
+    const double point = 0.1 + 0.8 * unit(rng);
+    const double low_b = alpha * point - offset;
+    const double high_a = low_b + 1.0 - 2.0 * alpha * point;
+    const double low_a = -offset - point * alpha;
+    MotorVector rest(4);
+    rest << high_a, low_b, low_a, low_b;  // a, b, a, b
+    MotorVector part(4);
+    part << alpha, -alpha, alpha, -alpha;
+    const detail::GroupExtremes e{high_a, low_a, low_b, low_b};
+    const double closed =
+        detail::largest_fitting_scale_two_groups(offset, e, alpha, -alpha, r, false);
+    const double stepped = detail::largest_fitting_scale_equal_lift<4>(
+        offset, detail::LocalMotors<4>(rest), detail::LocalMotors<4>(part), 4, r, false);
+    ASSERT_NEAR(closed, point, kScaleTolerance) << "case " << k;
+    ASSERT_NEAR(stepped, point, kScaleTolerance) << "case " << k;
   }
 }
 
