@@ -124,14 +124,14 @@ class PrioritizedAllocator::Kernel {
     effective[index(Axis::kYaw)] = 0.0;
     switch (a_.airmode_) {
       case Airmode::kOff:
-        u.noalias() = mixing() * effective;
+        u -= yaw * column(Axis::kYaw);  // the mix without yaw
         desaturate(u, effective, Axis::kThrust, kDecreaseOnly);
         desaturate(u, effective, Axis::kRoll);
         desaturate(u, effective, Axis::kPitch);
         mix_yaw(yaw, u, effective);
         break;
       case Airmode::kRollPitch:
-        u.noalias() = mixing() * effective;
+        u -= yaw * column(Axis::kYaw);  // the mix without yaw
         desaturate(u, effective, Axis::kThrust);
         mix_yaw(yaw, u, effective);
         break;
@@ -184,8 +184,8 @@ class PrioritizedAllocator::Kernel {
   View column(Axis axis) const { return View(a_.columns_[index(axis)].data(), n_); }
 
   // Into the range; NaN (which finite inputs cannot produce) to the safe end.
-  // Element by element: measured faster than the packet clamp plus a NaN
-  // test on these sizes.
+  // Element by element: measured as fast as, or faster than, the packet
+  // clamp (whose NaN behaviour depends on the target) on these sizes.
   void clamp(Motors& u) const {
     for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
       u[i] = u[i] >= range_.lower ? (u[i] <= range_.upper ? u[i] : range_.upper) : range_.lower;
@@ -336,15 +336,15 @@ class PrioritizedAllocator::Kernel {
   // demand (when the effectiveness inverts the mixing matrix).
   double repair_roll_pitch_error(const AxisVector& demand, const AxisVector& effective,
                                  const Repair& r) const {
-    AxisVector left = demand - effective;
-    left[index(Axis::kRoll)] =
-        demand[index(Axis::kRoll)] - r.rp_scale * effective[index(Axis::kRoll)];
-    left[index(Axis::kPitch)] =
-        demand[index(Axis::kPitch)] - r.rp_scale * effective[index(Axis::kPitch)];
-    for (int axis = 0; axis < kNumAxes; ++axis) {
-      if (!((a_.controlled_ >> axis) & 1U)) left[axis] = 0.0;
-    }
-    return roll_pitch_norm(left);
+    // Scalar on purpose: `effective` was just written element by element,
+    // and a packet load of it would stall on store forwarding.
+    const auto left = [&](Axis axis) {
+      const int a = index(axis);
+      return ((a_.controlled_ >> a) & 1U) ? demand[a] - r.rp_scale * effective[a] : 0.0;
+    };
+    const double roll = left(Axis::kRoll);
+    const double pitch = left(Axis::kPitch);
+    return std::sqrt(roll * roll + pitch * pitch);
   }
 
   const PrioritizedAllocator& a_;
