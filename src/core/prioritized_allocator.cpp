@@ -256,15 +256,14 @@ class PrioritizedAllocator::Kernel {
   // first (only downward without airmode), then yaw is scaled down, and
   // roll and pitch only when yaw alone cannot make room. First the scales...
   struct Repair {
-    Motors rp_part, yaw_part;
+    Motors rp_part;
     double yaw_scale = 0.0;
     double rp_scale = 1.0;
   };
   Repair repair_scales(const AxisVector& effective) const {
     const bool may_raise = a_.airmode_ != Airmode::kOff;
     Repair r{column(Axis::kRoll) * effective[index(Axis::kRoll)] +
-                 column(Axis::kPitch) * effective[index(Axis::kPitch)],
-             column(Axis::kYaw) * effective[index(Axis::kYaw)]};
+             column(Axis::kPitch) * effective[index(Axis::kPitch)]};
     // Yaw gives way first: the largest share of it that fits with all of
     // roll and pitch. Only when none fits do roll and pitch give way,
     // without yaw.
@@ -288,7 +287,8 @@ class PrioritizedAllocator::Kernel {
         rp_low = std::min(e.low_a, e.low_b);
         rp_high = std::max(e.high_a, e.high_b);
       } else {
-        r.yaw_scale = detail::largest_fitting_scale_equal_lift<N>(offset, r.rp_part, r.yaw_part, n_,
+        const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
+        r.yaw_scale = detail::largest_fitting_scale_equal_lift<N>(offset, r.rp_part, yaw_part, n_,
                                                                   range_, may_raise);
         rp_low = r.rp_part.minCoeff();
         rp_high = r.rp_part.maxCoeff();
@@ -301,7 +301,8 @@ class PrioritizedAllocator::Kernel {
       return r;
     }
     const Motors thrust_part = column(Axis::kThrust) * thrust;
-    r.yaw_scale = largest_fitting_scale(thrust_part + r.rp_part, r.yaw_part, may_raise);
+    const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
+    r.yaw_scale = largest_fitting_scale(thrust_part + r.rp_part, yaw_part, may_raise);
     if (r.yaw_scale < 0.0) {
       r.yaw_scale = 0.0;
       r.rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, r.rp_part, may_raise));
@@ -313,8 +314,8 @@ class PrioritizedAllocator::Kernel {
   void apply(const Repair& r, AxisVector& effective, Motors& u) const {
     const bool may_raise = a_.airmode_ != Airmode::kOff;
     const View thrust = column(Axis::kThrust);
-    u = thrust * effective[index(Axis::kThrust)] + r.yaw_scale * r.yaw_part +
-        r.rp_scale * r.rp_part;
+    u = thrust * effective[index(Axis::kThrust)] +
+        (r.yaw_scale * effective[index(Axis::kYaw)]) * column(Axis::kYaw) + r.rp_scale * r.rp_part;
     ShiftInterval k = detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_);
     if (!may_raise) k.hi = std::min(k.hi, 0.0);
     // At the largest scale some motor sits exactly on its limit: rounding
