@@ -24,6 +24,16 @@ std::vector<motormix::AxisVector> demands() {
   return d;
 }
 
+// Demands a hovering vehicle sees most of the time: small torques (within
+// 0.1) around mid thrust (0.4..0.6); the linear mix fits on every vehicle.
+std::vector<motormix::AxisVector> unsaturated_demands() {
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<motormix::AxisVector> d(1024);
+  for (auto& v : d) v << 0.1 * unit(rng), 0.1 * unit(rng), 0.1 * unit(rng), 0.5 + 0.1 * unit(rng);
+  return d;
+}
+
 void mix_loop(benchmark::State& state, const std::string& yaml) {
   const auto config = motormix::config::load_config_text(yaml, "bench.yaml");
   const motormix::Mixer mixer = motormix::config::build_mixer(config);
@@ -58,11 +68,11 @@ BENCHMARK_CAPTURE(BM_Octo, optimal, "optimal");
 // The allocation step alone, as the prioritized strategy's cost is compared
 // with other stacks': saturating demands in every axis (roll, pitch, yaw in
 // -1..1, thrust 0..1) on the normalized matrix of PX4's normalization.
-void allocate_yaml(benchmark::State& state, const std::string& yaml) {
+void allocate_yaml(benchmark::State& state, const std::string& yaml,
+                   const std::vector<motormix::AxisVector>& inputs = demands()) {
   const auto config = motormix::config::load_config_text(yaml, "bench");
   const motormix::Mixer built = motormix::config::build_mixer(config);
   const motormix::Allocator& allocator = built.allocator();
-  const auto inputs = demands();
   motormix::MotorVector commands;
   std::size_t i = 0;
   for (auto _ : state) {
@@ -90,13 +100,13 @@ void BM_Allocate(benchmark::State& state, const char* preset, const char* mixer)
   MOTORMIX_ALLOCATE_BENCH(preset, optimal, "{strategy: optimal}")
 // The PX4-style baseline (test/reference, float as PX4 runs it, clip and
 // allocated-control report included) on the same matrix and demands.
-void BM_Px4Baseline(benchmark::State& state, const char* preset,
-                    motormix::reference::Px4Airmode mode) {
+void px4_loop(benchmark::State& state, const char* preset, motormix::reference::Px4Airmode mode,
+              const std::vector<motormix::AxisVector>& demand_set) {
   const auto config = motormix::config::load_config_text(
       std::string("geometry: {preset: ") + preset + ", normalization: px4}\n", "bench");
   motormix::reference::Px4SequentialDesaturation px4(config.mixing, mode);
   std::vector<std::array<float, 4>> inputs;
-  for (const auto& d : demands()) {
+  for (const auto& d : demand_set) {
     inputs.push_back({static_cast<float>(d[0]), static_cast<float>(d[1]), static_cast<float>(d[2]),
                       static_cast<float>(d[3])});
   }
@@ -105,6 +115,10 @@ void BM_Px4Baseline(benchmark::State& state, const char* preset,
     px4.allocate(inputs[i++ & 1023U]);
     benchmark::DoNotOptimize(px4.allocated().data());
   }
+}
+void BM_Px4Baseline(benchmark::State& state, const char* preset,
+                    motormix::reference::Px4Airmode mode) {
+  px4_loop(state, preset, mode, demands());
 }
 #define MOTORMIX_PX4_PRESET(preset)                               \
   BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_off, #preset,        \
@@ -137,6 +151,34 @@ MOTORMIX_PX4_PRESET(octo_x);
 MOTORMIX_ALLOCATE_PRESET(quad_x);
 MOTORMIX_ALLOCATE_PRESET(hexa_x);
 MOTORMIX_ALLOCATE_PRESET(octo_x);
+
+// Unsaturated demands: `prioritized` returns the linear mix after one check,
+// where sequential desaturation runs its whole sequence regardless.
+void BM_Unsaturated(benchmark::State& state, const char* preset, const char* airmode) {
+  allocate_yaml(
+      state,
+      "geometry: {preset: " + std::string(preset) +
+          ", normalization: px4}\nmixer: {strategy: prioritized, prioritized: {airmode: " +
+          airmode + "}}\n",
+      unsaturated_demands());
+}
+void BM_Px4Unsaturated(benchmark::State& state, const char* preset,
+                       motormix::reference::Px4Airmode mode) {
+  px4_loop(state, preset, mode, unsaturated_demands());
+}
+#define MOTORMIX_UNSATURATED_PRESET(preset)                                               \
+  BENCHMARK_CAPTURE(BM_Unsaturated, preset##_prioritized_off, #preset, "off");            \
+  BENCHMARK_CAPTURE(BM_Unsaturated, preset##_prioritized_rp, #preset, "roll_pitch");      \
+  BENCHMARK_CAPTURE(BM_Unsaturated, preset##_prioritized_rpy, #preset, "roll_pitch_yaw"); \
+  BENCHMARK_CAPTURE(BM_Px4Unsaturated, preset##_off, #preset,                             \
+                    motormix::reference::Px4Airmode::kDisabled);                          \
+  BENCHMARK_CAPTURE(BM_Px4Unsaturated, preset##_rp, #preset,                              \
+                    motormix::reference::Px4Airmode::kRollPitch);                         \
+  BENCHMARK_CAPTURE(BM_Px4Unsaturated, preset##_rpy, #preset,                             \
+                    motormix::reference::Px4Airmode::kRollPitchYaw)
+MOTORMIX_UNSATURATED_PRESET(quad_x);
+MOTORMIX_UNSATURATED_PRESET(hexa_x);
+MOTORMIX_UNSATURATED_PRESET(octo_x);
 
 // Scaling: the allocation step against motor count, 4 to 16, for every
 // strategy, on a ring of rotors with alternating spin (a quad X at 4).

@@ -33,6 +33,25 @@ def scaling(median):
     print("| bare product | " + " | ".join("-" if b is None else f"{b:.1f}" for b in bare) + " |")
 
 
+def unsaturated(median):
+    """prioritized on demands whose linear mix fits, next to the PX4-style sequence on the same."""
+    rows = []
+    for preset in MOTORS:
+        for strategy, mode in PX4_MODE.items():
+            ours = median.get(f"BM_Unsaturated/{preset}_{strategy}")
+            px4 = median.get(f"BM_Px4Unsaturated/{preset}_{mode}")
+            if ours and px4:
+                rows.append(f"| {preset} | {strategy} | {ours:.1f} | {px4:.1f} | {ours / px4:.2f}x |")
+    if not rows:
+        return
+    print()
+    print("### Unsaturated demands (torques within 0.1, thrust 0.4..0.6: the linear mix fits)")
+    print()
+    print("| vehicle | strategy | motormix ns | PX4-style ns | ratio |")
+    print("|---|---|---|---|---|")
+    print("\n".join(rows))
+
+
 def main():
     data = json.load(open(sys.argv[1]))
     median = {}
@@ -53,6 +72,7 @@ def main():
                      f"{bare:.1f}" if bare else "-", f"{t / bare:.1f}x" if bare else "-",
                      f"{px4:.1f}" if px4 else "-", f"{t / px4:.2f}x" if px4 else "-"]
             print("| " + " | ".join(cells) + " |")
+    unsaturated(median)
     scaling(median)
 
 
