@@ -72,10 +72,11 @@ class MatrixAllocator : public Allocator {
   void mix_linear(const AxisVector& demand, MotorVector& commands) const;
   // Clamps into the range and reports against `target`.
   AllocationResult finish(const AxisVector& target, MotorVector& commands) const;
-  // mix_linear() then finish(), in one pass at the motor count's fixed size.
-  AllocationResult mix_and_clip(const AxisVector& demand, MotorVector& commands) const;
 
   MixingMatrix mixing_;
+  // The same matrix stored column by column (zero below the motor count),
+  // for the per-cycle products.
+  Eigen::Matrix<double, kMaxMotors, kNumAxes> mixing_by_column_;
   EffectivenessMatrix effectiveness_;
   CommandRange range_;
   AxisMask controlled_;

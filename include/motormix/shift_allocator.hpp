@@ -21,6 +21,8 @@ class ShiftAllocator final : public MatrixAllocator {
  private:
   MotorVector direction_;  // shift direction: the thrust column scaled to max 1 (or all ones)
   MotorVector inverse_direction_;  // 1 / direction where it is positive, else 0
+  bool every_motor_moves_ = true;  // no zero in inverse_direction_
+  bool all_motors_alike_ = false;  // direction all ones: the shift moves every motor alike
 };
 
 }  // namespace motormix

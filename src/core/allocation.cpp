@@ -40,9 +40,12 @@ MixingBasis::MixingBasis(const MixingMatrix& m, const EffectivenessMatrix& e, Ax
 
 MatrixAllocator::MatrixAllocator(const MixingBasis& basis, CommandRange range)
     : mixing_(basis.mixing),
+      mixing_by_column_(Eigen::Matrix<double, kMaxMotors, kNumAxes>::Zero()),
       effectiveness_(basis.effectiveness),
       range_(range),
-      controlled_(basis.controlled) {}
+      controlled_(basis.controlled) {
+  mixing_by_column_.topRows(mixing_.rows()) = mixing_;
+}
 
 void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index n = mixing_.rows();
@@ -50,7 +53,7 @@ void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands
   detail::with_motor_count(n, [&](auto size) {
     constexpr int N = decltype(size)::value;
     detail::MotorsView<N>(commands.data(), n).noalias() =
-        detail::ConstMixingView<N>(mixing_.data(), n, kNumAxes) * demand;
+        detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
   });
 }
 
@@ -65,22 +68,6 @@ AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& 
     }
     return detail::describe_fixed<N>(effectiveness_, target, commands.data(), n, range_,
                                      controlled_);
-  });
-}
-
-AllocationResult MatrixAllocator::mix_and_clip(const AxisVector& demand,
-                                               MotorVector& commands) const {
-  const Eigen::Index n = mixing_.rows();
-  commands.resize(n);
-  const CommandRange range = range_;
-  return detail::with_motor_count(n, [&](auto size) {
-    constexpr int N = decltype(size)::value;
-    detail::LocalMotors<N> u(n);
-    u.noalias() = detail::ConstMixingView<N>(mixing_.data(), n, kNumAxes) * demand;
-    // Finite demand and matrix give finite commands: a plain clamp.
-    u = u.cwiseMax(range.lower).cwiseMin(range.upper);
-    detail::MotorsView<N>(commands.data(), n) = u;
-    return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
   });
 }
 

@@ -6,6 +6,8 @@
 // product. Quads, hexas and octos, the vehicles flown most, get their own
 // instantiation; any other count runs the same code at dynamic size.
 
+#include <motormix/motor_vector.hpp>
+
 #include <Eigen/Core>
 
 #include <type_traits>
@@ -55,6 +57,12 @@ template <int N>
 using ConstMotorsView = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
 template <int N>
 using ConstMixingView = Eigen::Map<const Eigen::Matrix<double, N, 4, Eigen::RowMajor>>;
+// The mixing matrix column by column (MatrixAllocator::mixing_by_column_):
+// a product with it is a sum of columns scaled by the demand, packets all
+// the way, where the row-major matrix needs a horizontal sum per motor.
+template <int N>
+using ConstMixingColumnsView = Eigen::Map<const Eigen::Matrix<double, N, 4>, Eigen::Aligned16,
+                                          Eigen::OuterStride<kMaxMotors>>;
 template <int N>
 using ConstEffectivenessView = Eigen::Map<const Eigen::Matrix<double, 4, N>>;
 

@@ -178,8 +178,8 @@ class PrioritizedAllocator::Kernel {
  private:
   static constexpr bool kDecreaseOnly = true;
 
-  detail::ConstMixingView<N> mixing() const {
-    return detail::ConstMixingView<N>(a_.mixing_.data(), n_, kNumAxes);
+  detail::ConstMixingColumnsView<N> mixing() const {
+    return detail::ConstMixingColumnsView<N>(a_.mixing_by_column_.data(), n_, kNumAxes);
   }
   View column(Axis axis) const { return View(a_.columns_[index(axis)].data(), n_); }
 
@@ -316,7 +316,8 @@ class PrioritizedAllocator::Kernel {
     const View thrust = column(Axis::kThrust);
     u = thrust * effective[index(Axis::kThrust)] +
         (r.yaw_scale * effective[index(Axis::kYaw)]) * column(Axis::kYaw) + r.rp_scale * r.rp_part;
-    ShiftInterval k = detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_);
+    ShiftInterval k = detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_,
+                                                 a_.all_motors_lift_);
     if (!may_raise) k.hi = std::min(k.hi, 0.0);
     // At the largest scale some motor sits exactly on its limit: rounding
     // may leave the interval a few ulps wide of empty.

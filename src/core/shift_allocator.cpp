@@ -21,7 +21,24 @@ ShiftAllocator::ShiftAllocator(const MixingBasis& basis, CommandRange range)
     direction_.setOnes(mixing_.rows());
   }
   inverse_direction_ = detail::positive_inverse(direction_);
+  every_motor_moves_ = (inverse_direction_.array() != 0.0).all();
+  // After the scaling to a peak of 1, equal shares of thrust are all ones.
+  constexpr double kAlike = 1e-12;
+  all_motors_alike_ = (direction_.array() - 1.0).abs().maxCoeff() <= kAlike;
 }
+
+namespace {
+
+// The smallest shift that lands inside (0 when already inside). When none
+// does, the middle of the two bounds: the shift that leaves the smallest
+// worst overshoot, which the clamp then takes off. That happens when the
+// spread, shrunk about the mean to exactly the range, is a few ulps too
+// wide, or when the thrust column is not uniform (shrinking about the mean
+// is then not quite a shift along it); shifting by nothing there could
+// leave one end of the range unused and the other clipped hard.
+double landing_shift(ShiftInterval k) { return k.empty() ? 0.5 * (k.lo + k.hi) : k.smallest(); }
+
+}  // namespace
 
 AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index n = mixing_.rows();
@@ -32,8 +49,31 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
     const detail::ConstMotorsView<N> d(direction_.data(), n);
     const detail::ConstMotorsView<N> inverse(inverse_direction_.data(), n);
     detail::LocalMotors<N> u(n);
-    u.noalias() = detail::ConstMixingView<N>(mixing_.data(), n, kNumAxes) * demand;
-    ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range);
+    u.noalias() = detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
+    if (all_motors_alike_) {
+      // Every motor moves by the shift itself: the lowest and highest
+      // command give the shifts that fit, the spread, and (after the spread
+      // is shrunk about the mean) the new extremes, from one pass.
+      const double lowest = u.minCoeff();
+      const double highest = u.maxCoeff();
+      const double width = highest - lowest;
+      const double room = range.upper - range.lower;
+      if (width > room) {
+        const double mean = u.mean();
+        const double factor = room / width;
+        const double shift =
+            landing_shift(ShiftInterval{range.lower - ((lowest - mean) * factor + mean),
+                                        range.upper - ((highest - mean) * factor + mean)});
+        u = (((u.array() - mean) * factor + (mean + shift)).max(range.lower).min(range.upper))
+                .matrix();
+      } else {
+        const double shift = ShiftInterval{range.lower - lowest, range.upper - highest}.smallest();
+        u = (u.array() + shift).max(range.lower).min(range.upper).matrix();
+      }
+      detail::MotorsView<N>(commands.data(), n) = u;
+      return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
+    }
+    ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
     if (k.empty()) {
       // The spread alone does not fit: shrink the deviations from the mean
       // just enough, then shift.
@@ -41,10 +81,9 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
       const double width = u.maxCoeff() - u.minCoeff();
       const double room = range.upper - range.lower;
       if (width > room) u = (u.array() - mean) * (room / width) + mean;
-      k = detail::shifts_that_fit<N>(u, inverse, n, range);
+      k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
     }
-    // The smallest shift that lands inside (0 when already inside).
-    const double shift = k.empty() ? 0.0 : k.smallest();
+    const double shift = landing_shift(k);
     u = (u + shift * d).cwiseMax(range.lower).cwiseMin(range.upper);
     detail::MotorsView<N>(commands.data(), n) = u;
     return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);

@@ -27,8 +27,15 @@ inline constexpr double kUnmovedSlack = 1e-12;
 // feasible_shifts() at N motors, on local values: the k for which u + k d is
 // in range, given `inverse` = positive_inverse(d). A motor the shift cannot
 // move that is out of range (by more than rounding) makes the interval empty.
+// `all_move`: no zero in `inverse` (every motor moves), so the bounds are two
+// packet reductions with no test per motor.
 template <int N, typename U, typename D>
-ShiftInterval shifts_that_fit(const U& u, const D& inverse, Eigen::Index n, CommandRange range) {
+ShiftInterval shifts_that_fit(const U& u, const D& inverse, Eigen::Index n, CommandRange range,
+                              bool all_move = false) {
+  if (all_move) {
+    return {((range.lower - u.array()) * inverse.array()).maxCoeff(),
+            ((range.upper - u.array()) * inverse.array()).minCoeff()};
+  }
   ShiftInterval k{-std::numeric_limits<double>::infinity(),
                   std::numeric_limits<double>::infinity()};
   bool stuck = false;

@@ -5,8 +5,11 @@
 #include "test_support.hpp"
 
 #include <motormix/optimal_allocator.hpp>
+#include <motormix/shift_allocator.hpp>
 
 #include <gtest/gtest.h>
+
+#include <random>
 
 namespace motormix::test {
 namespace {
@@ -179,6 +182,44 @@ TEST(ShiftStrategy, AircraftKeepTorquesAndGiveUpThrust) {
   EXPECT_NEAR(out.command.maxCoeff(), 1.0, kAllocation);
   EXPECT_NEAR(out.allocation.unallocated[index(Axis::kRoll)], 0.0, kAllocation);
   EXPECT_NEAR(out.allocation.unallocated[index(Axis::kThrust)], 0.25, kAllocation);
+}
+
+// Motors that share thrust alike take shift's one-pass path; a thrust column
+// one part in 10^9 off uniform takes the general one. Both must deliver the
+// same commands, on saturating and fitting demands, aircraft and wheels.
+TEST(ShiftStrategy, OnePassPathAgreesWithTheGeneralOne) {
+  constexpr double kPaths = 1e-6;  // the perturbation's effect, with margin
+  for (const char* geometry : {"preset: quad_x", "preset: octo_x",
+                               "differential_drive: {wheel_radius: 5, track_width: 10, "
+                               "max_wheel_speed: 1}"}) {
+    const auto c = config::load_config_text(std::string("geometry: {") + geometry + "}\n", "s");
+    const CommandRange range{c.mixing.col(index(Axis::kThrust)).minCoeff() > 0.0 &&
+                                     std::string(geometry).find("differential") == std::string::npos
+                                 ? 0.0
+                                 : -1.0,
+                             1.0};
+    MixingMatrix nudged = c.mixing;
+    nudged(0, index(Axis::kThrust)) *= 1.0 + 1e-9;
+    const ShiftAllocator alike(MixingBasis(c.mixing), range);
+    const ShiftAllocator general(MixingBasis(nudged), range);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    MotorVector a;
+    MotorVector b;
+    for (int k = 0; k < 20000; ++k) {
+      const double scale = k % 2 == 0 ? 1.0 : 0.2;  // saturating, and mostly fitting
+      const AxisVector d(scale * unit(rng), scale * unit(rng), scale * unit(rng),
+                         range.lower < 0.0 ? unit(rng) : 0.5 + 0.5 * scale * unit(rng));
+      const AllocationResult ra = alike.allocate(d, a);
+      const AllocationResult rb = general.allocate(d, b);
+      ASSERT_LE((a - b).cwiseAbs().maxCoeff(), kPaths)
+          << geometry << " demand " << d.transpose() << "\n one pass " << a.transpose()
+          << "\n general  " << b.transpose();
+      ASSERT_LE((ra.unallocated - rb.unallocated).cwiseAbs().maxCoeff(), kPaths) << geometry;
+      ASSERT_GE(a.minCoeff(), range.lower);
+      ASSERT_LE(a.maxCoeff(), range.upper);
+    }
+  }
 }
 
 // The team quad document's "possible improvement": a negative contribution
