@@ -222,6 +222,28 @@ TEST(ShiftStrategy, OnePassPathAgreesWithTheGeneralOne) {
   }
 }
 
+// A torque spread wider than the range is shrunk to exactly the range and
+// shifted into it: both ends are used. (Rounding once left the shift out on
+// about half of such demands, leaving the range half unused.)
+TEST(ShiftStrategy, AWideSpreadFillsTheRange) {
+  const auto c = config::load_config_text("geometry: {preset: quad_x}\n", "q.yaml");
+  const ShiftAllocator shift(MixingBasis(c.mixing), CommandRange{0.0, 1.0});
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  MotorVector u;
+  int wide = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const AxisVector d(unit(rng), unit(rng), unit(rng), (unit(rng) + 1.0) / 2.0);
+    const MotorVector linear = c.mixing * d;
+    if (linear.maxCoeff() - linear.minCoeff() <= 1.0) continue;
+    ++wide;
+    shift.allocate(d, u);
+    ASSERT_NEAR(u.minCoeff(), 0.0, kAllocation) << d.transpose();
+    ASSERT_NEAR(u.maxCoeff(), 1.0, kAllocation) << d.transpose();
+  }
+  EXPECT_GT(wide, 10000);
+}
+
 // The team quad document's "possible improvement": a negative contribution
 // is taken from the power a motor has, down to zero.
 TEST(BudgetStrategy, NegativeContributionsComeFromAvailablePower) {
