@@ -64,9 +64,8 @@ class PrioritizedAllocator final : public MatrixAllocator {
 
   Airmode airmode_;
   double yaw_headroom_;
-  std::array<MotorVector, kNumAxes> columns_;  // the mixing matrix, column by column
-  std::array<InRangeGains, kNumAxes> gains_;   // per column, for the command range
-  InRangeGains yaw_gains_with_headroom_;       // yaw, with yaw_headroom above the top
+  std::array<InRangeGains, kNumAxes> gains_;  // per column, for the command range
+  InRangeGains yaw_gains_with_headroom_;      // yaw, with yaw_headroom above the top
   MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)
   bool all_motors_lift_;      // no motor the thrust shift leaves in place
   bool equal_lift_;           // every motor the same share of thrust (symmetric multirotors)

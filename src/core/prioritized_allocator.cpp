@@ -53,13 +53,13 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
                                            Airmode airmode, double yaw_headroom)
     : MatrixAllocator(basis, range), airmode_(airmode), yaw_headroom_(yaw_headroom) {
   for (int a = 0; a < kNumAxes; ++a) {
-    columns_[static_cast<std::size_t>(a)] = mixing_.col(a);
     gains_[static_cast<std::size_t>(a)] = in_range_gains(mixing_.col(a), range_);
   }
   CommandRange widened = range_;
   widened.upper += (range_.upper - range_.lower) * yaw_headroom_;
-  yaw_gains_with_headroom_ = in_range_gains(columns_[index(Axis::kYaw)], widened);
-  const MotorVector& thrust = columns_[index(Axis::kThrust)];
+  const MotorVector yaw = mixing_.col(index(Axis::kYaw));
+  const MotorVector thrust = mixing_.col(index(Axis::kThrust));
+  yaw_gains_with_headroom_ = in_range_gains(yaw, widened);
   lift_inverse_ = detail::positive_inverse(thrust);
   all_motors_lift_ = thrust.size() == 0 || thrust.minCoeff() > 0.0;
   // E M = I on the axes answered for: commands in range deliver exactly what
@@ -76,7 +76,6 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
         effectiveness_inverts_mixing_ = false;
     }
   }
-  const MotorVector& yaw = columns_[index(Axis::kYaw)];
   if (yaw.size() > 1) {
     const double scale = yaw.cwiseAbs().maxCoeff();
     const double same = 1e-12 * scale;  // equal within rounding
@@ -181,7 +180,9 @@ class PrioritizedAllocator::Kernel {
   detail::ConstMixingColumnsView<N> mixing() const {
     return detail::ConstMixingColumnsView<N>(a_.mixing_by_column_.data(), n_, kNumAxes);
   }
-  View column(Axis axis) const { return View(a_.columns_[index(axis)].data(), n_); }
+  // A column of the mixing matrix: contiguous in MatrixAllocator's
+  // column-major copy.
+  View column(Axis axis) const { return View(a_.mixing_by_column_.col(index(axis)).data(), n_); }
 
   // Into the range; NaN (which finite inputs cannot produce) to the safe end.
   // Element by element: measured as fast as, or faster than, the packet
