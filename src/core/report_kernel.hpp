@@ -18,21 +18,6 @@ namespace motormix::detail {
 // A command within this distance of a limit counts as sitting on it.
 inline constexpr double kSaturationTolerance = 1e-9;
 
-// 1 on the axes of a mask, 0 elsewhere, for every mask of four axes: the
-// undelivered demand is masked with one packet product, not a loop.
-struct AxisWeights {
-  alignas(32) double weights[16][kNumAxes];
-};
-inline constexpr AxisWeights kAxisWeights = [] {
-  AxisWeights t{};
-  for (unsigned mask = 0; mask < 16; ++mask) {
-    for (unsigned a = 0; a < static_cast<unsigned>(kNumAxes); ++a) {
-      t.weights[mask][a] = (mask >> a) & 1U ? 1.0 : 0.0;
-    }
-  }
-  return t;
-}();
-
 // What `commands` leave undelivered of `target`, per axis; axes the vehicle
 // is not commanded in are zero.
 template <int N>
@@ -43,8 +28,10 @@ MOTORMIX_ALWAYS_INLINE AxisVector undelivered(const EffectivenessMatrix& effecti
   const detail::ConstEffectivenessView<N> e(effectiveness.data(), kNumAxes, n);
   AxisVector unallocated;
   unallocated.noalias() = target - e * u;
-  return unallocated.cwiseProduct(
-      Eigen::Map<const AxisVector, Eigen::Aligned32>(kAxisWeights.weights[controlled & 0xFU]));
+  for (int a = 0; a < kNumAxes; ++a) {
+    if (!((controlled >> a) & 1U)) unallocated[a] = 0.0;
+  }
+  return unallocated;
 }
 
 // The report for `commands`, given what they leave undelivered.
