@@ -42,7 +42,8 @@ decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel) {
 // element by element through a view and reading it back as packets would
 // stall on store forwarding.
 template <int N>
-using LocalMotors = Eigen::Matrix<double, N, 1, Eigen::ColMajor, N == Eigen::Dynamic ? 16 : N, 1>;
+using LocalMotors =
+    Eigen::Matrix<double, N, 1, Eigen::ColMajor, N == Eigen::Dynamic ? kMaxMotors : N, 1>;
 
 // The loop bound at N motors: a constant the compiler unrolls when N is fixed.
 template <int N>
@@ -55,14 +56,12 @@ template <int N>
 using MotorsView = Eigen::Map<Eigen::Matrix<double, N, 1>>;
 template <int N>
 using ConstMotorsView = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
-template <int N>
-using ConstMixingView = Eigen::Map<const Eigen::Matrix<double, N, 4, Eigen::RowMajor>>;
 // The mixing matrix column by column (MatrixAllocator::mixing_by_column_):
 // a product with it is a sum of columns scaled by the demand, packets all
 // the way, where the row-major matrix needs a horizontal sum per motor.
 template <int N>
-using ConstMixingColumnsView = Eigen::Map<const Eigen::Matrix<double, N, 4>, Eigen::Aligned16,
-                                          Eigen::OuterStride<kMaxMotors>>;
+using ConstMixingColumnsView =
+    Eigen::Map<const Eigen::Matrix<double, N, 4>, Eigen::Aligned16, Eigen::OuterStride<kMaxMotors>>;
 template <int N>
 using ConstEffectivenessView = Eigen::Map<const Eigen::Matrix<double, 4, N>>;
 
