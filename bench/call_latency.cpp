@@ -5,7 +5,16 @@
 // clock; the clock's own cost is measured the same way and reported. For
 // `optimal`, the distribution of solver iterations too.
 //
-//   call_latency [--calls N]      # default 100000; prints a Markdown table
+// On a shared machine a few calls in a thousand are hit by an interrupt or
+// a preemption, which costs microseconds and says nothing of the call. So
+// the whole set of demands is timed in several passes, and each demand's
+// cost is its fastest pass: an interruption rarely lands on the same demand
+// twice. Both are reported: the first pass as it came (what a loop on this
+// machine sees) and the per-demand cost (what the algorithm costs). Passes
+// go over the whole set in turn, never one demand several times in a row,
+// so no call finds its own branches trained by the call before.
+//
+//   call_latency [--calls N] [--passes P]   # defaults 100000, 3; prints Markdown
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
@@ -47,8 +56,14 @@ std::string ring(int n) {
 
 int main(int argc, char** argv) {
   long calls = 100000;
+  long passes = 3;
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::string(argv[i]) == "--calls") calls = std::atol(argv[i + 1]);
+    if (std::string(argv[i]) == "--passes") passes = std::atol(argv[i + 1]);
+  }
+  if (calls < 1 || passes < 1) {
+    std::fprintf(stderr, "call_latency: --calls and --passes take a positive count\n");
+    return 2;
   }
   std::mt19937 rng(2026);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -67,8 +82,10 @@ int main(int argc, char** argv) {
       "p99.9 %.0f ns\n\n",
       percentile(empty, 0.5), percentile(empty, 0.999));
   std::printf(
-      "| vehicle | strategy | p50 ns | p99 ns | p99.9 ns | max ns | iterations (optimal) |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+      "| vehicle | strategy | p50 ns | p99 ns | p99.9 ns | max ns | per demand (fastest of %ld "
+      "passes): p50 / p99 / p99.9 / max ns | iterations (optimal) |\n",
+      passes);
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   const std::vector<std::pair<std::string, std::string>> vehicles = {
       {"quad_x", "geometry: {preset: quad_x, normalization: px4}\n"},
       {"hexa_x", "geometry: {preset: hexa_x, normalization: px4}\n"},
@@ -82,15 +99,25 @@ int main(int argc, char** argv) {
       const motormix::Mixer mixer = motormix::config::build_mixer(config);
       const motormix::Allocator& allocator = mixer.allocator();
       motormix::MotorVector u;
-      std::vector<double> ns(static_cast<std::size_t>(calls));
+      std::vector<double> first(static_cast<std::size_t>(calls));
+      std::vector<double> fastest(static_cast<std::size_t>(calls));
       std::map<int, long> iterations;
-      for (long k = 0; k < calls; ++k) {
-        const auto t0 = Clock::now();
-        const motormix::AllocationResult r =
-            allocator.allocate(demands[static_cast<std::size_t>(k)], u);
-        const auto t1 = Clock::now();
-        ns[static_cast<std::size_t>(k)] = std::chrono::duration<double, std::nano>(t1 - t0).count();
-        ++iterations[r.iterations];
+      for (long pass = 0; pass < passes; ++pass) {
+        for (long k = 0; k < calls; ++k) {
+          const auto t0 = Clock::now();
+          const motormix::AllocationResult r =
+              allocator.allocate(demands[static_cast<std::size_t>(k)], u);
+          const auto t1 = Clock::now();
+          const double ns = std::chrono::duration<double, std::nano>(t1 - t0).count();
+          const auto slot = static_cast<std::size_t>(k);
+          if (pass == 0) {
+            first[slot] = ns;
+            fastest[slot] = ns;
+            ++iterations[r.iterations];
+          } else {
+            fastest[slot] = std::min(fastest[slot], ns);
+          }
+        }
       }
       std::string hist;
       if (std::string(strategy) == "optimal") {
@@ -101,12 +128,16 @@ int main(int argc, char** argv) {
           hist += cell;
         }
       }
-      const double p50 = percentile(ns, 0.5);
-      const double p99 = percentile(ns, 0.99);
-      const double p999 = percentile(ns, 0.999);
-      const double max = *std::max_element(ns.begin(), ns.end());
-      std::printf("| %s | %s | %.0f | %.0f | %.0f | %.0f | %s |\n", name.c_str(), strategy, p50,
-                  p99, p999, max, hist.c_str());
+      const double p50 = percentile(first, 0.5);
+      const double p99 = percentile(first, 0.99);
+      const double p999 = percentile(first, 0.999);
+      const double max = *std::max_element(first.begin(), first.end());
+      const double f50 = percentile(fastest, 0.5);
+      const double f99 = percentile(fastest, 0.99);
+      const double f999 = percentile(fastest, 0.999);
+      const double fmax = *std::max_element(fastest.begin(), fastest.end());
+      std::printf("| %s | %s | %.0f | %.0f | %.0f | %.0f | %.0f / %.0f / %.0f / %.0f | %s |\n",
+                  name.c_str(), strategy, p50, p99, p999, max, f50, f99, f999, fmax, hist.c_str());
     }
   }
   return 0;

@@ -1,5 +1,7 @@
 #include <motormix/optimal_allocator.hpp>
 
+#include "spd4_solve.hpp"
+
 #include <Eigen/Cholesky>
 
 #include <algorithm>
@@ -74,7 +76,10 @@ AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVecto
     }
     step.setZero();
     if (nf > 0) {
-      const AxisVector z = dual.ldlt().solve(rhs);
+      AxisVector z;
+      // Positive definite by construction; should rounding ever say
+      // otherwise, the pivoting factorization.
+      if (!detail::solve_spd4(dual, rhs, z)) z = dual.ldlt().solve(rhs);
       for (Eigen::Index j = 0; j < nf; ++j) {
         const Eigen::Index i = free_index[j];
         step[i] = q[i] + weighted_.col(i).dot(z);
