@@ -20,9 +20,11 @@ class ShiftAllocator final : public MatrixAllocator {
 
  private:
   MotorVector direction_;  // shift direction: the thrust column scaled to max 1 (or all ones)
-  MotorVector inverse_direction_;  // 1 / direction where it is positive, else 0
-  bool every_motor_moves_ = true;  // no zero in inverse_direction_
-  bool all_motors_alike_ = false;  // direction all ones: the shift moves every motor alike
+  MotorVector inverse_direction_;      // 1 / direction where it is positive, else 0
+  bool every_motor_moves_ = true;      // no zero in inverse_direction_
+  bool all_motors_alike_ = false;      // direction all ones: the shift moves every motor alike
+  bool report_from_scalars_ = false;   // alike, E M = I on the controlled axes: see allocate
+  double inverse_thrust_share_ = 0.0;  // 1 / each motor's (equal) share of thrust, when alike
 };
 
 }  // namespace motormix

@@ -25,6 +25,22 @@ ShiftAllocator::ShiftAllocator(const MixingBasis& basis, CommandRange range)
   // After the scaling to a peak of 1, equal shares of thrust are all ones.
   constexpr double kAlike = 1e-12;
   all_motors_alike_ = (direction_.array() - 1.0).abs().maxCoeff() <= kAlike;
+  // The one-pass path's report from its scalars (see allocate) holds when
+  // the effectiveness undoes the mix on every controlled axis and the
+  // thrust column itself is uniform (not only the direction made of ones).
+  const Eigen::Matrix4d delivered = effectiveness_ * mixing_;
+  constexpr double kInverts = 1e-12;
+  const auto thrust = mixing_.col(index(Axis::kThrust));
+  bool inverts = peak > 0.0 && (thrust.array() - peak).abs().maxCoeff() <= kAlike * peak;
+  for (int row = 0; row < kNumAxes; ++row) {
+    if (!((controlled_ >> row) & 1U)) continue;
+    for (int col = 0; col < kNumAxes; ++col) {
+      const double expected = row == col ? 1.0 : 0.0;
+      if (std::abs(delivered(row, col) - expected) > kInverts) inverts = false;
+    }
+  }
+  report_from_scalars_ = inverts;
+  inverse_thrust_share_ = inverts ? 1.0 / peak : 0.0;
 }
 
 namespace {
@@ -52,25 +68,36 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
     u.noalias() = detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
     if (all_motors_alike_) {
       // Every motor moves by the shift itself: the lowest and highest
-      // command give the shifts that fit, the spread, and (after the spread
-      // is shrunk about the mean) the new extremes, from one pass.
+      // command give the shifts that fit and the spread, from one pass.
+      // Without a branch on whether the spread fits (random demands make it
+      // a coin toss for the predictor): the factor that shrinks the spread
+      // about the mean is exactly 1 when it fits, and then the commands are
+      // u + shift to the last bit, as if the shrink were not there.
       const double lowest = u.minCoeff();
       const double highest = u.maxCoeff();
-      const double width = highest - lowest;
+      const double mean = u.mean();
       const double room = range.upper - range.lower;
-      if (width > room) {
-        const double mean = u.mean();
-        const double factor = room / width;
-        const double shift =
-            landing_shift(ShiftInterval{range.lower - ((lowest - mean) * factor + mean),
-                                        range.upper - ((highest - mean) * factor + mean)});
-        u = (((u.array() - mean) * factor + (mean + shift)).max(range.lower).min(range.upper))
-                .matrix();
-      } else {
-        const double shift = ShiftInterval{range.lower - lowest, range.upper - highest}.smallest();
-        u = (u.array() + shift).max(range.lower).min(range.upper).matrix();
-      }
+      const double factor = room / std::max(highest - lowest, room);
+      const double pull = mean * (1.0 - factor);  // u * factor + pull: shrunk about the mean
+      const double shift = landing_shift(ShiftInterval{(range.lower - pull) - lowest * factor,
+                                                       (range.upper - pull) - highest * factor});
+      const double offset = pull + shift;
+      u = (u.array() * factor + offset).max(range.lower).min(range.upper).matrix();
       detail::MotorsView<N>(commands.data(), n) = u;
+      if (report_from_scalars_) {
+        // With E M = I on the controlled axes and a thrust column of c
+        // everywhere, E (factor M d + offset 1) = factor d + (offset / c)
+        // on thrust: what is left undelivered follows from two scalars,
+        // with no product by E. The clamp only takes off rounding here
+        // (the shift fits, or misses by ulps), far below the delivered
+        // tolerance.
+        AxisVector left = (1.0 - factor) * demand;
+        left[index(Axis::kThrust)] -= offset * inverse_thrust_share_;
+        for (int a = 0; a < kNumAxes; ++a) {
+          if (!((controlled_ >> a) & 1U)) left[a] = 0.0;
+        }
+        return detail::describe_with<N>(left, u.data(), n, range);
+      }
       return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
     }
     ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
