@@ -26,6 +26,22 @@ double roll_pitch_norm(const AxisVector& e) {
                    e[index(Axis::kPitch)] * e[index(Axis::kPitch)]);
 }
 
+// closer_in_priority_order() itself, inlined into the kernel (a call on
+// most saturating demands): the first key that differs by more than the
+// tolerance decides.
+MOTORMIX_ALWAYS_INLINE bool closer_in_order(const AxisVector& a, const AxisVector& b,
+                                            double tolerance) {
+  const double rp_a = roll_pitch_norm(a);
+  const double rp_b = roll_pitch_norm(b);
+  if (rp_a < rp_b - tolerance) return true;
+  if (rp_a > rp_b + tolerance) return false;
+  const double thrust_a = std::abs(a[index(Axis::kThrust)]);
+  const double thrust_b = std::abs(b[index(Axis::kThrust)]);
+  if (thrust_a < thrust_b - tolerance) return true;
+  if (thrust_a > thrust_b + tolerance) return false;
+  return std::abs(a[index(Axis::kYaw)]) < std::abs(b[index(Axis::kYaw)]) - tolerance;
+}
+
 }  // namespace
 
 PrioritizedAllocator::InRangeGains PrioritizedAllocator::in_range_gains(const MotorVector& v,
@@ -115,7 +131,9 @@ class PrioritizedAllocator::Kernel {
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const {
     Motors u(n_);
     u.noalias() = mixing() * demand;
-    if (u.minCoeff() >= range_.lower && u.maxCoeff() <= range_.upper) {
+    const double lowest = u.minCoeff();
+    const double highest = u.maxCoeff();
+    if (lowest >= range_.lower && highest <= range_.upper) {
       return deliver(demand, u, commands);  // nothing saturates: nothing to prioritize
     }
     const double yaw = demand[index(Axis::kYaw)];
@@ -136,7 +154,13 @@ class PrioritizedAllocator::Kernel {
         break;
       case Airmode::kRollPitchYaw:
         effective = demand;  // u is already the mix of the whole demand
-        desaturate(u, effective, Axis::kThrust);
+        if (a_.equal_lift_) {
+          // Thrust moves every motor alike: the extremes just taken give
+          // its step, with no second pass.
+          desaturate_equal_lift(u, effective, lowest, highest);
+        } else {
+          desaturate(u, effective, Axis::kThrust);
+        }
         desaturate(u, effective, Axis::kYaw);
         break;
     }
@@ -166,7 +190,7 @@ class PrioritizedAllocator::Kernel {
     apply(r, effective, u);
     clamp(u);
     const AxisVector repair_left = undelivered(demand, u);
-    if (closer_in_priority_order(clip_left, repair_left)) {
+    if (closer_in_order(clip_left, repair_left, kDeliveredTolerance)) {
       store(clipped, commands);
       return detail::describe_with<N>(clip_left, clipped.data(), n_, range_);
     }
@@ -229,6 +253,19 @@ class PrioritizedAllocator::Kernel {
     const Motors position = u.cwiseProduct(View(g.inverse.data(), n_));
     const double need_up = (View(g.lowest.data(), n_) - position).maxCoeff();     // max a_i
     const double need_down = (View(g.highest.data(), n_) - position).minCoeff();  // min b_i
+    step(u, effective, axis, need_up, need_down, decrease_only);
+  }
+  // The same for thrust when every motor has the same share of it (1 / c
+  // in every entry of its gains): max a_i and min b_i are the lowest and
+  // highest command's.
+  void desaturate_equal_lift(Motors& u, AxisVector& effective, double lowest,
+                             double highest) const {
+    const InRangeGains& g = a_.gains_[index(Axis::kThrust)];
+    step(u, effective, Axis::kThrust, g.lowest[0] - lowest * g.inverse[0],
+         g.highest[0] - highest * g.inverse[0], false);
+  }
+  void step(Motors& u, AxisVector& effective, Axis axis, double need_up, double need_down,
+            bool decrease_only) const {
     double gain = std::max(0.0, need_up) + std::min(0.0, need_down);
     if (decrease_only && gain > 0.0) return;
     gain += 0.5 * (std::max(0.0, need_up - gain) + std::min(0.0, need_down - gain));
@@ -357,15 +394,7 @@ class PrioritizedAllocator::Kernel {
 
 bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
                                                     const AxisVector& error_b, double tolerance) {
-  const std::array<std::pair<double, double>, 3> in_order = {
-      std::pair{roll_pitch_norm(error_a), roll_pitch_norm(error_b)},
-      std::pair{std::abs(error_a[index(Axis::kThrust)]), std::abs(error_b[index(Axis::kThrust)])},
-      std::pair{std::abs(error_a[index(Axis::kYaw)]), std::abs(error_b[index(Axis::kYaw)])}};
-  for (const auto& [x, y] : in_order) {
-    if (x < y - tolerance) return true;
-    if (x > y + tolerance) return false;
-  }
-  return false;  // a tie keeps the repair
+  return closer_in_order(error_a, error_b, tolerance);
 }
 
 AllocationResult PrioritizedAllocator::allocate(const AxisVector& demand,
