@@ -83,15 +83,15 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build-release"))
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--jitter-seconds", type=float, default=60.0)
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
     if os.environ.get("MOTORMIX_PRIVATE_BUS") != "1":
         sys.exit("run through scripts/private-bus")
     lcm_python.add_types_path(args.build)
     raw = os.path.join(args.build, "bench", "raw_loop")
 
-    print("| rate | cycles | bare LCM timer process CPU s | motormix run CPU s | ratio |")
-    print("|---|---|---|---|---|")
+    print("| rate | cycles | bare LCM timer process CPU s | motormix run CPU s | ratio | ratio of each pair of runs |")
+    print("|---|---|---|---|---|---|")
     raw_periods = {}
     for rate in (400, 8000):
         cycles = int(rate * args.seconds)
@@ -103,10 +103,13 @@ def main():
             mm_runs.append(mm_cpu)
         raw_periods[rate] = raw_out.strip()
         raw_cpu, mm_cpu = statistics.median(raw_runs), statistics.median(mm_runs)
-        print(f"| {rate} Hz | {cycles} | {raw_cpu:.3f} | {mm_cpu:.3f} | {mm_cpu / raw_cpu:.2f}x |")
+        pairs = sorted(m / r for m, r in zip(mm_runs, raw_runs))
+        spread = ", ".join(f"{x:.2f}" for x in pairs)
+        print(f"| {rate} Hz | {cycles} | {raw_cpu:.3f} | {mm_cpu:.3f} | {mm_cpu / raw_cpu:.2f}x | {spread} |")
     print()
     print(f"CPU seconds (user + system, from the kernel) over the whole process life, median of "
-          f"{args.repeats} alternating runs.")
+          f"{args.repeats} alternating runs; the last column shows how far single pairs of runs "
+          f"scatter on this machine.")
     print()
     print("Bare process, its own periods: " + "; ".join(raw_periods.values()))
     print()
