@@ -4,9 +4,10 @@
 // When the linear mix leaves the range, every motor is shifted along the
 // thrust column (all motors alike for identical rotors) by just enough to
 // bring them back: the torques (or, for wheels, the turn) are kept and
-// thrust (forward speed) gives way. If the spread between motors alone is
-// wider than the range, the torque part is scaled down until it fits, and
-// the report says which axes lost.
+// thrust (forward speed) gives way. If no shift brings every motor into
+// range (the spread between motors is too wide), the torque part is scaled
+// down along its own direction by the least amount after which one does,
+// and the report says which axes lost.
 
 #include <motormix/allocation.hpp>
 
@@ -25,6 +26,7 @@ class ShiftAllocator final : public MatrixAllocator {
   bool all_motors_alike_ = false;      // direction all ones: the shift moves every motor alike
   bool report_from_scalars_ = false;   // alike, E M = I on the controlled axes: see allocate
   double inverse_thrust_share_ = 0.0;  // 1 / each motor's (equal) share of thrust, when alike
+  double base_per_thrust_ = 0.0;       // thrust column = direction * this (0: no column to follow)
 };
 
 }  // namespace motormix

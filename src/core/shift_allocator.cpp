@@ -1,5 +1,6 @@
 #include <motormix/shift_allocator.hpp>
 
+#include "fitting_scale.hpp"
 #include "fixed_size.hpp"
 #include "report_kernel.hpp"
 #include "shift_kernel.hpp"
@@ -14,11 +15,19 @@ ShiftAllocator::ShiftAllocator(const MixingBasis& basis, CommandRange range)
     : MatrixAllocator(basis, range) {
   direction_ = mixing_.col(index(Axis::kThrust));
   const double peak = direction_.cwiseAbs().maxCoeff();
-  // A motor with no share of thrust (a failed one) is not moved by the shift.
-  if (peak > 0.0 && direction_.minCoeff() >= 0.0) {
+  // A motor with no share of thrust (a failed one) is not moved by the
+  // shift. A derived failure mixing leaves rounding (1e-15) where a share
+  // is zero: that is zero too, not a reason to give up the thrust column.
+  constexpr double kNoShare = 1e-12;
+  if (peak > 0.0 && direction_.minCoeff() >= -kNoShare * peak) {
     direction_ /= peak;
+    for (Eigen::Index i = 0; i < direction_.size(); ++i) {
+      if (direction_[i] <= kNoShare) direction_[i] = 0.0;
+    }
+    base_per_thrust_ = peak;
   } else {
-    direction_.setOnes(mixing_.rows());
+    direction_.setOnes(mixing_.rows());  // no thrust column to follow: all motors alike
+    base_per_thrust_ = 0.0;
   }
   inverse_direction_ = detail::positive_inverse(direction_);
   every_motor_moves_ = (inverse_direction_.array() != 0.0).all();
@@ -102,12 +111,20 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
     }
     ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
     if (k.empty()) {
-      // The spread alone does not fit: shrink the deviations from the mean
-      // just enough, then shift.
-      const double mean = u.mean();
-      const double width = u.maxCoeff() - u.minCoeff();
-      const double room = range.upper - range.lower;
-      if (width > room) u = (u.array() - mean) * (room / width) + mean;
+      // No shift fits: the torque part (all but thrust along the shift
+      // direction) gives way, along its own direction, by the least amount
+      // after which one does. That scale solves the same one-dimensional
+      // problem as `prioritized`'s repair (fitting_scale.hpp), exactly.
+      // Without a thrust column to follow, the base is the mean command.
+      const double along =
+          base_per_thrust_ > 0.0 ? base_per_thrust_ * demand[index(Axis::kThrust)] : u.mean();
+      const detail::LocalMotors<N> base = d * along;
+      const detail::LocalMotors<N> part = u - base;
+      const double scale =
+          detail::largest_fitting_scale<N>(base, part, inverse, every_motor_moves_, n, range, true);
+      // None at all (a motor the shift cannot move is out of range on its
+      // own): the torques go, and the clamp takes what is left.
+      u = base + std::max(scale, 0.0) * part;
       k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
     }
     const double shift = landing_shift(k);

@@ -255,6 +255,74 @@ TEST(ShiftStrategy, AWideSpreadFillsTheRange) {
   EXPECT_GT(wide, 10000);
 }
 
+// A vehicle whose thrust column is not uniform (rotors off the symmetric
+// positions, one stronger) takes shift's general path. Its promise: thrust
+// gives way first (the torques are delivered exactly whenever some shift
+// fits), and otherwise the torques are scaled down together, keeping their
+// direction, by the least amount after which a shift fits: a slightly larger
+// share would not fit with any shift. Checked by brute force over shifts.
+TEST(ShiftStrategy, UnevenVehicleKeepsTheTorqueDirectionAtTheLargestScale) {
+  const auto c = config::load_config_text(
+      "geometry:\n  rotors:\n"
+      "    - {position: [0.9, 1.1], spin: ccw, thrust_coefficient: 1.3}\n"
+      "    - {position: [-1.2, -0.8], spin: ccw}\n"
+      "    - {position: [1.0, -1.0], spin: cw}\n"
+      "    - {position: [-0.7, 1.2], spin: cw}\n",
+      "uneven.yaml");
+  const MixingBasis basis(c.mixing);
+  const auto thrust = c.mixing.col(index(Axis::kThrust));
+  ASSERT_GT(thrust.maxCoeff() - thrust.minCoeff(), 0.05) << "the general path is not exercised";
+  const CommandRange range{0.0, 1.0};
+  const ShiftAllocator shift(basis, range);
+  // Torques scaled alike: the same share of each demanded torque delivered.
+  constexpr double kSameShare = 1e-9;
+  // How much larger a share is tried to show that no shift fits it.
+  constexpr double kLargerShare = 1e-6;
+  const MotorVector direction = thrust / thrust.maxCoeff();
+  // Whether some shift k along the thrust column puts every motor in range
+  // (the interval of k, from each motor).
+  const auto some_shift_fits = [&](const MotorVector& u) {
+    double lo = -1e300;
+    double hi = 1e300;
+    for (Eigen::Index i = 0; i < u.size(); ++i) {
+      lo = std::max(lo, (range.lower - u[i]) / direction[i]);
+      hi = std::min(hi, (range.upper - u[i]) / direction[i]);
+    }
+    return lo <= hi;
+  };
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  MotorVector u;
+  int scaled = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const AxisVector d(unit(rng), unit(rng), unit(rng), (unit(rng) + 1.0) / 2.0);
+    const AllocationResult r = shift.allocate(d, u);
+    ASSERT_GE(u.minCoeff(), range.lower);
+    ASSERT_LE(u.maxCoeff(), range.upper);
+    // The share of the torques delivered, from the largest demanded torque.
+    int largest = 0;
+    for (int a = 1; a < 3; ++a) {
+      if (std::abs(d[a]) > std::abs(d[largest])) largest = a;
+    }
+    const double share = 1.0 - r.unallocated[largest] / d[largest];
+    for (int a = 0; a < 3; ++a) {
+      ASSERT_NEAR(r.unallocated[a], (1.0 - share) * d[a], kSameShare)
+          << "axis " << a << " demand " << d.transpose();
+    }
+    const MotorVector base = thrust * d[index(Axis::kThrust)];
+    const MotorVector torque_part = c.mixing * d - base;
+    if (some_shift_fits(base + torque_part)) {
+      ASSERT_NEAR(share, 1.0, kSameShare) << "a shift fits, yet torque was given up";
+    } else {
+      ++scaled;
+      ASSERT_LT(share, 1.0);
+      ASSERT_FALSE(some_shift_fits(base + (share + kLargerShare) * torque_part))
+          << "a larger share fits: " << share << " demand " << d.transpose();
+    }
+  }
+  EXPECT_GT(scaled, 2000);
+}
+
 // The team quad document's "possible improvement": a negative contribution
 // is taken from the power a motor has, down to zero.
 TEST(BudgetStrategy, NegativeContributionsComeFromAvailablePower) {
