@@ -68,8 +68,10 @@ class Mixer {
   FailureReport failure_report(MotorMask failed) const;
 
  private:
-  // The allocator mix() uses for `failed` (already limited to the motors).
-  const Allocator& allocator_for(MotorMask failed) const;
+  // Both for `failed` (already limited to the motors) given its prepared
+  // set `exact` (prepared(failed), or nullptr): mix() looks it up once.
+  const Allocator& allocator_for(MotorMask failed, const PreparedFailure* exact) const;
+  FailureReport failure_report(MotorMask failed, const PreparedFailure* exact) const;
 
   std::unique_ptr<const Allocator> allocator_;
   OutputStage output_stage_;

@@ -16,11 +16,15 @@ Mixer::Mixer(std::unique_ptr<const Allocator> allocator, OutputStage output_stag
 }
 
 Mixer::FailureReport Mixer::failure_report(MotorMask failed) const {
+  return failure_report(failed, failed == 0 ? nullptr : prepared(failed));
+}
+
+Mixer::FailureReport Mixer::failure_report(MotorMask failed, const PreparedFailure* exact) const {
   FailureReport r;
   r.held = failures_.controlled;
   r.authority = failures_.healthy_authority;
   if (failed == 0) return r;
-  if (const PreparedFailure* p = prepared(failed)) {
+  if (const PreparedFailure* p = exact) {
     r.handling = p->held == failures_.controlled ? FailureHandling::kReallocated
                                                  : FailureHandling::kAxesLost;
     r.held = p->held;
@@ -34,9 +38,9 @@ Mixer::FailureReport Mixer::failure_report(MotorMask failed) const {
   return r;
 }
 
-const Allocator& Mixer::allocator_for(MotorMask failed) const {
+const Allocator& Mixer::allocator_for(MotorMask failed, const PreparedFailure* exact) const {
   if (failed == 0) return *allocator_;
-  if (const PreparedFailure* p = prepared(failed)) return *p->allocator;
+  if (exact != nullptr) return *exact->allocator;
   // Not prepared: the set of its two lowest motors, if that one was.
   const MotorMask first = failed & (~failed + 1);
   const MotorMask rest = failed & ~first;
@@ -65,8 +69,9 @@ MixStatus Mixer::mix(const AxisVector& demand, MixerOutput& out, double dt_s,
       std::clamp(demand[index(Axis::kThrust)], thrust_low, 1.0);
   const MotorMask all = motors() >= 32 ? ~MotorMask{0} : (MotorMask{1} << motors()) - 1;
   failed &= all;
-  const Allocator* allocator = &allocator_for(failed);
-  const FailureReport report = failure_report(failed);
+  const PreparedFailure* exact = failed == 0 ? nullptr : prepared(failed);
+  const Allocator* allocator = &allocator_for(failed, exact);
+  const FailureReport report = failure_report(failed, exact);
   out.failed = failed;
   out.failure = report.handling;
   out.held = report.held;
