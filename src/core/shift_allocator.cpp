@@ -58,10 +58,42 @@ namespace {
 // does, the middle of the two bounds: the shift that leaves the smallest
 // worst overshoot, which the clamp then takes off. That happens when the
 // spread, shrunk about the mean to exactly the range, is a few ulps too
-// wide, or when the thrust column is not uniform (shrinking about the mean
-// is then not quite a shift along it); shifting by nothing there could
-// leave one end of the range unused and the other clipped hard.
+// wide, or when the largest fitting scale leaves the interval a few ulps
+// short of a point; shifting by nothing there could leave one end of the
+// range unused and the other clipped hard.
 double landing_shift(ShiftInterval k) { return k.empty() ? 0.5 * (k.lo + k.hi) : k.smallest(); }
+
+// The general path (the shift direction is not all ones), out of line so
+// that the one-pass path's code stays as small as it is.
+template <int N>
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+void shift_along_thrust(const AxisVector& demand, const detail::ConstMotorsView<N>& d,
+                        const detail::ConstMotorsView<N>& inverse, bool every_motor_moves,
+                        double base_per_thrust, CommandRange range, detail::LocalMotors<N>& u) {
+  const Eigen::Index n = u.size();
+  ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves);
+  if (k.empty()) {
+    // No shift fits: the torque part (all but thrust along the shift
+    // direction) gives way, along its own direction, by the least amount
+    // after which one does. That scale solves the same one-dimensional
+    // problem as `prioritized`'s repair (fitting_scale.hpp), exactly.
+    // Without a thrust column to follow, the base is the mean command.
+    const double along =
+        base_per_thrust > 0.0 ? base_per_thrust * demand[index(Axis::kThrust)] : u.mean();
+    const detail::LocalMotors<N> base = d * along;
+    const detail::LocalMotors<N> part = u - base;
+    const double scale =
+        detail::largest_fitting_scale<N>(base, part, inverse, every_motor_moves, n, range, true);
+    // None at all (a motor the shift cannot move is out of range on its
+    // own): the torques go, and the clamp takes what is left.
+    u = base + std::max(scale, 0.0) * part;
+    k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves);
+  }
+  const double shift = landing_shift(k);
+  u = (u + shift * d).cwiseMax(range.lower).cwiseMin(range.upper);
+}
 
 }  // namespace
 
@@ -109,26 +141,7 @@ AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector&
       }
       return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
     }
-    ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
-    if (k.empty()) {
-      // No shift fits: the torque part (all but thrust along the shift
-      // direction) gives way, along its own direction, by the least amount
-      // after which one does. That scale solves the same one-dimensional
-      // problem as `prioritized`'s repair (fitting_scale.hpp), exactly.
-      // Without a thrust column to follow, the base is the mean command.
-      const double along =
-          base_per_thrust_ > 0.0 ? base_per_thrust_ * demand[index(Axis::kThrust)] : u.mean();
-      const detail::LocalMotors<N> base = d * along;
-      const detail::LocalMotors<N> part = u - base;
-      const double scale =
-          detail::largest_fitting_scale<N>(base, part, inverse, every_motor_moves_, n, range, true);
-      // None at all (a motor the shift cannot move is out of range on its
-      // own): the torques go, and the clamp takes what is left.
-      u = base + std::max(scale, 0.0) * part;
-      k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
-    }
-    const double shift = landing_shift(k);
-    u = (u + shift * d).cwiseMax(range.lower).cwiseMin(range.upper);
+    shift_along_thrust<N>(demand, d, inverse, every_motor_moves_, base_per_thrust_, range, u);
     detail::MotorsView<N>(commands.data(), n) = u;
     return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
   });
