@@ -1,10 +1,11 @@
 #pragma once
 // Solving the 4 x 4 symmetric positive definite system of `optimal`'s Newton
-// step (its dual, B_f B_f^T + I / gamma) by a Cholesky factorization written
-// out in full. Eigen's LDLT at this size runs its general loops with
-// pivoting, and took 40 % of an octo's solve; the system is positive
-// definite by construction (I / gamma on the diagonal), so Cholesky needs no
-// pivoting, and at a fixed size of 4 every step is a few scalar operations.
+// step (its dual, B_f B_f^T + I / gamma) by a square-root-free Cholesky
+// factorization (L D L^T) written out in full. Eigen's LDLT at this size runs
+// its general loops with pivoting, and took 40 % of an octo's solve; the
+// system is positive definite by construction (I / gamma on the diagonal),
+// so it needs no pivoting, and at a fixed size of 4 every step is a few
+// scalar operations.
 
 #include <Eigen/Core>
 
