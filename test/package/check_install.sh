@@ -43,6 +43,21 @@ if grep -rl "$src" "$prefix/$libdir/cmake" "$prefix/$libdir/pkgconfig"; then
   fail "the CMake package or motormix.pc names the source tree (above)"
 fi
 
+step "run paths: no empty or relative entry (the loader reads those as the current directory)"
+for bin in "$build/motormix" "$prefix/bin/motormix"; do
+  paths=$(readelf -d "$bin" | sed -n 's/.*(R\(UN\)\{0,1\}PATH).*\[\(.*\)\]$/\2/p')
+  echo "$bin: ${paths:-none}"
+  if [ -n "$paths" ]; then
+    IFS=: read -r -a entries <<<"$paths:"
+    for e in "${entries[@]}"; do
+      case "$e" in
+        /* | '$ORIGIN'*) ;;
+        *) fail "$bin searches libraries in the current directory (run path '$paths')" ;;
+      esac
+    done
+  fi
+done
+
 step "installed binary"
 "$prefix/bin/motormix" --version | tee "$work/version.txt"
 version=$(awk '{print $2}' "$work/version.txt")
