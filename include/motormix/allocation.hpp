@@ -72,6 +72,14 @@ class MatrixAllocator : public Allocator {
   void mix_linear(const AxisVector& demand, MotorVector& commands) const;
   // Clamps into the range and reports against `target`.
   AllocationResult finish(const AxisVector& target, MotorVector& commands) const;
+  // E M = I within `tolerance` on the controlled axes: commands in range
+  // deliver exactly what they were mixed from (true of the healthy vehicle;
+  // after a failure the effectiveness is the healthy one's, and an axis
+  // given up is not delivered).
+  bool effectiveness_inverts_mixing(double tolerance) const;
+  // Every motor the same positive share of thrust, within rounding
+  // (symmetric multirotors with equal rotors).
+  bool equal_thrust_shares() const;
 
   MixingMatrix mixing_;
   // The same matrix stored column by column (zero below the motor count),

@@ -47,6 +47,25 @@ MatrixAllocator::MatrixAllocator(const MixingBasis& basis, CommandRange range)
   mixing_by_column_.topRows(mixing_.rows()) = mixing_;
 }
 
+bool MatrixAllocator::effectiveness_inverts_mixing(double tolerance) const {
+  const Eigen::Matrix4d delivered = effectiveness_ * mixing_;
+  for (int row = 0; row < kNumAxes; ++row) {
+    if (!((controlled_ >> row) & 1U)) continue;
+    for (int col = 0; col < kNumAxes; ++col) {
+      const double expected = row == col ? 1.0 : 0.0;
+      if (std::abs(delivered(row, col) - expected) > tolerance) return false;
+    }
+  }
+  return true;
+}
+
+bool MatrixAllocator::equal_thrust_shares() const {
+  const auto thrust = mixing_.col(index(Axis::kThrust));
+  if (thrust.size() == 0 || !(thrust.minCoeff() > 0.0)) return false;
+  constexpr double kSameShare = 1e-12;  // relative to the largest share
+  return thrust.maxCoeff() - thrust.minCoeff() <= kSameShare * thrust.maxCoeff();
+}
+
 void MatrixAllocator::mix_linear(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index n = mixing_.rows();
   commands.resize(n);

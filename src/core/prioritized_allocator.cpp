@@ -78,20 +78,8 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
   yaw_gains_with_headroom_ = in_range_gains(yaw, widened);
   lift_inverse_ = detail::positive_inverse(thrust);
   all_motors_lift_ = thrust.size() == 0 || thrust.minCoeff() > 0.0;
-  // E M = I on the axes answered for: commands in range deliver exactly what
-  // they were mixed from (true of the healthy vehicle; after a failure the
-  // effectiveness is the healthy one's, and an axis given up is not).
-  Eigen::Matrix4d delivered = effectiveness_ * mixing_;
-  constexpr double kInverts = 1e-9;
-  effectiveness_inverts_mixing_ = true;
-  for (int row = 0; row < kNumAxes; ++row) {
-    for (int col = 0; col < kNumAxes; ++col) {
-      if (!((controlled_ >> row) & 1U)) continue;
-      const double expected = row == col ? 1.0 : 0.0;
-      if (std::abs(delivered(row, col) - expected) > kInverts)
-        effectiveness_inverts_mixing_ = false;
-    }
-  }
+  constexpr double kInverts = 1e-9;  // far below the delivered tolerance's effect
+  effectiveness_inverts_mixing_ = effectiveness_inverts_mixing(kInverts);
   if (yaw.size() > 1) {
     const double scale = yaw.cwiseAbs().maxCoeff();
     const double same = 1e-12 * scale;  // equal within rounding
@@ -114,9 +102,7 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
     yaw_value_b_ = b;
   }
   // Equal within rounding: the repair's shift still uses the column itself.
-  constexpr double kSameLift = 1e-12;
-  equal_lift_ = thrust.size() > 0 && all_motors_lift_ &&
-                thrust.maxCoeff() - thrust.minCoeff() <= kSameLift * thrust.maxCoeff();
+  equal_lift_ = equal_thrust_shares();
 }
 
 // One allocation at N motors, every per-motor vector a local of fixed size.

@@ -37,19 +37,9 @@ ShiftAllocator::ShiftAllocator(const MixingBasis& basis, CommandRange range)
   // The one-pass path's report from its scalars (see allocate) holds when
   // the effectiveness undoes the mix on every controlled axis and the
   // thrust column itself is uniform (not only the direction made of ones).
-  const Eigen::Matrix4d delivered = effectiveness_ * mixing_;
   constexpr double kInverts = 1e-12;
-  const auto thrust = mixing_.col(index(Axis::kThrust));
-  bool inverts = peak > 0.0 && (thrust.array() - peak).abs().maxCoeff() <= kAlike * peak;
-  for (int row = 0; row < kNumAxes; ++row) {
-    if (!((controlled_ >> row) & 1U)) continue;
-    for (int col = 0; col < kNumAxes; ++col) {
-      const double expected = row == col ? 1.0 : 0.0;
-      if (std::abs(delivered(row, col) - expected) > kInverts) inverts = false;
-    }
-  }
-  report_from_scalars_ = inverts;
-  inverse_thrust_share_ = inverts ? 1.0 / peak : 0.0;
+  report_from_scalars_ = equal_thrust_shares() && effectiveness_inverts_mixing(kInverts);
+  inverse_thrust_share_ = report_from_scalars_ ? 1.0 / peak : 0.0;
 }
 
 namespace {
