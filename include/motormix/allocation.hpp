@@ -58,6 +58,24 @@ struct MixingBasis {
   AxisMask controlled;
 };
 
+// What every cycle clamps and reports with (the range, the saturation
+// thresholds, the axis mask, the tolerances), prepared once per strategy as
+// whole packets (each value twice): the baseline x86-64 target has no
+// broadcasting load, so a scalar made a packet costs a load and a shuffle
+// on every call, and the compiler does that even for constants.
+struct alignas(16) CycleConstants {
+  CycleConstants(CommandRange range, AxisMask controlled);
+  double lower[2];  // the command range
+  double upper[2];
+  double at_upper[2];  // a command at or above this sits on the upper limit (twice: one packet)
+  double at_lower[2];  // at or below this, on the lower limit
+  // All bits set on a controlled axis, none elsewhere: an undelivered
+  // demand is kept or zeroed by a bitwise and, never multiplied.
+  std::uint64_t axis_kept[kNumAxes];
+  double delivered[2];  // kDeliveredTolerance
+  double sign[2];       // -0.0: the sign bit alone
+};
+
 // Shared state of the strategies that work from a mixing matrix: the matrix,
 // its normalized effectiveness (for reporting) and the command range.
 class MatrixAllocator : public Allocator {
@@ -88,6 +106,7 @@ class MatrixAllocator : public Allocator {
   EffectivenessMatrix effectiveness_;
   CommandRange range_;
   AxisMask controlled_;
+  CycleConstants cycle_constants_;
 };
 
 // The shifts k along a direction d for which every motor of u + k d is in

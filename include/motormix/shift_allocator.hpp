@@ -20,13 +20,25 @@ class ShiftAllocator final : public MatrixAllocator {
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
  private:
+  // The two paths of allocate() at N motors (N == Eigen::Dynamic: any
+  // count). All motors alike: one pass, inlined. Along a thrust column that
+  // is not uniform: out of line, so that the one-pass path keeps no stack
+  // frame for it.
+  template <int N>
+  AllocationResult allocate_alike(const AxisVector& demand, double* out, Eigen::Index n) const;
+  template <int N>
+  AllocationResult allocate_along_thrust(const AxisVector& demand, double* out,
+                                         Eigen::Index n) const;
+
   MotorVector direction_;  // shift direction: the thrust column scaled to max 1 (or all ones)
-  MotorVector inverse_direction_;      // 1 / direction where it is positive, else 0
-  bool every_motor_moves_ = true;      // no zero in inverse_direction_
-  bool all_motors_alike_ = false;      // direction all ones: the shift moves every motor alike
-  bool report_from_scalars_ = false;   // alike, E M = I on the controlled axes: see allocate
-  double inverse_thrust_share_ = 0.0;  // 1 / each motor's (equal) share of thrust, when alike
-  double base_per_thrust_ = 0.0;       // thrust column = direction * this (0: no column to follow)
+  MotorVector inverse_direction_;     // 1 / direction where it is positive, else 0
+  bool every_motor_moves_ = true;     // no zero in inverse_direction_
+  bool all_motors_alike_ = false;     // direction all ones: the shift moves every motor alike
+  bool report_from_scalars_ = false;  // alike, E M = I on the controlled axes: see allocate
+  // The thrust a shift of 1 delivers, as an axis vector (0, 0, 0, 1 / each
+  // motor's equal share): zero unless report_from_scalars_.
+  AxisVector thrust_per_shift_ = AxisVector::Zero();
+  double base_per_thrust_ = 0.0;  // thrust column = direction * this (0: no column to follow)
 };
 
 }  // namespace motormix

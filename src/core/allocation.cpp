@@ -13,8 +13,8 @@ AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
                                      CommandRange range, AxisMask controlled) {
   return detail::with_motor_count(commands.size(), [&](auto size) {
-    return detail::describe_fixed<decltype(size)::value>(effectiveness, target, commands.data(),
-                                                         commands.size(), range, controlled);
+    return detail::describe_fixed<decltype(size)::value>(
+        effectiveness, target, commands.data(), commands.size(), CycleConstants(range, controlled));
   });
 }
 
@@ -38,12 +38,28 @@ MixingBasis::MixingBasis(const MixingMatrix& m)
 MixingBasis::MixingBasis(const MixingMatrix& m, const EffectivenessMatrix& e, AxisMask c)
     : mixing(m), effectiveness(e), controlled(c) {}
 
+CycleConstants::CycleConstants(CommandRange range, AxisMask controlled)
+    : lower{range.lower, range.lower},
+      upper{range.upper, range.upper},
+      at_upper{range.upper - detail::kSaturationTolerance,
+               range.upper - detail::kSaturationTolerance},
+      at_lower{range.lower + detail::kSaturationTolerance,
+               range.lower + detail::kSaturationTolerance},
+      axis_kept{},
+      delivered{kDeliveredTolerance, kDeliveredTolerance},
+      sign{-0.0, -0.0} {
+  for (int a = 0; a < kNumAxes; ++a) {
+    axis_kept[a] = ((controlled >> a) & 1U) ? ~std::uint64_t{0} : std::uint64_t{0};
+  }
+}
+
 MatrixAllocator::MatrixAllocator(const MixingBasis& basis, CommandRange range)
     : mixing_(basis.mixing),
       mixing_by_column_(Eigen::Matrix<double, kMaxMotors, kNumAxes>::Zero()),
       effectiveness_(basis.effectiveness),
       range_(range),
-      controlled_(basis.controlled) {
+      controlled_(basis.controlled),
+      cycle_constants_(range, basis.controlled) {
   mixing_by_column_.topRows(mixing_.rows()) = mixing_;
 }
 
@@ -85,8 +101,7 @@ AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& 
     for (Eigen::Index i = 0; i < detail::count<N>(n); ++i) {
       u[i] = std::isnan(u[i]) ? range_.lower : std::clamp(u[i], range_.lower, range_.upper);
     }
-    return detail::describe_fixed<N>(effectiveness_, target, commands.data(), n, range_,
-                                     controlled_);
+    return detail::describe_fixed<N>(effectiveness_, target, commands.data(), n, cycle_constants_);
   });
 }
 

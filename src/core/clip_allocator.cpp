@@ -11,17 +11,23 @@ namespace motormix {
 AllocationResult ClipAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index n = mixing_.rows();
   commands.resize(n);
-  const CommandRange range = range_;
-  return detail::with_motor_count(n, [&](auto size) {
-    constexpr int N = decltype(size)::value;
-    detail::LocalMotors<N> u(n);
-    u.noalias() = detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
-    // Finite demand and matrix give finite commands (the Mixer guarantees
-    // the demand): a plain clamp.
-    u = u.cwiseMax(range.lower).cwiseMin(range.upper);
-    detail::MotorsView<N>(commands.data(), n) = u;
-    return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
-  });
+  return detail::with_motor_count(
+      n,
+      [](auto size, const ClipAllocator& self, const AxisVector& target, double* out,
+         Eigen::Index motors) MOTORMIX_INLINE_LAMBDA {
+        constexpr int N = decltype(size)::value;
+        detail::LocalMotors<N> u(motors);
+        u.noalias() =
+            detail::ConstMixingColumnsView<N>(self.mixing_by_column_.data(), motors, kNumAxes) *
+            target;
+        // Finite demand and matrix give finite commands (the Mixer
+        // guarantees the demand): a plain clamp.
+        detail::clamp_finite<N>(u, self.cycle_constants_);
+        detail::MotorsView<N>(out, motors) = u;
+        return detail::describe_fixed<N>(self.effectiveness_, target, u.data(), motors,
+                                         self.cycle_constants_);
+      },
+      *this, demand, commands.data(), n);
 }
 
 }  // namespace motormix

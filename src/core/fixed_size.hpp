@@ -6,34 +6,59 @@
 // product. Quads, hexas and octos, the vehicles flown most, get their own
 // instantiation; any other count runs the same code at dynamic size.
 
+#include <motormix/axes.hpp>
+#include <motormix/effectiveness.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <Eigen/Core>
 
 #include <type_traits>
+#include <utility>
 
 // For the small steps of a kernel that must not become calls: a call passes
 // the per-motor vectors through memory, on the critical path of a chain of
 // dependent steps.
 #if defined(__GNUC__)
 #define MOTORMIX_ALWAYS_INLINE __attribute__((always_inline)) inline
+// The same for a lambda (after its parameter list): a kernel passed to
+// with_motor_count is inlined into the switch, not called from it.
+#define MOTORMIX_INLINE_LAMBDA __attribute__((always_inline))
 #else
 #define MOTORMIX_ALWAYS_INLINE inline
+#define MOTORMIX_INLINE_LAMBDA
 #endif
 
 namespace motormix::detail {
 
-template <typename Kernel>
-decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel) {
+// Calls kernel(size, args...) with size the motor count as a compile-time
+// constant (Eigen::Dynamic for the counts without their own instantiation).
+// Per-cycle callers pass what the kernel needs as arguments to a lambda that
+// captures nothing: a capturing lambda's closure is built in memory before
+// the switch on every call, for the one branch (the dynamic size) that
+// calls out of line and needs it.
+// The dynamic size, out of line: its code (loops with remainders) is large,
+// and inlined it would make every call save registers for it.
+template <typename Kernel, typename... Args>
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+decltype(auto)
+at_dynamic_size(Kernel& kernel, Args&&... args) {
+  return kernel(std::integral_constant<int, Eigen::Dynamic>{}, std::forward<Args>(args)...);
+}
+
+template <typename Kernel, typename... Args>
+MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel,
+                                                       Args&&... args) {
   switch (motors) {
     case 4:
-      return kernel(std::integral_constant<int, 4>{});
+      return kernel(std::integral_constant<int, 4>{}, std::forward<Args>(args)...);
     case 6:
-      return kernel(std::integral_constant<int, 6>{});
+      return kernel(std::integral_constant<int, 6>{}, std::forward<Args>(args)...);
     case 8:
-      return kernel(std::integral_constant<int, 8>{});
+      return kernel(std::integral_constant<int, 8>{}, std::forward<Args>(args)...);
     default:
-      return kernel(std::integral_constant<int, Eigen::Dynamic>{});
+      return at_dynamic_size(kernel, std::forward<Args>(args)...);
   }
 }
 
@@ -59,10 +84,21 @@ using ConstMotorsView = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
 // The mixing matrix column by column (MatrixAllocator::mixing_by_column_):
 // a product with it is a sum of columns scaled by the demand, packets all
 // the way, where the row-major matrix needs a horizontal sum per motor.
+// Packet alignment where Eigen gives fixed-capacity matrices aligned
+// storage (every vectorized target), none elsewhere.
+template <typename Matrix>
+inline constexpr int kStorageAlignment = alignof(Matrix) >= 16 ? Eigen::Aligned16
+                                                               : Eigen::Unaligned;
 template <int N>
 using ConstMixingColumnsView =
-    Eigen::Map<const Eigen::Matrix<double, N, 4>, Eigen::Aligned16, Eigen::OuterStride<kMaxMotors>>;
+    Eigen::Map<const Eigen::Matrix<double, N, 4>,
+               kStorageAlignment<Eigen::Matrix<double, kMaxMotors, kNumAxes>>,
+               Eigen::OuterStride<kMaxMotors>>;
+// The effectiveness (4 x motors, column-major): packet-aligned, since an
+// EffectivenessMatrix has fixed capacity and 4 rows make each column two
+// whole packets.
 template <int N>
-using ConstEffectivenessView = Eigen::Map<const Eigen::Matrix<double, 4, N>>;
+using ConstEffectivenessView =
+    Eigen::Map<const Eigen::Matrix<double, 4, N>, kStorageAlignment<EffectivenessMatrix>>;
 
 }  // namespace motormix::detail

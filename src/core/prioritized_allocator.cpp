@@ -171,17 +171,17 @@ class PrioritizedAllocator::Kernel {
         roll_pitch_norm(clip_left) <
             repair_roll_pitch_error(demand, effective, r) - 2.0 * kDeliveredTolerance) {
       store(clipped, commands);
-      return detail::describe_with<N>(clip_left, clipped.data(), n_, range_);
+      return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
     }
     apply(r, effective, u);
     clamp(u);
     const AxisVector repair_left = undelivered(demand, u);
     if (closer_in_order(clip_left, repair_left, kDeliveredTolerance)) {
       store(clipped, commands);
-      return detail::describe_with<N>(clip_left, clipped.data(), n_, range_);
+      return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
     }
     store(u, commands);
-    return detail::describe_with<N>(repair_left, u.data(), n_, range_);
+    return detail::describe_with<N>(repair_left, u.data(), n_, a_.cycle_constants_);
   }
 
  private:
@@ -207,11 +207,10 @@ class PrioritizedAllocator::Kernel {
     detail::MotorsView<N>(commands.data(), n_) = u;
   }
   AxisVector undelivered(const AxisVector& target, const Motors& u) const {
-    return detail::undelivered<N>(a_.effectiveness_, target, u.data(), n_, a_.controlled_);
+    return detail::undelivered<N>(a_.effectiveness_, target, u.data(), n_, a_.cycle_constants_);
   }
   AllocationResult report(const AxisVector& target, const Motors& u) const {
-    return detail::describe_fixed<N>(a_.effectiveness_, target, u.data(), n_, range_,
-                                     a_.controlled_);
+    return detail::describe_fixed<N>(a_.effectiveness_, target, u.data(), n_, a_.cycle_constants_);
   }
   AllocationResult deliver(const AxisVector& target, Motors& u, MotorVector& commands) const {
     clamp(u);
@@ -385,9 +384,13 @@ bool PrioritizedAllocator::closer_in_priority_order(const AxisVector& error_a,
 
 AllocationResult PrioritizedAllocator::allocate(const AxisVector& demand,
                                                 MotorVector& commands) const {
-  return detail::with_motor_count(mixing_.rows(), [&](auto size) {
-    return Kernel<decltype(size)::value>(*this).allocate(demand, commands);
-  });
+  return detail::with_motor_count(
+      mixing_.rows(),
+      [](auto size, const PrioritizedAllocator& self, const AxisVector& target, MotorVector& out)
+          MOTORMIX_INLINE_LAMBDA {
+            return Kernel<decltype(size)::value>(self).allocate(target, out);
+          },
+      *this, demand, commands);
 }
 
 }  // namespace motormix

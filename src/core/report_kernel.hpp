@@ -18,32 +18,63 @@ namespace motormix::detail {
 // A command within this distance of a limit counts as sitting on it.
 inline constexpr double kSaturationTolerance = 1e-9;
 
+// `left` on the controlled axes, zero on the others (roll and pitch of a
+// wheeled vehicle): a bitwise and with the prepared mask, no branch and no
+// trip through memory.
+MOTORMIX_ALWAYS_INLINE AxisVector on_controlled_axes(const AxisVector& left,
+                                                     const CycleConstants& limits) {
+  AxisVector kept;
+#if defined(__SSE2__)
+  const __m128i* keep = reinterpret_cast<const __m128i*>(limits.axis_kept);
+  _mm_store_pd(kept.data(),
+               _mm_and_pd(_mm_load_pd(left.data()), _mm_castsi128_pd(_mm_load_si128(keep))));
+  _mm_store_pd(kept.data() + 2, _mm_and_pd(_mm_load_pd(left.data() + 2),
+                                           _mm_castsi128_pd(_mm_load_si128(keep + 1))));
+#else
+  for (int a = 0; a < kNumAxes; ++a) kept[a] = limits.axis_kept[a] ? left[a] : 0.0;
+#endif
+  return kept;
+}
+
+// u into the command range. For finite u only (maxpd and minpd pass a NaN
+// through in one operand order and not the other): the strategies that
+// call it mix finite demands through finite matrices.
+template <int N>
+MOTORMIX_ALWAYS_INLINE void clamp_finite(LocalMotors<N>& u, const CycleConstants& limits) {
+#if defined(__SSE2__)
+  if constexpr (N != Eigen::Dynamic && N % 2 == 0) {
+    const __m128d lower = _mm_load_pd(limits.lower);
+    const __m128d upper = _mm_load_pd(limits.upper);
+    for (int i = 0; i < N; i += 2) {
+      _mm_storeu_pd(u.data() + i, _mm_min_pd(_mm_max_pd(_mm_loadu_pd(u.data() + i), lower), upper));
+    }
+    return;
+  }
+#endif
+  u = u.cwiseMax(limits.lower[0]).cwiseMin(limits.upper[0]);
+}
+
 // What `commands` leave undelivered of `target`, per axis; axes the vehicle
 // is not commanded in are zero.
 template <int N>
 MOTORMIX_ALWAYS_INLINE AxisVector undelivered(const EffectivenessMatrix& effectiveness,
                                               const AxisVector& target, const double* commands,
-                                              Eigen::Index n, AxisMask controlled) {
+                                              Eigen::Index n, const CycleConstants& limits) {
   const detail::ConstMotorsView<N> u(commands, n);
+  // An EffectivenessMatrix's storage is packet-aligned (fixed capacity).
   const detail::ConstEffectivenessView<N> e(effectiveness.data(), kNumAxes, n);
-  AxisVector unallocated;
-  unallocated.noalias() = target - e * u;
-  for (int a = 0; a < kNumAxes; ++a) {
-    if (!((controlled >> a) & 1U)) unallocated[a] = 0.0;
-  }
-  return unallocated;
+  AxisVector left;
+  left.noalias() = target - e * u;
+  return on_controlled_axes(left, limits);
 }
 
 // The report for `commands`, given what they leave undelivered.
 template <int N>
 MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unallocated,
                                                       const double* commands, Eigen::Index n,
-                                                      CommandRange range) {
-  AllocationResult result;
+                                                      const CycleConstants& limits) {
   MotorMask upper = 0;
   MotorMask lower = 0;
-  const double top = range.upper - kSaturationTolerance;
-  const double bottom = range.lower + kSaturationTolerance;
   std::uint8_t limited = 0;
 #if defined(__SSE2__)
   constexpr bool kPairs = N != Eigen::Dynamic && N % 2 == 0;
@@ -54,15 +85,15 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unalloca
 #if defined(__SSE2__)
     // Two motors per compare, their flags by movemask: the flags cost a
     // few instructions instead of two compares and shifts per motor.
-    const __m128d top2 = _mm_set1_pd(top);
-    const __m128d bottom2 = _mm_set1_pd(bottom);
+    const __m128d top2 = _mm_load_pd(limits.at_upper);
+    const __m128d bottom2 = _mm_load_pd(limits.at_lower);
     for (int i = 0; i < N; i += 2) {
       const __m128d pair = _mm_loadu_pd(commands + i);
       upper |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmpge_pd(pair, top2))) << i;
       lower |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmple_pd(pair, bottom2))) << i;
     }
-    const __m128d tolerance = _mm_set1_pd(kDeliveredTolerance);
-    const __m128d magnitude = _mm_set1_pd(-0.0);  // the sign bit, cleared by andnot
+    const __m128d tolerance = _mm_load_pd(limits.delivered);
+    const __m128d magnitude = _mm_load_pd(limits.sign);  // the sign bit, cleared by andnot
     const __m128d low_axes = _mm_andnot_pd(magnitude, _mm_loadu_pd(unallocated.data()));
     const __m128d high_axes = _mm_andnot_pd(magnitude, _mm_loadu_pd(unallocated.data() + 2));
     limited = static_cast<std::uint8_t>(_mm_movemask_pd(_mm_cmpgt_pd(low_axes, tolerance)) |
@@ -70,6 +101,8 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unalloca
 #endif
   } else {
     const detail::ConstMotorsView<N> u(commands, n);
+    const double top = limits.at_upper[0];
+    const double bottom = limits.at_lower[0];
     for (Eigen::Index i = 0; i < detail::count<N>(n); ++i) {
       upper |= static_cast<MotorMask>(u[i] >= top) << i;
       lower |= static_cast<MotorMask>(u[i] <= bottom) << i;
@@ -78,6 +111,7 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unalloca
       limited |= static_cast<std::uint8_t>((std::abs(unallocated[a]) > kDeliveredTolerance) << a);
     }
   }
+  AllocationResult result;
   result.saturated_upper = upper;
   result.saturated_lower = lower;
   result.unallocated = unallocated;
@@ -91,9 +125,9 @@ template <int N>
 MOTORMIX_ALWAYS_INLINE AllocationResult describe_fixed(const EffectivenessMatrix& effectiveness,
                                                        const AxisVector& target,
                                                        const double* commands, Eigen::Index n,
-                                                       CommandRange range, AxisMask controlled) {
-  return describe_with<N>(undelivered<N>(effectiveness, target, commands, n, controlled), commands,
-                          n, range);
+                                                       const CycleConstants& limits) {
+  return describe_with<N>(undelivered<N>(effectiveness, target, commands, n, limits), commands, n,
+                          limits);
 }
 
 }  // namespace motormix::detail

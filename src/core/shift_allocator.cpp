@@ -39,7 +39,7 @@ ShiftAllocator::ShiftAllocator(const MixingBasis& basis, CommandRange range)
   // thrust column itself is uniform (not only the direction made of ones).
   constexpr double kInverts = 1e-12;
   report_from_scalars_ = equal_thrust_shares() && effectiveness_inverts_mixing(kInverts);
-  inverse_thrust_share_ = report_from_scalars_ ? 1.0 / peak : 0.0;
+  if (report_from_scalars_) thrust_per_shift_[index(Axis::kThrust)] = 1.0 / peak;
 }
 
 namespace {
@@ -53,17 +53,59 @@ namespace {
 // range unused and the other clipped hard.
 double landing_shift(ShiftInterval k) { return k.empty() ? 0.5 * (k.lo + k.hi) : k.smallest(); }
 
-// The general path (the shift direction is not all ones), out of line so
-// that the one-pass path's code stays as small as it is.
+}  // namespace
+
+template <int N>
+MOTORMIX_ALWAYS_INLINE AllocationResult ShiftAllocator::allocate_alike(const AxisVector& demand,
+                                                                       double* out,
+                                                                       Eigen::Index n) const {
+  // Every motor moves by the shift itself: the lowest and highest command
+  // give the shifts that fit and the spread, from one pass. Without a
+  // branch on whether the spread fits (random demands make it a coin toss
+  // for the predictor): the factor that shrinks the spread about the mean
+  // is exactly 1 when it fits, and then the commands are u + shift to the
+  // last bit, as if the shrink were not there.
+  const double lower = range_.lower;
+  const double upper = range_.upper;
+  detail::LocalMotors<N> u(n);
+  u.noalias() = detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
+  const double lowest = u.minCoeff();
+  const double highest = u.maxCoeff();
+  const double mean = u.mean();
+  const double room = upper - lower;
+  const double factor = room / std::max(highest - lowest, room);
+  const double pull = mean * (1.0 - factor);  // u * factor + pull: shrunk about the mean
+  const double shift = landing_shift(
+      ShiftInterval{(lower - pull) - lowest * factor, (upper - pull) - highest * factor});
+  const double offset = pull + shift;
+  u = (u.array() * factor + offset).matrix();
+  detail::clamp_finite<N>(u, cycle_constants_);
+  detail::MotorsView<N>(out, n) = u;
+  if (report_from_scalars_) {
+    // With E M = I on the controlled axes and a thrust column of c
+    // everywhere, E (factor M d + offset 1) = factor d + (offset / c) on
+    // thrust: what is left undelivered follows from two scalars, with no
+    // product by E. The clamp only takes off rounding here (the shift
+    // fits, or misses by ulps), far below the delivered tolerance.
+    const AxisVector left = (1.0 - factor) * demand - offset * thrust_per_shift_;
+    return detail::describe_with<N>(detail::on_controlled_axes(left, cycle_constants_), u.data(), n,
+                                    cycle_constants_);
+  }
+  return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, cycle_constants_);
+}
+
 template <int N>
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
-void shift_along_thrust(const AxisVector& demand, const detail::ConstMotorsView<N>& d,
-                        const detail::ConstMotorsView<N>& inverse, bool every_motor_moves,
-                        double base_per_thrust, CommandRange range, detail::LocalMotors<N>& u) {
-  const Eigen::Index n = u.size();
-  ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves);
+AllocationResult
+ShiftAllocator::allocate_along_thrust(const AxisVector& demand, double* out, Eigen::Index n) const {
+  const CommandRange range = range_;
+  const detail::ConstMotorsView<N> d(direction_.data(), n);
+  const detail::ConstMotorsView<N> inverse(inverse_direction_.data(), n);
+  detail::LocalMotors<N> u(n);
+  u.noalias() = detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
+  ShiftInterval k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
   if (k.empty()) {
     // No shift fits: the torque part (all but thrust along the shift
     // direction) gives way, along its own direction, by the least amount
@@ -71,70 +113,34 @@ void shift_along_thrust(const AxisVector& demand, const detail::ConstMotorsView<
     // problem as `prioritized`'s repair (fitting_scale.hpp), exactly.
     // Without a thrust column to follow, the base is the mean command.
     const double along =
-        base_per_thrust > 0.0 ? base_per_thrust * demand[index(Axis::kThrust)] : u.mean();
+        base_per_thrust_ > 0.0 ? base_per_thrust_ * demand[index(Axis::kThrust)] : u.mean();
     const detail::LocalMotors<N> base = d * along;
     const detail::LocalMotors<N> part = u - base;
     const double scale =
-        detail::largest_fitting_scale<N>(base, part, inverse, every_motor_moves, n, range, true);
+        detail::largest_fitting_scale<N>(base, part, inverse, every_motor_moves_, n, range, true);
     // None at all (a motor the shift cannot move is out of range on its
     // own): the torques go, and the clamp takes what is left.
     u = base + std::max(scale, 0.0) * part;
-    k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves);
+    k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
   }
   const double shift = landing_shift(k);
   u = (u + shift * d).cwiseMax(range.lower).cwiseMin(range.upper);
+  detail::MotorsView<N>(out, n) = u;
+  return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, cycle_constants_);
 }
 
-}  // namespace
-
 AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
-  const Eigen::Index n = mixing_.rows();
-  commands.resize(n);
-  const CommandRange range = range_;
-  return detail::with_motor_count(n, [&](auto size) {
-    constexpr int N = decltype(size)::value;
-    const detail::ConstMotorsView<N> d(direction_.data(), n);
-    const detail::ConstMotorsView<N> inverse(inverse_direction_.data(), n);
-    detail::LocalMotors<N> u(n);
-    u.noalias() = detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
-    if (all_motors_alike_) {
-      // Every motor moves by the shift itself: the lowest and highest
-      // command give the shifts that fit and the spread, from one pass.
-      // Without a branch on whether the spread fits (random demands make it
-      // a coin toss for the predictor): the factor that shrinks the spread
-      // about the mean is exactly 1 when it fits, and then the commands are
-      // u + shift to the last bit, as if the shrink were not there.
-      const double lowest = u.minCoeff();
-      const double highest = u.maxCoeff();
-      const double mean = u.mean();
-      const double room = range.upper - range.lower;
-      const double factor = room / std::max(highest - lowest, room);
-      const double pull = mean * (1.0 - factor);  // u * factor + pull: shrunk about the mean
-      const double shift = landing_shift(ShiftInterval{(range.lower - pull) - lowest * factor,
-                                                       (range.upper - pull) - highest * factor});
-      const double offset = pull + shift;
-      u = (u.array() * factor + offset).max(range.lower).min(range.upper).matrix();
-      detail::MotorsView<N>(commands.data(), n) = u;
-      if (report_from_scalars_) {
-        // With E M = I on the controlled axes and a thrust column of c
-        // everywhere, E (factor M d + offset 1) = factor d + (offset / c)
-        // on thrust: what is left undelivered follows from two scalars,
-        // with no product by E. The clamp only takes off rounding here
-        // (the shift fits, or misses by ulps), far below the delivered
-        // tolerance.
-        AxisVector left = (1.0 - factor) * demand;
-        left[index(Axis::kThrust)] -= offset * inverse_thrust_share_;
-        for (int a = 0; a < kNumAxes; ++a) {
-          if (!((controlled_ >> a) & 1U)) left[a] = 0.0;
-        }
-        return detail::describe_with<N>(left, u.data(), n, range);
-      }
-      return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
-    }
-    shift_along_thrust<N>(demand, d, inverse, every_motor_moves_, base_per_thrust_, range, u);
-    detail::MotorsView<N>(commands.data(), n) = u;
-    return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, range, controlled_);
-  });
+  const Eigen::Index motors = mixing_.rows();
+  commands.resize(motors);
+  return detail::with_motor_count(
+      motors,
+      [](auto size, const ShiftAllocator& self, const AxisVector& target, double* out,
+         Eigen::Index n) MOTORMIX_INLINE_LAMBDA {
+        constexpr int N = decltype(size)::value;
+        return self.all_motors_alike_ ? self.allocate_alike<N>(target, out, n)
+                                      : self.allocate_along_thrust<N>(target, out, n);
+      },
+      *this, demand, commands.data(), motors);
 }
 
 }  // namespace motormix
