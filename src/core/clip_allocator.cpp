@@ -20,9 +20,7 @@ AllocationResult ClipAllocator::allocate(const AxisVector& demand, MotorVector& 
         u.noalias() =
             detail::ConstMixingColumnsView<N>(self.mixing_by_column_.data(), motors, kNumAxes) *
             target;
-        // Finite demand and matrix give finite commands (the Mixer
-        // guarantees the demand): a plain clamp.
-        detail::clamp_finite<N>(u, self.cycle_constants_);
+        detail::clamp_into_range<N>(u, self.cycle_constants_);
         detail::MotorsView<N>(out, motors) = u;
         return detail::describe_fixed<N>(self.effectiveness_, target, u.data(), motors,
                                          self.cycle_constants_);

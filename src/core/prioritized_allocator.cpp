@@ -195,13 +195,7 @@ class PrioritizedAllocator::Kernel {
   View column(Axis axis) const { return View(a_.mixing_by_column_.col(index(axis)).data(), n_); }
 
   // Into the range; NaN (which finite inputs cannot produce) to the safe end.
-  // Element by element: measured as fast as, or faster than, the packet
-  // clamp (whose NaN behaviour depends on the target) on these sizes.
-  void clamp(Motors& u) const {
-    for (Eigen::Index i = 0; i < detail::count<N>(n_); ++i) {
-      u[i] = u[i] >= range_.lower ? (u[i] <= range_.upper ? u[i] : range_.upper) : range_.lower;
-    }
-  }
+  void clamp(Motors& u) const { detail::clamp_into_range<N>(u, a_.cycle_constants_); }
   void store(const Motors& u, MotorVector& commands) const {
     commands.resize(n_);
     detail::MotorsView<N>(commands.data(), n_) = u;

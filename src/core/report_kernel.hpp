@@ -36,11 +36,12 @@ MOTORMIX_ALWAYS_INLINE AxisVector on_controlled_axes(const AxisVector& left,
   return kept;
 }
 
-// u into the command range. For finite u only (maxpd and minpd pass a NaN
-// through in one operand order and not the other): the strategies that
-// call it mix finite demands through finite matrices.
+// u into the command range, a NaN (which finite inputs cannot produce) to
+// the lower end, the safe one. maxpd(u, lower) gives its second operand
+// unless u is greater, so a NaN (and a -0 at a lower limit of 0) becomes
+// `lower`; the scalar loop says the same.
 template <int N>
-MOTORMIX_ALWAYS_INLINE void clamp_finite(LocalMotors<N>& u, const CycleConstants& limits) {
+MOTORMIX_ALWAYS_INLINE void clamp_into_range(LocalMotors<N>& u, const CycleConstants& limits) {
 #if defined(__SSE2__)
   if constexpr (N != Eigen::Dynamic && N % 2 == 0) {
     const __m128d lower = _mm_load_pd(limits.lower);
@@ -51,7 +52,12 @@ MOTORMIX_ALWAYS_INLINE void clamp_finite(LocalMotors<N>& u, const CycleConstants
     return;
   }
 #endif
-  u = u.cwiseMax(limits.lower[0]).cwiseMin(limits.upper[0]);
+  const double lower = limits.lower[0];
+  const double upper = limits.upper[0];
+  for (Eigen::Index i = 0; i < u.size(); ++i) {
+    const double above = u[i] > lower ? u[i] : lower;
+    u[i] = above < upper ? above : upper;
+  }
 }
 
 // What `commands` leave undelivered of `target`, per axis; axes the vehicle

@@ -79,7 +79,7 @@ MOTORMIX_ALWAYS_INLINE AllocationResult ShiftAllocator::allocate_alike(const Axi
       ShiftInterval{(lower - pull) - lowest * factor, (upper - pull) - highest * factor});
   const double offset = pull + shift;
   u = (u.array() * factor + offset).matrix();
-  detail::clamp_finite<N>(u, cycle_constants_);
+  detail::clamp_into_range<N>(u, cycle_constants_);
   detail::MotorsView<N>(out, n) = u;
   if (report_from_scalars_) {
     // With E M = I on the controlled axes and a thrust column of c
@@ -124,7 +124,8 @@ ShiftAllocator::allocate_along_thrust(const AxisVector& demand, double* out, Eig
     k = detail::shifts_that_fit<N>(u, inverse, n, range, every_motor_moves_);
   }
   const double shift = landing_shift(k);
-  u = (u + shift * d).cwiseMax(range.lower).cwiseMin(range.upper);
+  u += shift * d;
+  detail::clamp_into_range<N>(u, cycle_constants_);
   detail::MotorsView<N>(out, n) = u;
   return detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, cycle_constants_);
 }
