@@ -30,12 +30,6 @@
 
 namespace motormix::detail {
 
-// Calls kernel(size, args...) with size the motor count as a compile-time
-// constant (Eigen::Dynamic for the counts without their own instantiation).
-// Per-cycle callers pass what the kernel needs as arguments to a lambda that
-// captures nothing: a capturing lambda's closure is built in memory before
-// the switch on every call, for the one branch (the dynamic size) that
-// calls out of line and needs it.
 // The dynamic size, out of line: its code (loops with remainders) is large,
 // and inlined it would make every call save registers for it.
 template <typename Kernel, typename... Args>
@@ -47,6 +41,12 @@ at_dynamic_size(Kernel& kernel, Args&&... args) {
   return kernel(std::integral_constant<int, Eigen::Dynamic>{}, std::forward<Args>(args)...);
 }
 
+// Calls kernel(size, args...) with size the motor count as a compile-time
+// constant (Eigen::Dynamic for the counts without their own instantiation).
+// Per-cycle callers pass what the kernel needs as arguments to a lambda that
+// captures nothing: a capturing lambda's closure is built in memory before
+// the switch on every call, for the one branch (the dynamic size) that
+// calls out of line and needs it.
 template <typename Kernel, typename... Args>
 MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel,
                                                        Args&&... args) {
@@ -81,14 +81,14 @@ template <int N>
 using MotorsView = Eigen::Map<Eigen::Matrix<double, N, 1>>;
 template <int N>
 using ConstMotorsView = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
-// The mixing matrix column by column (MatrixAllocator::mixing_by_column_):
-// a product with it is a sum of columns scaled by the demand, packets all
-// the way, where the row-major matrix needs a horizontal sum per motor.
 // Packet alignment where Eigen gives fixed-capacity matrices aligned
 // storage (every vectorized target), none elsewhere.
 template <typename Matrix>
 inline constexpr int kStorageAlignment = alignof(Matrix) >= 16 ? Eigen::Aligned16
                                                                : Eigen::Unaligned;
+// The mixing matrix column by column (MatrixAllocator::mixing_by_column_):
+// a product with it is a sum of columns scaled by the demand, packets all
+// the way, where the row-major matrix needs a horizontal sum per motor.
 template <int N>
 using ConstMixingColumnsView =
     Eigen::Map<const Eigen::Matrix<double, N, 4>,
