@@ -129,6 +129,11 @@ ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, Comman
 AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
                                      CommandRange range, AxisMask controlled);
+// The same with the range and the axis mask prepared once, for a caller that
+// reports every cycle.
+AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
+                                     const AxisVector& target, const MotorVector& commands,
+                                     const CycleConstants& limits);
 
 // Demand differences below this count as delivered (normalized units).
 inline constexpr double kDeliveredTolerance = 1e-6;

@@ -50,7 +50,7 @@ class YawYieldingAllocator final : public Allocator {
   MotorVector yaw_alone_;           // command change per unit of yaw, nothing else
   EffectivenessMatrix effectiveness_;
   CommandRange range_;
-  AxisMask controlled_;
+  CycleConstants cycle_constants_;  // the range and the controlled axes, for the report
 };
 
 }  // namespace motormix

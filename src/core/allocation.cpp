@@ -12,9 +12,15 @@ namespace motormix {
 AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
                                      const AxisVector& target, const MotorVector& commands,
                                      CommandRange range, AxisMask controlled) {
+  return describe_allocation(effectiveness, target, commands, CycleConstants(range, controlled));
+}
+
+AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
+                                     const AxisVector& target, const MotorVector& commands,
+                                     const CycleConstants& limits) {
   return detail::with_motor_count(commands.size(), [&](auto size) {
-    return detail::describe_fixed<decltype(size)::value>(
-        effectiveness, target, commands.data(), commands.size(), CycleConstants(range, controlled));
+    return detail::describe_fixed<decltype(size)::value>(effectiveness, target, commands.data(),
+                                                         commands.size(), limits);
   });
 }
 

@@ -38,7 +38,7 @@ YawYieldingAllocator::YawYieldingAllocator(const MixingBasis& reduced, const Mix
       yaw_alone_(yaw_free.col(index(Axis::kYaw))),
       effectiveness_(reduced.effectiveness),
       range_(range),
-      controlled_(reduced.controlled) {}
+      cycle_constants_(range, reduced.controlled) {}
 
 YawYieldingAllocator::Interval YawYieldingAllocator::room_along_yaw(const MotorVector& u) const {
   Interval k{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
@@ -83,7 +83,7 @@ AllocationResult YawYieldingAllocator::allocate(const AxisVector& demand,
     free_commands[i] = std::clamp(free_commands[i], range_.lower, range_.upper);
   }
   const AllocationResult yielded =
-      describe_allocation(effectiveness_, demand, free_commands, range_, controlled_);
+      describe_allocation(effectiveness_, demand, free_commands, cycle_constants_);
   const bool yielded_better = PrioritizedAllocator::closer_in_priority_order(
       yielded.unallocated, full.unallocated, kCandidateTie);
   const AllocationResult& best = yielded_better ? yielded : full;
