@@ -82,8 +82,10 @@ class MixerProcessTest : public ::testing::Test {
  protected:
   void SetUp() override { ASSERT_TRUE(in_private_bus()) << "run through scripts/private-bus"; }
 
+  // `run_options`: further options of `motormix run` (e.g. --lcm-url).
   void start(const std::vector<std::string>& overrides = {},
-             const std::string& config_file = "config/team_quad.yaml") {
+             const std::string& config_file = "config/team_quad.yaml",
+             const std::vector<std::string>& run_options = {}) {
     config_ = config::load_config_file(source_path(config_file), overrides);
     bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
     pilot_ = std::make_unique<Pilot>(config_);
@@ -92,6 +94,7 @@ class MixerProcessTest : public ::testing::Test {
       argv.push_back("--set");
       argv.push_back(o);
     }
+    argv.insert(argv.end(), run_options.begin(), run_options.end());
     mixer_ = std::make_unique<ChildProcess>(argv);
     ASSERT_TRUE(bus_->wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
   }

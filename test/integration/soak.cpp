@@ -7,6 +7,7 @@
 
 #include "integration/bus_recorder.hpp"
 #include "integration/process.hpp"
+#include "integration/udp_drops.hpp"
 
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
@@ -32,27 +33,6 @@ long rss_kb(::pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   for (std::string line; std::getline(status, line);) {
     if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
-  }
-  return -1;
-}
-
-// Datagrams the kernel dropped because a UDP receive buffer was full, in this
-// network namespace (the private bus): /proc/net/snmp, Udp RcvbufErrors.
-long udp_receive_buffer_drops() {
-  std::ifstream snmp("/proc/net/snmp");
-  std::string names, values;
-  for (std::string line; std::getline(snmp, line);) {
-    if (line.rfind("Udp:", 0) != 0) continue;
-    if (names.empty()) {
-      names = line;
-    } else {
-      values = line;
-      break;
-    }
-  }
-  std::istringstream n(names), v(values);
-  for (std::string name, value; n >> name && v >> value;) {
-    if (name == "RcvbufErrors") return std::stol(value);
   }
   return -1;
 }
@@ -107,7 +87,7 @@ int main(int argc, char** argv) {
   }
 
   lcm::LCM lcm;
-  const long drops_before = udp_receive_buffer_drops();
+  const long drops_before = motormix::test::udp_receive_buffer_drops();
   const auto start = Clock::now();
   const auto end = start + std::chrono::duration<double>(seconds);
   auto next = start;
@@ -160,7 +140,7 @@ int main(int argc, char** argv) {
       },
       3s);
   const auto status = bus.status();
-  const long kernel_drops = udp_receive_buffer_drops() - drops_before;
+  const long kernel_drops = motormix::test::udp_receive_buffer_drops() - drops_before;
   mixer.signal(SIGTERM);
   const auto exit_code = mixer.wait_for(10s);
 

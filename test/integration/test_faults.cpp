@@ -6,11 +6,13 @@
 // counters that match what was injected, a disarmed last message on exit.
 
 #include "integration/mixer_fixture.hpp"
+#include "integration/udp_drops.hpp"
 
 #include <sys/wait.h>
 
 #include <array>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <random>
 #include <thread>
@@ -142,10 +144,15 @@ TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
 }
 
 // A burst: lcm-logplayer plays the 14 s flight at 50 times its speed (about
-// 25 000 messages a second). Nothing is lost or rejected: every message of
-// the log is counted as accepted, and the outputs stay in range.
+// 25 000 messages a second). Nothing is rejected, and every message of the log
+// is accepted except those the kernel dropped before motormix could read them
+// (a full socket receive buffer on a loaded machine, counted in RcvbufErrors):
+// motormix runs with the larger buffer the README recommends for bursts, and
+// any message missing beyond the kernel's count is motormix's loss, a failure.
+// The outputs stay in range.
 TEST_F(Faults, BurstAtFiftyTimesSpeedLosesNothing) {
-  start();
+  start({}, "config/team_quad.yaml",
+        {"--lcm-url", "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152"});
   int setpoints = 0, pids = 0;
   {
     lcm::LogFile log(source_path("test/data/flights/team_quad.lcmlog"), "r");
@@ -154,20 +161,34 @@ TEST_F(Faults, BurstAtFiftyTimesSpeedLosesNothing) {
       pids += ev->channel == config_.channels.pid;
     }
   }
+  const long drops_before = udp_receive_buffer_drops();
+  ASSERT_GE(drops_before, 0) << "cannot read Udp RcvbufErrors from /proc/net/snmp";
   ChildProcess player(
       {"lcm-logplayer", "-s", "50", source_path("test/data/flights/team_quad.lcmlog")});
   ASSERT_EQ(player.wait_for(30s), 0);
-  ASSERT_TRUE(bus_->wait_until(
+  // Every message accepted, or (on a loaded machine) until the counts stop
+  // growing: 5 s is twenty status periods after the last message.
+  bus_->wait_until(
       [&](const auto&, const auto& s) {
         return !s.empty() && s.back().setpoint_received + s.back().pid_received >= setpoints + pids;
       },
-      5s))
-      << "accepted " << bus_->status().back().setpoint_received << " setpoints of " << setpoints
-      << ", " << bus_->status().back().pid_received << " pid of " << pids;
+      5s);
+  const long kernel_drops = udp_receive_buffer_drops() - drops_before;
   const auto status = bus_->status();  // a copy: `last` must not outlive it
+  ASSERT_FALSE(status.empty());
   const auto& last = status.back();
-  EXPECT_EQ(last.setpoint_received, setpoints);
-  EXPECT_EQ(last.pid_received, pids);
+  const long missing = (setpoints - last.setpoint_received) + (pids - last.pid_received);
+  EXPECT_LE(last.setpoint_received, setpoints);
+  EXPECT_LE(last.pid_received, pids);
+  // The kernel's count covers every socket on the private bus (the test's
+  // own recorder too), so it bounds what motormix could have lost there.
+  EXPECT_LE(missing, kernel_drops) << "accepted " << last.setpoint_received << " setpoints of "
+                                   << setpoints << ", " << last.pid_received << " pid of " << pids
+                                   << "; the kernel dropped " << kernel_drops << " datagrams";
+  if (missing > 0 && missing <= kernel_drops) {
+    std::printf("note: %ld of %d messages dropped by the kernel (receive buffer full)\n", missing,
+                setpoints + pids);
+  }
   EXPECT_EQ(last.rejected_decode + last.rejected_range + last.rejected_nonfinite +
                 last.rejected_stale_order + last.rejected_future,
             0);
@@ -243,6 +264,8 @@ TEST_F(Faults, FloodsOfUndecodableAndOversizedMessagesAreCounted) {
   std::mt19937 rng(1234);
   constexpr int kFlood = 1000;
   const std::size_t outputs_before = bus_->pwm_count();
+  ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return !s.empty(); }, 5s));
+  const std::int64_t failsafes_before = bus_->status().back().failsafe_events;
   const auto t0 = Clock::now();
   for (int k = 0; k < kFlood; ++k) {
     const std::size_t size = k % 10 == 0 ? 60000 : 1 + rng() % 100;  // every tenth: 60 kB
@@ -262,7 +285,17 @@ TEST_F(Faults, FloodsOfUndecodableAndOversizedMessagesAreCounted) {
   const double outputs = static_cast<double>(bus_->pwm_count() - outputs_before);
   EXPECT_GE(outputs, 0.6 * flood_s * config_.loop_rate_hz);
   ASSERT_TRUE(mixer_->running());
-  ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  // On a loaded machine the flood can hold back valid setpoints past their
+  // timeout: motormix then fails safe and disarms, as documented, and only a
+  // fresh arming sequence flies again. Either way it must fly after the flood.
+  const mixer_status_t after = bus_->status().back();
+  if (after.failsafe_events > failsafes_before) {
+    EXPECT_NE(after.failsafe_reason, mixer_status_t::REASON_INVALID_INPUT)
+        << "junk must be rejected, never taken as the inputs in force";
+    arm();
+  } else {
+    ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return m.armed; }));
+  }
   expect_outputs_in_range();
   stop_and_expect_disarmed_exit();
 }
