@@ -4,6 +4,7 @@
 
 #include "test_support.hpp"
 
+#include <motormix/clip_allocator.hpp>
 #include <motormix/optimal_allocator.hpp>
 #include <motormix/shift_allocator.hpp>
 
@@ -230,6 +231,49 @@ TEST(ShiftStrategy, OnePassPathAgreesWithTheGeneralOne) {
       ASSERT_GE(a.minCoeff(), range.lower);
       ASSERT_LE(a.maxCoeff(), range.upper);
     }
+  }
+}
+
+// A mix that fits the range is returned as it is, to the last bit (the
+// same commands `clip` gives, which only clamps), and a spread that fits but
+// sits too high or too low is moved by one shift, the same for every motor:
+// no scaling creeps in by rounding. (A form that rescaled on every cycle
+// rounded here.)
+TEST(ShiftStrategy, AMixThatFitsIsKeptExactly) {
+  for (const char* preset : {"quad_x", "hexa_x", "octo_x"}) {
+    const auto c =
+        config::load_config_text(std::string("geometry: {preset: ") + preset + "}\n", "s.yaml");
+    const CommandRange range{0.0, 1.0};
+    const ShiftAllocator shift(MixingBasis(c.mixing), range);
+    const ClipAllocator clip(MixingBasis(c.mixing), range);
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    MotorVector shifted;
+    MotorVector clipped;
+    int inside = 0;
+    int moved = 0;
+    for (int k = 0; k < 20000; ++k) {
+      const AxisVector d(0.2 * unit(rng), 0.2 * unit(rng), 0.2 * unit(rng), 0.5 + 0.6 * unit(rng));
+      shift.allocate(d, shifted);
+      clip.allocate(d, clipped);
+      const MotorVector linear = c.mixing * d;
+      if (linear.maxCoeff() - linear.minCoeff() > 0.9) continue;
+      if (linear.minCoeff() > 1e-9 && linear.maxCoeff() < 1.0 - 1e-9) {
+        ++inside;
+        for (Eigen::Index i = 0; i < shifted.size(); ++i) {
+          ASSERT_EQ(shifted[i], clipped[i])
+              << preset << " motor " << i << " demand " << d.transpose();
+        }
+      } else {
+        ++moved;
+        // One shift for all: each command minus the clip-free mix is the same
+        // number (the clip's mix is the linear one where it is in range).
+        const MotorVector step = shifted - linear;
+        ASSERT_LE(step.maxCoeff() - step.minCoeff(), 1e-15) << preset << " " << d.transpose();
+      }
+    }
+    EXPECT_GT(inside, 5000) << preset;
+    EXPECT_GT(moved, 2000) << preset;
   }
 }
 
