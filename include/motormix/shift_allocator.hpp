@@ -20,10 +20,10 @@ class ShiftAllocator final : public MatrixAllocator {
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
  private:
-  // The two paths of allocate() at N motors (N == Eigen::Dynamic: any
-  // count). All motors alike: one pass, inlined. Along a thrust column that
-  // is not uniform: out of line, so that the one-pass path keeps no stack
-  // frame for it.
+  // The two paths of allocate() at N motors (N == Eigen::Dynamic: a count
+  // without its own instantiation, see src/core/fixed_size.hpp). All motors alike: one pass,
+  // inlined. Along a thrust column that is not uniform: out of line, so that the one-pass path
+  // keeps no stack frame for it.
   template <int N>
   AllocationResult allocate_alike(const AxisVector& demand, double* out, Eigen::Index n) const;
   template <int N>

@@ -1,6 +1,6 @@
 // The per-cycle report and clamp kernels (src/core/report_kernel.hpp) at the
-// motor counts with their own instantiation (packet code) and at dynamic
-// size (scalar code), against the plain definitions: a clamp that sends NaN
+// motor counts with their own instantiation (4 to 16, even: packet code) and
+// at dynamic size (scalar code), against the plain definitions: a clamp that sends NaN
 // to the lower end, saturation flags within kSaturationTolerance of a
 // limit, and what the commands leave undelivered through the effectiveness,
 // zero on axes the vehicle does not command.
@@ -46,6 +46,10 @@ TEST(ReportKernel, ClampSendsNanToTheLowerEndAtEveryMotorCount) {
   check_clamp<4>(4);
   check_clamp<6>(6);
   check_clamp<8>(8);
+  check_clamp<10>(10);
+  check_clamp<12>(12);
+  check_clamp<14>(14);
+  check_clamp<16>(16);
   for (Eigen::Index n : {1, 3, 5, 10, 16}) check_clamp<Eigen::Dynamic>(n);
 }
 
@@ -102,6 +106,10 @@ TEST(ReportKernel, FlagsAndUndeliveredDemandAtEveryMotorCount) {
     check_report<4>(4, controlled);
     check_report<6>(6, controlled);
     check_report<8>(8, controlled);
+    check_report<10>(10, controlled);
+    check_report<12>(12, controlled);
+    check_report<14>(14, controlled);
+    check_report<16>(16, controlled);
     for (Eigen::Index n : {2, 3, 5, 12, 16}) check_report<Eigen::Dynamic>(n, controlled);
   }
 }
