@@ -47,9 +47,8 @@ class PrioritizedAllocator final : public MatrixAllocator {
                                        double tolerance = kDeliveredTolerance);
 
  private:
-  // The per-cycle work at a motor count fixed at compile time (every even
-  // count from 4 to 16, or any other at dynamic size); defined in
-  // prioritized_allocator.cpp.
+  // The per-cycle work at a motor count fixed at compile time (4, 6, 8, or
+  // any other at dynamic size); defined in prioritized_allocator.cpp.
   template <int N>
   class Kernel;
 

@@ -3,9 +3,9 @@
 // dynamic size with a fixed capacity (so one type serves 1..16 motors), but
 // their storage is contiguous, so a kernel can view it at a size known at
 // compile time: the products unroll and vectorize like a bare fixed-size
-// product. Every even count from 4 to 16 gets its own instantiation (quads,
-// hexas and octos inline, the vehicles flown most; 10 to 16 out of line);
-// any other count runs the same code at dynamic size, out of line too.
+// product. Quads, hexas and octos, the vehicles flown most, get their own
+// instantiation in every strategy; clip and shift also at 10, 12, 14 and 16
+// motors; any other count runs the same code at dynamic size.
 
 #include <motormix/axes.hpp>
 #include <motormix/effectiveness.hpp>
@@ -31,25 +31,23 @@
 
 namespace motormix::detail {
 
-// The sizes above eight (fixed: 10, 12, 14, 16; dynamic: any other count),
-// out of line: their code is large (the dynamic size's loops have
-// remainders), and inlined it would make every call save registers for it,
-// the quads' and hexas' calls too.
-template <int N, typename Kernel, typename... Args>
+// The dynamic size, out of line: its code (loops with remainders) is large,
+// and inlined it would make every call save registers for it.
+template <typename Kernel, typename... Args>
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
 decltype(auto)
-out_of_line(Kernel& kernel, Args&&... args) {
-  return kernel(std::integral_constant<int, N>{}, std::forward<Args>(args)...);
+at_dynamic_size(Kernel& kernel, Args&&... args) {
+  return kernel(std::integral_constant<int, Eigen::Dynamic>{}, std::forward<Args>(args)...);
 }
 
 // Calls kernel(size, args...) with size the motor count as a compile-time
 // constant (Eigen::Dynamic for the counts without their own instantiation).
 // Per-cycle callers pass what the kernel needs as arguments to a lambda that
 // captures nothing: a capturing lambda's closure is built in memory before
-// the switch on every call, for the branches (above eight motors) that call
-// out of line and need it.
+// the switch on every call, for the branch (the dynamic size) that calls
+// out of line and needs it.
 template <typename Kernel, typename... Args>
 MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel,
                                                        Args&&... args) {
@@ -60,16 +58,53 @@ MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kern
       return kernel(std::integral_constant<int, 6>{}, std::forward<Args>(args)...);
     case 8:
       return kernel(std::integral_constant<int, 8>{}, std::forward<Args>(args)...);
-    case 10:
-      return out_of_line<10>(kernel, std::forward<Args>(args)...);
-    case 12:
-      return out_of_line<12>(kernel, std::forward<Args>(args)...);
-    case 14:
-      return out_of_line<14>(kernel, std::forward<Args>(args)...);
-    case 16:
-      return out_of_line<16>(kernel, std::forward<Args>(args)...);
     default:
-      return out_of_line<Eigen::Dynamic>(kernel, std::forward<Args>(args)...);
+      return at_dynamic_size(kernel, std::forward<Args>(args)...);
+  }
+}
+
+// The counts above eight (10, 12, 14, 16 fixed, any other dynamic) in one
+// function out of line: inlined, their code would make every call save
+// registers for it and turn the switch of the counts flown most into a jump
+// table (seen: 1.6x the quad's time).
+template <typename Kernel, typename... Args>
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+decltype(auto)
+at_counts_above_eight(Eigen::Index motors, Kernel& kernel, Args&&... args) {
+  switch (motors) {
+    case 10:
+      return kernel(std::integral_constant<int, 10>{}, std::forward<Args>(args)...);
+    case 12:
+      return kernel(std::integral_constant<int, 12>{}, std::forward<Args>(args)...);
+    case 14:
+      return kernel(std::integral_constant<int, 14>{}, std::forward<Args>(args)...);
+    case 16:
+      return kernel(std::integral_constant<int, 16>{}, std::forward<Args>(args)...);
+    default:
+      return kernel(std::integral_constant<int, Eigen::Dynamic>{}, std::forward<Args>(args)...);
+  }
+}
+
+// with_motor_count with fixed sizes up to 16 motors (every even count), for
+// the simple strategies (clip, shift), whose kernels are small. Not for the
+// large ones (prioritized, the report of the others): four more
+// instantiations grow their translation unit past the compiler's inlining
+// budget, which then calls helpers it inlined before (seen: 84 more
+// instructions per quad call of prioritized).
+template <typename Kernel, typename... Args>
+MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count_up_to_16(Eigen::Index motors,
+                                                                Kernel&& kernel, Args&&... args) {
+  switch (motors) {
+    case 4:
+      return kernel(std::integral_constant<int, 4>{}, std::forward<Args>(args)...);
+    case 6:
+      return kernel(std::integral_constant<int, 6>{}, std::forward<Args>(args)...);
+    case 8:
+      return kernel(std::integral_constant<int, 8>{}, std::forward<Args>(args)...);
+    default:
+      return at_counts_above_eight(motors, kernel, std::forward<Args>(args)...);
   }
 }
 
