@@ -63,36 +63,26 @@ MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kern
   }
 }
 
-// The counts above eight (10, 12, 14, 16 fixed, any other dynamic) in one
-// function out of line: inlined, their code would make every call save
-// registers for it and turn the switch of the counts flown most into a jump
-// table (seen: 1.6x the quad's time).
-template <typename Kernel, typename... Args>
+// One count's kernel out of line (each count its own function: in one
+// shared function the larger counts' registers and stack frame made
+// `shift` at 10 to 16 motors 1.4-2x slower).
+template <int N, typename Kernel, typename... Args>
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
 decltype(auto)
-at_counts_above_eight(Eigen::Index motors, Kernel& kernel, Args&&... args) {
-  switch (motors) {
-    case 10:
-      return kernel(std::integral_constant<int, 10>{}, std::forward<Args>(args)...);
-    case 12:
-      return kernel(std::integral_constant<int, 12>{}, std::forward<Args>(args)...);
-    case 14:
-      return kernel(std::integral_constant<int, 14>{}, std::forward<Args>(args)...);
-    case 16:
-      return kernel(std::integral_constant<int, 16>{}, std::forward<Args>(args)...);
-    default:
-      return kernel(std::integral_constant<int, Eigen::Dynamic>{}, std::forward<Args>(args)...);
-  }
+at_size_out_of_line(Kernel& kernel, Args&&... args) {
+  return kernel(std::integral_constant<int, N>{}, std::forward<Args>(args)...);
 }
 
 // with_motor_count with fixed sizes up to 16 motors (every even count), for
-// the simple strategies (clip, shift), whose kernels are small. Not for the
-// large ones (prioritized, the report of the others): four more
-// instantiations grow their translation unit past the compiler's inlining
-// budget, which then calls helpers it inlined before (seen: 84 more
-// instructions per quad call of prioritized).
+// the simple strategies (clip, shift), whose kernels are small. The counts
+// above eight are out of line: inlined, their code made every call save
+// registers for it (seen: 1.6x the quad's time). Not for the large kernels
+// (prioritized, the report of the others): four more instantiations grow
+// their translation unit past the compiler's inlining budget, which then
+// calls helpers it inlined before (seen: 84 more instructions per quad call
+// of prioritized).
 template <typename Kernel, typename... Args>
 MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count_up_to_16(Eigen::Index motors,
                                                                 Kernel&& kernel, Args&&... args) {
@@ -103,8 +93,16 @@ MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count_up_to_16(Eigen::Index mot
       return kernel(std::integral_constant<int, 6>{}, std::forward<Args>(args)...);
     case 8:
       return kernel(std::integral_constant<int, 8>{}, std::forward<Args>(args)...);
+    case 10:
+      return at_size_out_of_line<10>(kernel, std::forward<Args>(args)...);
+    case 12:
+      return at_size_out_of_line<12>(kernel, std::forward<Args>(args)...);
+    case 14:
+      return at_size_out_of_line<14>(kernel, std::forward<Args>(args)...);
+    case 16:
+      return at_size_out_of_line<16>(kernel, std::forward<Args>(args)...);
     default:
-      return at_counts_above_eight(motors, kernel, std::forward<Args>(args)...);
+      return at_dynamic_size(kernel, std::forward<Args>(args)...);
   }
 }
 
