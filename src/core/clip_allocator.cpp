@@ -11,7 +11,7 @@ namespace motormix {
 AllocationResult ClipAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index n = mixing_.rows();
   commands.resize(n);
-  return detail::with_motor_count_up_to_16(
+  return detail::with_motor_count<detail::FixedCounts::kUpTo16>(
       n,
       [](auto size, const ClipAllocator& self, const AxisVector& target, double* out,
          Eigen::Index motors) MOTORMIX_INLINE_LAMBDA {

@@ -31,41 +31,12 @@
 
 namespace motormix::detail {
 
-// The dynamic size, out of line: its code (loops with remainders) is large,
-// and inlined it would make every call save registers for it.
-template <typename Kernel, typename... Args>
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-decltype(auto)
-at_dynamic_size(Kernel& kernel, Args&&... args) {
-  return kernel(std::integral_constant<int, Eigen::Dynamic>{}, std::forward<Args>(args)...);
-}
-
-// Calls kernel(size, args...) with size the motor count as a compile-time
-// constant (Eigen::Dynamic for the counts without their own instantiation).
-// Per-cycle callers pass what the kernel needs as arguments to a lambda that
-// captures nothing: a capturing lambda's closure is built in memory before
-// the switch on every call, for the branch (the dynamic size) that calls
-// out of line and needs it.
-template <typename Kernel, typename... Args>
-MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel,
-                                                       Args&&... args) {
-  switch (motors) {
-    case 4:
-      return kernel(std::integral_constant<int, 4>{}, std::forward<Args>(args)...);
-    case 6:
-      return kernel(std::integral_constant<int, 6>{}, std::forward<Args>(args)...);
-    case 8:
-      return kernel(std::integral_constant<int, 8>{}, std::forward<Args>(args)...);
-    default:
-      return at_dynamic_size(kernel, std::forward<Args>(args)...);
-  }
-}
-
-// One count's kernel out of line (each count its own function: in one
-// shared function the larger counts' registers and stack frame made
-// `shift` at 10 to 16 motors 1.4-2x slower).
+// One count's kernel out of line: the dynamic size (its loops have
+// remainders) and the fixed counts above eight. Their code is large, and
+// inlined it would make every call save registers for it (seen: 1.6x the
+// quad's time). Each count has its own function: in one shared function the
+// larger counts' registers and stack frame made `shift` at 10 to 16 motors
+// 1.4-2x slower.
 template <int N, typename Kernel, typename... Args>
 #if defined(__GNUC__)
 __attribute__((noinline))
@@ -75,17 +46,24 @@ at_size_out_of_line(Kernel& kernel, Args&&... args) {
   return kernel(std::integral_constant<int, N>{}, std::forward<Args>(args)...);
 }
 
-// with_motor_count with fixed sizes up to 16 motors (every even count), for
-// the simple strategies (clip, shift), whose kernels are small. The counts
-// above eight are out of line: inlined, their code made every call save
-// registers for it (seen: 1.6x the quad's time). Not for the large kernels
-// (prioritized, the report of the others): four more instantiations grow
-// their translation unit past the compiler's inlining budget, which then
-// calls helpers it inlined before (seen: 84 more instructions per quad call
-// of prioritized).
-template <typename Kernel, typename... Args>
-MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count_up_to_16(Eigen::Index motors,
-                                                                Kernel&& kernel, Args&&... args) {
+// The motor counts with a kernel of their own. Quads, hexas and octos in
+// every strategy. The even counts from 10 to 16 only for the strategies
+// whose kernels are small (clip, shift): four more instantiations grow a
+// large kernel's translation unit (prioritized, the report of the others)
+// past the compiler's inlining budget, which then calls helpers it inlined
+// before (seen: 84 more instructions per quad call of prioritized).
+enum class FixedCounts { kUpTo8, kUpTo16 };
+
+// Calls kernel(size, args...) with size the motor count as a compile-time
+// constant (Eigen::Dynamic for the counts without their own instantiation).
+// Per-cycle callers pass what the kernel needs as arguments to a lambda that
+// captures nothing: a capturing lambda's closure is built in memory before
+// the switch on every call, for the branches that call out of line and need
+// it.
+template <FixedCounts kCounts = FixedCounts::kUpTo8, typename Kernel, typename... Args>
+MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count(Eigen::Index motors, Kernel&& kernel,
+                                                       Args&&... args) {
+  constexpr bool kUpTo16 = kCounts == FixedCounts::kUpTo16;
   switch (motors) {
     case 4:
       return kernel(std::integral_constant<int, 4>{}, std::forward<Args>(args)...);
@@ -94,16 +72,21 @@ MOTORMIX_ALWAYS_INLINE decltype(auto) with_motor_count_up_to_16(Eigen::Index mot
     case 8:
       return kernel(std::integral_constant<int, 8>{}, std::forward<Args>(args)...);
     case 10:
-      return at_size_out_of_line<10>(kernel, std::forward<Args>(args)...);
+      if constexpr (kUpTo16) return at_size_out_of_line<10>(kernel, std::forward<Args>(args)...);
+      break;
     case 12:
-      return at_size_out_of_line<12>(kernel, std::forward<Args>(args)...);
+      if constexpr (kUpTo16) return at_size_out_of_line<12>(kernel, std::forward<Args>(args)...);
+      break;
     case 14:
-      return at_size_out_of_line<14>(kernel, std::forward<Args>(args)...);
+      if constexpr (kUpTo16) return at_size_out_of_line<14>(kernel, std::forward<Args>(args)...);
+      break;
     case 16:
-      return at_size_out_of_line<16>(kernel, std::forward<Args>(args)...);
+      if constexpr (kUpTo16) return at_size_out_of_line<16>(kernel, std::forward<Args>(args)...);
+      break;
     default:
-      return at_dynamic_size(kernel, std::forward<Args>(args)...);
+      break;
   }
+  return at_size_out_of_line<Eigen::Dynamic>(kernel, std::forward<Args>(args)...);
 }
 
 // A per-motor vector held locally (in registers where it fits) at N motors.

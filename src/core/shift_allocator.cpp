@@ -143,7 +143,7 @@ ShiftAllocator::allocate_along_thrust(const AxisVector& demand, double* out, Eig
 AllocationResult ShiftAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
   const Eigen::Index motors = mixing_.rows();
   commands.resize(motors);
-  return detail::with_motor_count_up_to_16(
+  return detail::with_motor_count<detail::FixedCounts::kUpTo16>(
       motors,
       [](auto size, const ShiftAllocator& self, const AxisVector& target, double* out,
          Eigen::Index n) MOTORMIX_INLINE_LAMBDA {
