@@ -21,9 +21,10 @@ class ShiftAllocator final : public MatrixAllocator {
 
  private:
   // The two paths of allocate() at N motors (N == Eigen::Dynamic: a count
-  // without its own instantiation, see src/core/fixed_size.hpp). All motors alike: one pass,
-  // inlined. Along a thrust column that is not uniform: out of line, so that the one-pass path
-  // keeps no stack frame for it.
+  // without its own instantiation, see src/core/fixed_size.hpp). All
+  // motors alike: one pass, inlined. Along a thrust column that is not
+  // uniform: out of line, so that the one-pass path keeps no stack frame
+  // for it.
   template <int N>
   AllocationResult allocate_alike(const AxisVector& demand, double* out, Eigen::Index n) const;
   template <int N>
