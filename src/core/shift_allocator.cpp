@@ -61,8 +61,9 @@ MOTORMIX_ALWAYS_INLINE AllocationResult ShiftAllocator::allocate_alike(const Axi
   // Every motor moves by the shift itself: the lowest and highest command
   // give the shifts that fit and the spread, from one pass.
   // - The spread fits: the smallest shift into [lower - lowest, upper -
-  //   highest] (0 clamped into it: minsd and maxsd, no branch), added to the
-  //   mix, which is kept to the last bit. No division.
+  //   highest] (ShiftInterval::smallest without its branches: 0 clamped
+  //   into the interval, minsd and maxsd), added to the mix, which is kept
+  //   to the last bit. No division.
   // - It does not: the spread is scaled by room / spread, and the only shift
   //   that then fits takes the lowest command to the lower limit (the highest
   //   lands on the upper one). Where the scale is centred makes no
@@ -79,13 +80,14 @@ MOTORMIX_ALWAYS_INLINE AllocationResult ShiftAllocator::allocate_alike(const Axi
   const double lowest = u.minCoeff();
   const double highest = u.maxCoeff();
   const double room = upper - lower;
+  const double spread = highest - lowest;
   double factor = 1.0;
   double offset;
-  if (highest - lowest <= room) {
+  if (spread <= room) {
     offset = std::max(lower - lowest, std::min(0.0, upper - highest));
     u.array() += offset;
   } else {
-    factor = room / (highest - lowest);
+    factor = room / spread;
     offset = lower - lowest * factor;
     u = ((u.array() - lowest) * factor + lower).matrix();
   }

@@ -1,9 +1,9 @@
 // The per-cycle report and clamp kernels (src/core/report_kernel.hpp) at the
 // motor counts with their own instantiation (4 to 16, even: packet code) and
-// at dynamic size (scalar code), against the plain definitions: a clamp that sends NaN
-// to the lower end, saturation flags within kSaturationTolerance of a
-// limit, and what the commands leave undelivered through the effectiveness,
-// zero on axes the vehicle does not command.
+// at dynamic size (scalar code), against the plain definitions: a clamp that
+// sends NaN to the lower end, saturation flags within kSaturationTolerance of
+// a limit, and what the commands leave undelivered through the
+// effectiveness, zero on axes the vehicle does not command.
 
 #include "report_kernel.hpp"
 

@@ -240,6 +240,9 @@ TEST(ShiftStrategy, OnePassPathAgreesWithTheGeneralOne) {
 // no scaling creeps in by rounding. (A form that rescaled on every cycle
 // rounded here.)
 TEST(ShiftStrategy, AMixThatFitsIsKeptExactly) {
+  // Commands minus the linear mix: one number, to the rounding of a sum of
+  // unit terms (the test's row-major product against the kernel's columns).
+  constexpr double kOneShiftRounding = 1e-15;
   for (const char* preset : {"quad_x", "hexa_x", "octo_x"}) {
     const auto c =
         config::load_config_text(std::string("geometry: {preset: ") + preset + "}\n", "s.yaml");
@@ -269,7 +272,8 @@ TEST(ShiftStrategy, AMixThatFitsIsKeptExactly) {
         // One shift for all: each command minus the clip-free mix is the same
         // number (the clip's mix is the linear one where it is in range).
         const MotorVector step = shifted - linear;
-        ASSERT_LE(step.maxCoeff() - step.minCoeff(), 1e-15) << preset << " " << d.transpose();
+        ASSERT_LE(step.maxCoeff() - step.minCoeff(), kOneShiftRounding)
+            << preset << " " << d.transpose();
       }
     }
     EXPECT_GT(inside, 5000) << preset;
