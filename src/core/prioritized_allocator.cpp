@@ -18,12 +18,28 @@ namespace {
 constexpr double kNegligibleEntry = std::numeric_limits<float>::epsilon();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The roll/pitch part of an error, Euclidean. Errors are at most a few
-// units: a plain root is exact enough and much cheaper than hypot's
-// overflow guards.
-double roll_pitch_norm(const AxisVector& e) {
-  return std::sqrt(e[index(Axis::kRoll)] * e[index(Axis::kRoll)] +
-                   e[index(Axis::kPitch)] * e[index(Axis::kPitch)]);
+// The roll/pitch part of an error, squared...
+double roll_pitch_square(const AxisVector& e) {
+  return e[index(Axis::kRoll)] * e[index(Axis::kRoll)] +
+         e[index(Axis::kPitch)] * e[index(Axis::kPitch)];
+}
+// ...and Euclidean. Errors are at most a few units: a plain root is exact
+// enough and much cheaper than hypot's overflow guards.
+double roll_pitch_norm(const AxisVector& e) { return std::sqrt(roll_pitch_square(e)); }
+
+// Which of the clip and the repair delivers roll and pitch better, from
+// the clip's squared error and the repair's error as its scales predict
+// it: decided only by more than twice the delivered tolerance, so that
+// the prediction's rounding (E M = I within 1e-9) cannot turn it. Squares
+// compare as their roots do, so no root waits on the way.
+enum class RollPitchVerdict { kUndecided, kClipCloser, kRepairCloser };
+RollPitchVerdict roll_pitch_verdict(double clip_square, double repair_error) {
+  constexpr double kMargin = 2.0 * kDeliveredTolerance;
+  const double below = repair_error - kMargin;
+  if (below > 0.0 && clip_square < below * below) return RollPitchVerdict::kClipCloser;
+  const double above = repair_error + kMargin;
+  if (clip_square > above * above) return RollPitchVerdict::kRepairCloser;
+  return RollPitchVerdict::kUndecided;
 }
 
 // closer_in_priority_order() itself, inlined into the kernel (a call on
@@ -122,6 +138,9 @@ class PrioritizedAllocator::Kernel {
     if (lowest >= range_.lower && highest <= range_.upper) {
       return deliver(demand, u, commands);  // nothing saturates: nothing to prioritize
     }
+    // Needed only if the sequence fails, and only with airmode, but from
+    // the demand alone: taken now, its root is ready by then.
+    const double demanded = a_.airmode_ == Airmode::kOff ? 0.0 : demanded_roll_pitch(demand);
     const double yaw = demand[index(Axis::kYaw)];
     AxisVector effective = demand;
     effective[index(Axis::kYaw)] = 0.0;
@@ -164,19 +183,29 @@ class PrioritizedAllocator::Kernel {
     clamp(clipped);
     const AxisVector clip_left = undelivered(demand, clipped);
     const Repair r = repair_scales(effective);
-    // Most often the clip keeps more of roll and pitch than scaling them
-    // along their direction can. When the scales already show that (with
-    // a margin far above rounding), the repaired commands are not needed.
-    if (a_.effectiveness_inverts_mixing_ &&
-        roll_pitch_norm(clip_left) <
-            repair_roll_pitch_error(demand, effective, r) - 2.0 * kDeliveredTolerance) {
-      store(clipped, commands);
-      return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
+    // When the effectiveness inverts the mixing matrix, the repair's roll
+    // and pitch error is known from its scales alone: in range, its
+    // commands deliver exactly the scaled effective demand. With a margin
+    // far above the rounding of that shortcut, it often decides the first
+    // key of the order without the repaired commands' report: the clip is
+    // closer (no repaired commands needed), or the repair is (no
+    // comparison of the two reports needed). Squared norms keep a root
+    // off the chain that the decision waits for.
+    RollPitchVerdict verdict = RollPitchVerdict::kUndecided;
+    if (a_.effectiveness_inverts_mixing_) {
+      verdict = roll_pitch_verdict(roll_pitch_square(clip_left),
+                                   repair_roll_pitch_error(demand, effective, r, demanded));
+      if (verdict == RollPitchVerdict::kClipCloser) {
+        store(clipped, commands);
+        return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
+      }
     }
-    apply(r, effective, u);
+    const bool repair_fits = apply(r, effective, u);
     clamp(u);
     const AxisVector repair_left = undelivered(demand, u);
-    if (closer_in_order(clip_left, repair_left, kDeliveredTolerance)) {
+    // The shortcut holds only for repaired commands in range.
+    const bool repair_closer = verdict == RollPitchVerdict::kRepairCloser && repair_fits;
+    if (!repair_closer && closer_in_order(clip_left, repair_left, kDeliveredTolerance)) {
       store(clipped, commands);
       return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
     }
@@ -327,8 +356,10 @@ class PrioritizedAllocator::Kernel {
     return r;
   }
 
-  // ...then the commands: the scaled parts with the best thrust shift.
-  void apply(const Repair& r, AxisVector& effective, Motors& u) const {
+  // ...then the commands: the scaled parts with the best thrust shift;
+  // false when no shift brings them into range (rounding aside, the
+  // scales rule that out).
+  bool apply(const Repair& r, AxisVector& effective, Motors& u) const {
     const bool may_raise = a_.airmode_ != Airmode::kOff;
     const View thrust = column(Axis::kThrust);
     u = thrust * effective[index(Axis::kThrust)] +
@@ -340,7 +371,8 @@ class PrioritizedAllocator::Kernel {
     // may leave the interval a few ulps wide of empty.
     constexpr double kRounding = 1e-12;
     if (k.empty() && k.lo - k.hi < kRounding) k.lo = k.hi = 0.5 * (k.lo + k.hi);
-    if (!k.empty()) {
+    const bool fits = !k.empty();
+    if (fits) {
       const double shift = k.smallest();
       u += shift * thrust;
       effective[index(Axis::kThrust)] += shift;
@@ -348,13 +380,18 @@ class PrioritizedAllocator::Kernel {
     effective[index(Axis::kYaw)] *= r.yaw_scale;
     effective[index(Axis::kRoll)] *= r.rp_scale;
     effective[index(Axis::kPitch)] *= r.rp_scale;
+    return fits;
   }
 
   // The roll/pitch error the repair will leave, known from its scales
   // alone: in range, the commands deliver exactly the scaled effective
-  // demand (when the effectiveness inverts the mixing matrix).
+  // demand (when the effectiveness inverts the mixing matrix). With
+  // airmode, the sequence leaves roll and pitch as demanded, so the error
+  // is the share the scale drops of the demand's own roll/pitch error,
+  // whose root (`demanded`) waits on nothing.
   double repair_roll_pitch_error(const AxisVector& demand, const AxisVector& effective,
-                                 const Repair& r) const {
+                                 const Repair& r, double demanded) const {
+    if (a_.airmode_ != Airmode::kOff) return (1.0 - r.rp_scale) * demanded;
     // Scalar on purpose: `effective` was just written element by element,
     // and a packet load of it would stall on store forwarding.
     const auto left = [&](Axis axis) {
@@ -364,6 +401,11 @@ class PrioritizedAllocator::Kernel {
     const double roll = left(Axis::kRoll);
     const double pitch = left(Axis::kPitch);
     return std::sqrt(roll * roll + pitch * pitch);
+  }
+  // The roll/pitch error of delivering nothing: the demand's, on the
+  // commanded axes.
+  double demanded_roll_pitch(const AxisVector& demand) const {
+    return roll_pitch_norm(detail::on_controlled_axes(demand, a_.cycle_constants_));
   }
 
   const PrioritizedAllocator& a_;
