@@ -138,9 +138,6 @@ class PrioritizedAllocator::Kernel {
     if (lowest >= range_.lower && highest <= range_.upper) {
       return deliver(demand, u, commands);  // nothing saturates: nothing to prioritize
     }
-    // Needed only if the sequence fails, and only with airmode, but from
-    // the demand alone: taken now, its root is ready by then.
-    const double demanded = a_.airmode_ == Airmode::kOff ? 0.0 : demanded_roll_pitch(demand);
     const double yaw = demand[index(Axis::kYaw)];
     AxisVector effective = demand;
     effective[index(Axis::kYaw)] = 0.0;
@@ -179,6 +176,9 @@ class PrioritizedAllocator::Kernel {
     // does elsewhere. Clipping can change the direction of the delivered
     // torque yet land closer to the demand. Keep whichever delivers the
     // demand better in priority order: roll and pitch, then thrust, then yaw.
+    // Needed only with airmode, and from the demand alone: taken before
+    // the clip and the scales, its root is ready when they are.
+    const double demanded = a_.airmode_ == Airmode::kOff ? 0.0 : demanded_roll_pitch(demand);
     Motors clipped = u;
     clamp(clipped);
     const AxisVector clip_left = undelivered(demand, clipped);
