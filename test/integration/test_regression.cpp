@@ -10,6 +10,7 @@
 
 #include "integration/bus_recorder.hpp"
 #include "integration/process.hpp"
+#include "integration/udp_drops.hpp"
 #include "test_support.hpp"
 
 #include <motormix/setpoint_t.hpp>
@@ -18,6 +19,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -111,20 +113,31 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
   }
   ChildProcess mixer(argv);
   ASSERT_TRUE(bus.wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
+  const long drops_before = udp_receive_buffer_drops();
+  ASSERT_GE(drops_before, 0) << "cannot read Udp RcvbufErrors from /proc/net/snmp";
   ChildProcess player({"lcm-logplayer", "-s", std::to_string(kPlaybackSpeed), flight});
   ASSERT_EQ(player.wait_for(120s), 0);
   const std::int64_t last_setpoint = armed_by_setpoint.rbegin()->first;
-  ASSERT_TRUE(bus.wait_until(
+  const bool saw_last_setpoint = bus.wait_until(
       [&](const auto& pwm, const auto&) {
         return !pwm.empty() && pwm.back().setpoint_utime == last_setpoint;
       },
-      10s));
+      10s);
   mixer.signal(SIGTERM);
   ASSERT_EQ(mixer.wait_for(10s), 0);
+  // A datagram the kernel dropped (a full receive buffer on a loaded
+  // machine) never reached motormix: the outputs until the next message on
+  // that channel name a pair of inputs the golden replay, which saw every
+  // message, never formed. Only then are such outputs tolerated, counted,
+  // and only a few of them; with no drop every output must match.
+  const long kernel_drops = udp_receive_buffer_drops() - drops_before;
+  ASSERT_TRUE(saw_last_setpoint || kernel_drops > 0)
+      << "no output named the flight's last setpoint, and the kernel dropped nothing";
 
   const int n = config.motors();
   std::size_t armed = 0;
   std::size_t compared = 0;
+  std::size_t unmatched = 0;  // only when the kernel dropped datagrams
   for (const motor_pwm_t& out : bus.pwm()) {
     ASSERT_EQ(out.num_motors, n);
     for (int i = 0; i < n; ++i) {
@@ -149,6 +162,10 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
     ++armed;
     const auto g = golden.armed.find(
         {out.setpoint_utime, out.pid_utime, golden.keyed_by_failures ? out.failed_motors : 0});
+    if (g == golden.armed.end() && kernel_drops > 0) {
+      ++unmatched;
+      continue;
+    }
     ASSERT_NE(g, golden.armed.end()) << "armed output for inputs (" << out.setpoint_utime << ", "
                                      << out.pid_utime << ") that the golden replay never armed";
     ++compared;
@@ -172,7 +189,17 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
                           static_cast<double>(armed_by_setpoint.size()) * span_s *
                           config.loop_rate_hz / kPlaybackSpeed;
   EXPECT_GT(static_cast<double>(armed), 0.5 * expected);  // a loaded machine drops late cycles
-  EXPECT_EQ(compared, armed);
+  // A dropped input leaves at most a few cycles unmatched; a broken mixer
+  // would leave most of them.
+  constexpr double kUnmatchedShare = 0.05;
+  EXPECT_LE(static_cast<double>(unmatched), kUnmatchedShare * static_cast<double>(armed))
+      << unmatched << " outputs name input pairs the golden replay never formed; the kernel "
+      << "dropped " << kernel_drops << " datagrams on the private bus";
+  if (unmatched > 0) {
+    std::printf("%zu of %zu armed outputs not compared: the kernel dropped %ld datagrams\n",
+                unmatched, armed, kernel_drops);
+  }
+  EXPECT_EQ(compared + unmatched, armed);
 }
 
 }  // namespace
