@@ -176,9 +176,12 @@ class PrioritizedAllocator::Kernel {
     // does elsewhere. Clipping can change the direction of the delivered
     // torque yet land closer to the demand. Keep whichever delivers the
     // demand better in priority order: roll and pitch, then thrust, then yaw.
-    // Needed only with airmode, and from the demand alone: taken before
-    // the clip and the scales, its root is ready when they are.
-    const double demanded = a_.airmode_ == Airmode::kOff ? 0.0 : demanded_roll_pitch(demand);
+    // Needed only by the shortcut below with airmode, and from the demand
+    // alone: taken before the clip and the scales, its root is ready when
+    // they are.
+    const double demanded = a_.effectiveness_inverts_mixing_ && a_.airmode_ != Airmode::kOff
+                                ? demanded_roll_pitch(demand)
+                                : 0.0;
     Motors clipped = u;
     clamp(clipped);
     const AxisVector clip_left = undelivered(demand, clipped);
