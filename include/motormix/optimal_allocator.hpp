@@ -26,6 +26,11 @@ class OptimalAllocator final : public MatrixAllocator {
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
  private:
+  // allocate() at N motors (Eigen::Dynamic: a count without its own
+  // instantiation, see src/core/fixed_size.hpp).
+  template <int N>
+  AllocationResult solve(const AxisVector& demand, double* out, Eigen::Index n) const;
+
   OptimalSettings settings_;
   EffectivenessMatrix weighted_;  // W E: the effectiveness with each axis row weighted
 };

@@ -1,5 +1,7 @@
 #include <motormix/optimal_allocator.hpp>
 
+#include "fixed_size.hpp"
+#include "report_kernel.hpp"
 #include "spd4_solve.hpp"
 
 #include <Eigen/Cholesky>
@@ -33,101 +35,122 @@ double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector
   return e.squaredNorm();
 }
 
-AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
-  const Eigen::Index n = mixing_.rows();
+// The active-set iteration at N motors (fixed where the count has its own
+// instantiation, see fixed_size.hpp): every per-motor loop has a constant
+// bound the compiler unrolls, and the free set is a vector of ones and zeros,
+// so the dual, its right-hand side and the step are whole products instead of
+// loops over a list of free motors. Each iteration is a chain of dependent
+// steps (the dual's factorization, the step, the ratio test), so its length,
+// not the arithmetic, sets the time.
+template <int N>
+AllocationResult OptimalAllocator::solve(const AxisVector& demand, double* out,
+                                         Eigen::Index n) const {
+  using Motors = detail::LocalMotors<N>;
+  constexpr int kCapacity = N == Eigen::Dynamic ? kMaxMotors : N;
+  const Eigen::Index motors = detail::count<N>(n);
+  const double lower = range_.lower;
+  const double upper = range_.upper;
+  const detail::ConstEffectivenessView<N> b(weighted_.data(), kNumAxes, n);  // B = W E
   // Preferred commands: the plain linear mix clipped to the limits.
-  mix_linear(demand, commands);
-  MotorVector preferred(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    preferred[i] = std::clamp(commands[i], range_.lower, range_.upper);
-  }
+  Motors preferred(n);
+  preferred.noalias() =
+      detail::ConstMixingColumnsView<N>(mixing_by_column_.data(), n, kNumAxes) * demand;
+  for (Eigen::Index i = 0; i < motors; ++i) preferred[i] = std::clamp(preferred[i], lower, upper);
   // Start feasible: the clipped linear mix, with motors on a limit active.
-  commands = preferred;
-  Eigen::Matrix<signed char, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxMotors, 1> active(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    active[i] = commands[i] <= range_.lower   ? kAtLower
-                : commands[i] >= range_.upper ? kAtUpper
-                                              : kFree;
+  Motors u = preferred;
+  Eigen::Matrix<signed char, N, 1, Eigen::ColMajor, kCapacity, 1> side(n);
+  Motors free(n);  // 1 for a free motor, 0 for one held on a limit
+  for (Eigen::Index i = 0; i < motors; ++i) {
+    side[i] = u[i] <= lower ? kAtLower : u[i] >= upper ? kAtUpper : kFree;
+    free[i] = side[i] == kFree ? 1.0 : 0.0;
   }
   // The cost is gamma |e|^2 + |q|^2 with e = W (d - E u) and q = u_p - u.
   // Both residuals are kept up to date as u moves.
-  AxisVector e = settings_.weights.cwiseProduct(demand) - weighted_ * commands;
-  MotorVector q = MotorVector::Zero(n);
-
-  Eigen::Matrix<int, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxMotors, 1> free_index(n);
-  MotorVector step(n);
-  MotorVector g(n);  // gamma B^T e + q: the descent direction of the cost, per motor
+  AxisVector e = settings_.weights.cwiseProduct(demand) - b * u;
+  Motors q = Motors::Zero(n);
+  Motors step(n);
+  Motors g(n);  // gamma B^T e + q: the descent direction of the cost, per motor
   int iteration = 0;
   for (; iteration < settings_.max_iterations; ++iteration) {
-    // Newton step on the free motors: (I + gamma B_f^T B_f) s_f = gamma B_f^T e + q_f
-    // (B = W E), solved through its 4 x 4 dual (Woodbury) in the form that
-    // never multiplies by gamma:
+    // Newton step on the free motors: (I + gamma B_f^T B_f) s_f = gamma B_f^T e + q_f,
+    // solved through its 4 x 4 dual (Woodbury) in the form that never
+    // multiplies by gamma:
     //   s_f = q_f + B_f^T z,   (B_f B_f^T + I / gamma) z = e - B_f q_f,
     // so an iteration costs the same small solve for any motor count.
     Eigen::Matrix4d dual = Eigen::Matrix4d::Identity() / kGamma;
     AxisVector rhs = e;
-    Eigen::Index nf = 0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (active[i] != kFree) continue;
-      free_index[nf++] = static_cast<int>(i);
-      const auto b = weighted_.col(i);
-      dual.noalias() += b * b.transpose();
-      rhs -= b * q[i];
+    for (Eigen::Index i = 0; i < motors; ++i) {
+      if (side[i] != kFree) continue;
+      const auto column = b.col(i);
+      dual.noalias() += column * column.transpose();
+      rhs -= column * q[i];
     }
-    step.setZero();
-    if (nf > 0) {
-      AxisVector z;
-      // Positive definite by construction; should rounding ever say
-      // otherwise, the pivoting factorization.
-      if (!detail::solve_spd4(dual, rhs, z)) z = dual.ldlt().solve(rhs);
-      for (Eigen::Index j = 0; j < nf; ++j) {
-        const Eigen::Index i = free_index[j];
-        step[i] = q[i] + weighted_.col(i).dot(z);
-      }
-    }
-    // Largest fraction of the step that keeps every free motor in range.
+    AxisVector z;
+    // Positive definite by construction; should rounding ever say
+    // otherwise, the pivoting factorization.
+    if (!detail::solve_spd4(dual, rhs, z)) z = dual.ldlt().solve(rhs);
+    step.noalias() = b.transpose() * z;
+    step = free.cwiseProduct(step + q);
+    // Largest fraction of the step that keeps every free motor in range (a
+    // held motor's step is zero: it never blocks).
     double alpha = 1.0;
     Eigen::Index blocking = -1;
-    for (Eigen::Index j = 0; j < nf; ++j) {
-      const Eigen::Index i = free_index[j];
-      const double target = commands[i] + step[i];
-      if (target > range_.upper && step[i] > 0.0) {
-        const double f = (range_.upper - commands[i]) / step[i];
-        if (f < alpha) alpha = f, blocking = i;
-      } else if (target < range_.lower && step[i] < 0.0) {
-        const double f = (range_.lower - commands[i]) / step[i];
+    for (Eigen::Index i = 0; i < motors; ++i) {
+      const double target = u[i] + step[i];
+      const bool over = target > upper && step[i] > 0.0;
+      const bool under = target < lower && step[i] < 0.0;
+      if (over || under) {
+        const double f = ((over ? upper : lower) - u[i]) / step[i];
         if (f < alpha) alpha = f, blocking = i;
       }
     }
-    commands += alpha * step;
-    e.noalias() -= alpha * (weighted_ * step);
+    u += alpha * step;
+    e.noalias() -= alpha * (b * step);
     q -= alpha * step;
     if (blocking >= 0) {
-      active[blocking] = step[blocking] > 0.0 ? kAtUpper : kAtLower;
-      const double limit = active[blocking] == kAtUpper ? range_.upper : range_.lower;
-      q[blocking] += commands[blocking] - limit;
-      e += weighted_.col(blocking) * (commands[blocking] - limit);
-      commands[blocking] = limit;
+      side[blocking] = step[blocking] > 0.0 ? kAtUpper : kAtLower;
+      free[blocking] = 0.0;
+      const double limit = side[blocking] == kAtUpper ? upper : lower;
+      q[blocking] += u[blocking] - limit;
+      e += b.col(blocking) * (u[blocking] - limit);
+      u[blocking] = limit;
       continue;
     }
     // Full step taken: optimal on this working set. Release the constraint
     // whose multiplier says the error would drop by leaving it, if any.
-    g.noalias() = kGamma * (weighted_.transpose() * e);
-    g += q;  // descent direction per motor
+    g.noalias() = b.transpose() * e;
+    g = kGamma * g + q;  // descent direction per motor
     Eigen::Index release = -1;
     double most_negative = -kMultiplierTolerance;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (active[i] == kFree) continue;
-      // At the upper limit the error would drop by moving down: g < 0.
-      const double multiplier = active[i] == kAtUpper ? g[i] : -g[i];
+    for (Eigen::Index i = 0; i < motors; ++i) {
+      // At the upper limit the error would drop by moving down: g < 0. A
+      // free motor has no multiplier.
+      const double multiplier = side[i] == kAtUpper ? g[i] : side[i] == kAtLower ? -g[i] : 0.0;
       if (multiplier < most_negative) most_negative = multiplier, release = i;
     }
     if (release < 0) break;
-    active[release] = kFree;
+    side[release] = kFree;
+    free[release] = 1.0;
   }
-  AllocationResult result = finish(demand, commands);
+  // NaN cannot come from finite inputs; if it ever did, the safe end.
+  for (Eigen::Index i = 0; i < motors; ++i) {
+    u[i] = std::isnan(u[i]) ? lower : std::clamp(u[i], lower, upper);
+  }
+  detail::MotorsView<N>(out, n) = u;
+  AllocationResult result =
+      detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, cycle_constants_);
   result.iterations = static_cast<std::uint16_t>(std::min(iteration + 1, settings_.max_iterations));
   return result;
+}
+
+AllocationResult OptimalAllocator::allocate(const AxisVector& demand, MotorVector& commands) const {
+  const Eigen::Index n = mixing_.rows();
+  commands.resize(n);
+  return detail::with_motor_count(
+      n,
+      [](auto size, const OptimalAllocator& self, const AxisVector& target, double* out,
+         Eigen::Index motors) { return self.solve<decltype(size)::value>(target, out, motors); },
+      *this, demand, commands.data(), n);
 }
 
 }  // namespace motormix

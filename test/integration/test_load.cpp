@@ -17,6 +17,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <unistd.h>
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -27,6 +28,7 @@
 #include <memory>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 namespace motormix::test {
 namespace {
@@ -39,12 +41,29 @@ constexpr auto kFlight = 8s;
 // Stated bounds, while twenty mixers, their twenty publishers and this
 // recorder share two cores, and every one of those processes receives all
 // of the bus's traffic (multicast), so the machine is saturated and the
-// shares depend on it: each loop runs at least this share of its cycles (its
-// own count, from its status; seen 86-99 % on the 2-core CI machine)...
-constexpr double kMinCycleShare = 0.70;
-// ...and at least this share of its outputs reaches this recorder (seen
-// 70-97 %). A loop that stalls, dies or falls far behind fails either bound.
-constexpr double kMinDeliveredShare = 0.50;
+// shares depend on how fast it is (the same build has seen 86-99 % of cycles
+// run and 70-97 % of outputs received on one 2-core machine, 74-79 % and
+// 35-41 % on a slower one). So each vehicle is held to the fleet it flies
+// with, measured in the same run, and to a floor that only a stalled or dead
+// loop misses: each loop runs at least this share of the fleet's median
+// share of cycles (its own count, from its status)...
+constexpr double kMinCycleShareOfMedian = 0.80;
+// ...and at least this share of its cycles in absolute terms...
+constexpr double kMinCycleShare = 0.50;
+// ...and of its outputs, at least this share of the fleet's median share
+// reaches this recorder, and this share in absolute terms. A loop that
+// stalls, dies or falls far behind the others fails one of them.
+constexpr double kMinDeliveredShareOfMedian = 0.70;
+constexpr double kMinDeliveredShare = 0.20;
+// Armed from 300 ms into the flight: of the outputs received during the
+// flight window (which starts at 1 s), at least this share are armed.
+constexpr double kMinArmedShare = 0.95;
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 std::int64_t wall_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -201,14 +220,22 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   std::vector<double> cpu_share;
   std::vector<double> delivered;
   std::vector<double> cycled;
+  std::vector<long> received;  // outputs, then armed ones, in the flight window
+  std::vector<long> armed;
   for (int v = 0; v < kVehicles; ++v) {
+    received.push_back(fleet[v].outputs - count0[v]);
+    armed.push_back(fleet[v].armed - armed0[v]);
     cpu_share.push_back((cpu_seconds(mixers[v]->pid()) - cpu0[v]) / seconds);
-    delivered.push_back(static_cast<double>(fleet[v].outputs - count0[v]) / (400.0 * seconds));
+    delivered.push_back(static_cast<double>(received.back()) / (400.0 * seconds));
     cycled.push_back(static_cast<double>(fleet[v].cycles - cycles0[v]) / (400.0 * seconds));
   }
   stop = true;
   for (auto& t : pilots) t.join();
 
+  const double median_cycled = median(cycled);
+  const double median_delivered = median(delivered);
+  std::printf("fleet median: %.1f %% of cycles run, %.1f %% of outputs received\n",
+              100.0 * median_cycled, 100.0 * median_delivered);
   double cpu_total = 0;
   for (int v = 0; v < kVehicles; ++v) {
     SCOPED_TRACE("vehicle " + std::to_string(v));
@@ -218,12 +245,16 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
         "core\n",
         v, 100.0 * cycled[v], 100.0 * delivered[v], 100.0 * cpu_share[v]);
     EXPECT_GE(cycled[v], kMinCycleShare);
+    EXPECT_GE(cycled[v], kMinCycleShareOfMedian * median_cycled);
     EXPECT_LE(cycled[v], 1.05);
     EXPECT_GE(delivered[v], kMinDeliveredShare);
+    EXPECT_GE(delivered[v], kMinDeliveredShareOfMedian * median_delivered);
     EXPECT_LE(delivered[v], 1.05);
     EXPECT_EQ(fleet[v].cross_talk, 0) << "outputs computed from another vehicle's inputs";
     EXPECT_EQ(fleet[v].out_of_range, 0);
-    EXPECT_GT(fleet[v].armed - armed0[v], 400 * 3) << "armed outputs during the flight window";
+    EXPECT_GT(received[v], 0);
+    EXPECT_GE(static_cast<double>(armed[v]), kMinArmedShare * static_cast<double>(received[v]))
+        << "armed outputs during the flight window";
     EXPECT_EQ(fleet[v].undecodable, 0);
   }
   std::printf("20 mixers at 400 Hz: %.1f %% of one core in all (%.2f %% each on average)\n",
