@@ -61,7 +61,7 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       config_failed_(config.failed_motors) {
   if (config.battery) battery_.emplace(*config.battery);
   mixer_.disarm(result_.mix);
-  describe_failures(0);
+  record_vehicle_state(0);
 }
 
 void ControlLoop::count(Rejection rejection) {
@@ -158,7 +158,7 @@ Rejection ControlLoop::on_battery(const BatterySample& sample, std::int64_t now_
   return rejection;
 }
 
-void ControlLoop::describe_failures(std::int64_t now_us) {
+void ControlLoop::record_vehicle_state(std::int64_t now_us) {
   const MotorMask all = (MotorMask{1} << mixer_.motors()) - 1;
   result_.failed = (config_failed_ | reported_failed_) & all;
   const Mixer::FailureReport report = mixer_.failure_report(result_.failed);
@@ -242,7 +242,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
       break;
   }
 
-  describe_failures(now_us);
+  record_vehicle_state(now_us);
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
   const AxisVector demand(pid_.roll, pid_.pitch, yaw, setpoint_.throttle);
   if (result_.state == LoopState::kArmed) {

@@ -127,7 +127,9 @@ class ControlLoop {
   bool from_future(std::int64_t utime, std::int64_t wall_us);
   void enter_failsafe(FailsafeReason reason, std::int64_t now_us);
   void mix_inputs(const AxisVector& demand, std::int64_t now_us);
-  void describe_failures(std::int64_t now_us);
+  // The cycle result's view of the vehicle: failed motors and how they
+  // are handled, battery state and thrust gain, and each input's age.
+  void record_vehicle_state(std::int64_t now_us);
 
   Mixer mixer_;
   ThrustRange thrust_range_;
