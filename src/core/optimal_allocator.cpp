@@ -37,11 +37,13 @@ double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector
 
 // The active-set iteration at N motors (fixed where the count has its own
 // instantiation, see fixed_size.hpp): every per-motor loop has a constant
-// bound the compiler unrolls, and the free set is a vector of ones and zeros,
-// so the dual, its right-hand side and the step are whole products instead of
-// loops over a list of free motors. Each iteration is a chain of dependent
-// steps (the dual's factorization, the step, the ratio test), so its length,
-// not the arithmetic, sets the time.
+// bound the compiler unrolls, and the free set is also kept as ones and
+// zeros, so the step is one product masked by it instead of a loop over a
+// list of free motors. The dual still skips held motors by a branch: at a
+// fixed count, multiplying their columns by zero instead was slower (see
+// docs/benchmark_history.md). Each iteration is a chain of dependent steps
+// (the dual's factorization, the step, the ratio test), so its length, not
+// the arithmetic, sets the time.
 template <int N>
 AllocationResult OptimalAllocator::solve(const AxisVector& demand, double* out,
                                          Eigen::Index n) const {
