@@ -37,11 +37,10 @@ double weighted_error(const EffectivenessMatrix& effectiveness, const AxisVector
 
 // The active-set iteration at N motors (fixed where the count has its own
 // instantiation, see fixed_size.hpp): every per-motor loop has a constant
-// bound the compiler unrolls, and the free set is also kept as ones and
-// zeros, so the step is one product masked by it instead of a loop over a
-// list of free motors. The dual still skips held motors by a branch: at a
-// fixed count, multiplying their columns by zero instead was slower (see
-// docs/benchmark_history.md). Each iteration is a chain of dependent steps
+// bound the compiler unrolls, and the step is one product masked to the free
+// motors instead of a loop over a list of them. The dual skips held motors
+// by a branch: at a fixed count, multiplying their columns by zero instead
+// was slower (see docs/benchmark_history.md). Each iteration is a chain of dependent steps
 // (the dual's factorization, the step, the ratio test), so its length, not
 // the arithmetic, sets the time.
 template <int N>
@@ -61,10 +60,8 @@ AllocationResult OptimalAllocator::solve(const AxisVector& demand, double* out,
   // Start feasible: the clipped linear mix, with motors on a limit active.
   Motors u = preferred;
   Eigen::Matrix<signed char, N, 1, Eigen::ColMajor, kCapacity, 1> side(n);
-  Motors free(n);  // 1 for a free motor, 0 for one held on a limit
   for (Eigen::Index i = 0; i < motors; ++i) {
     side[i] = u[i] <= lower ? kAtLower : u[i] >= upper ? kAtUpper : kFree;
-    free[i] = side[i] == kFree ? 1.0 : 0.0;
   }
   // The cost is gamma |e|^2 + |q|^2 with e = W (d - E u) and q = u_p - u.
   // Both residuals are kept up to date as u moves.
@@ -92,7 +89,7 @@ AllocationResult OptimalAllocator::solve(const AxisVector& demand, double* out,
     // otherwise, the pivoting factorization.
     if (!detail::solve_spd4(dual, rhs, z)) z = dual.ldlt().solve(rhs);
     step.noalias() = b.transpose() * z;
-    step = free.cwiseProduct(step + q);
+    for (Eigen::Index i = 0; i < motors; ++i) step[i] = side[i] == kFree ? step[i] + q[i] : 0.0;
     // Largest fraction of the step that keeps every free motor in range (a
     // held motor's step is zero: it never blocks).
     double alpha = 1.0;
@@ -111,7 +108,6 @@ AllocationResult OptimalAllocator::solve(const AxisVector& demand, double* out,
     q -= alpha * step;
     if (blocking >= 0) {
       side[blocking] = step[blocking] > 0.0 ? kAtUpper : kAtLower;
-      free[blocking] = 0.0;
       const double limit = side[blocking] == kAtUpper ? upper : lower;
       q[blocking] += u[blocking] - limit;
       e += b.col(blocking) * (u[blocking] - limit);
@@ -132,12 +128,10 @@ AllocationResult OptimalAllocator::solve(const AxisVector& demand, double* out,
     }
     if (release < 0) break;
     side[release] = kFree;
-    free[release] = 1.0;
   }
-  // NaN cannot come from finite inputs; if it ever did, the safe end.
-  for (Eigen::Index i = 0; i < motors; ++i) {
-    u[i] = std::isnan(u[i]) ? lower : std::clamp(u[i], lower, upper);
-  }
+  // Rounding aside the iterate is in range; a NaN (which finite inputs
+  // cannot produce) goes to the safe end.
+  detail::clamp_into_range<N>(u, cycle_constants_);
   detail::MotorsView<N>(out, n) = u;
   AllocationResult result =
       detail::describe_fixed<N>(effectiveness_, demand, u.data(), n, cycle_constants_);
