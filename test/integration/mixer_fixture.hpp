@@ -148,12 +148,18 @@ class MixerProcessTest : public ::testing::Test {
   }
   // SIGTERM: exit 0, and the last word on the bus is disarmed.
   void stop_and_expect_disarmed_exit() {
+    // Only a status published after the signal can be the final one: the
+    // status runs at 10 Hz, so the newest before the signal may still be a
+    // disarmed one from before arming.
+    const std::size_t statuses_before = bus_->status().size();
     mixer_->signal(SIGTERM);
     ASSERT_EQ(mixer_->wait_for(10s), 0);
-    // Its final status follows its final outputs: once it is here, so are they.
+    // Its final status follows its final outputs on the same socket: once it
+    // is here, so are they.
     ASSERT_TRUE(bus_->wait_until(
-        [](const auto&, const auto& s) {
-          return !s.empty() && s.back().state == mixer_status_t::STATE_DISARMED;
+        [&](const auto&, const auto& s) {
+          return s.size() > statuses_before &&
+                 s.back().state == mixer_status_t::STATE_DISARMED;
         },
         5s));
     EXPECT_FALSE(bus_->pwm().back().armed);
