@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace motormix {
@@ -289,6 +290,66 @@ TEST(FittingScale, SinglePointScalesAreFound) {
     ASSERT_NEAR(closed, point, kScaleTolerance) << "case " << k;
     ASSERT_NEAR(stepped, point, kScaleTolerance) << "case " << k;
   }
+}
+
+// The public feasible_shifts (allocation.hpp) against its definition, on
+// seeded random mixes with motors the direction cannot move (d <= 0) among
+// them: at both ends of a non-empty interval every motor is in range, a
+// step past either end takes a movable motor out, and the interval is
+// empty exactly when an unmovable motor is out of range or the ends cross.
+TEST(FeasibleShifts, MatchesItsDefinition) {
+  constexpr double kInRange = 1e-12;  // rounding of u + k d at an end
+  constexpr double kStep = 1e-6;      // a step past an end, far above that rounding
+  const CommandRange r{0.1, 0.9};
+  const auto in_range = [&](double v) {
+    return v >= r.lower - kInRange && v <= r.upper + kInRange;
+  };
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int empty = 0;
+  int stuck = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const int n = 1 + k % 8;
+    MotorVector u(n);
+    MotorVector d(n);
+    bool unmovable_out = false;
+    for (int i = 0; i < n; ++i) {
+      u[i] = -0.5 + 2.0 * unit(rng);
+      const double pick = unit(rng);
+      d[i] = pick < 0.15 ? 0.0 : (pick < 0.25 ? -unit(rng) : 0.05 + unit(rng));
+      if (d[i] <= 0.0 && !(u[i] >= r.lower && u[i] <= r.upper)) unmovable_out = true;
+    }
+    const ShiftInterval s = feasible_shifts(u, d, r);
+    // As documented, a motor with d <= 0 is one the shift does not move.
+    const MotorVector moved = d.cwiseMax(0.0);
+    if (unmovable_out) {
+      ASSERT_TRUE(s.empty()) << "case " << k;
+      ++stuck;
+      continue;
+    }
+    // Any finite shift works when no motor moves: the bounds stay infinite.
+    if ((d.array() <= 0.0).all()) {
+      ASSERT_FALSE(s.empty());
+      ASSERT_TRUE(std::isinf(s.lo) && std::isinf(s.hi)) << "case " << k;
+      continue;
+    }
+    if (s.empty()) {
+      // The ends crossed: some pair of movable motors cannot both fit. At
+      // the midpoint of the crossed ends at least one motor is out.
+      const double mid = 0.5 * (s.lo + s.hi);
+      ASSERT_FALSE(((u + mid * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+      ++empty;
+      continue;
+    }
+    for (const double end : {s.lo, s.hi}) {
+      ASSERT_TRUE(((u + end * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+    }
+    ASSERT_FALSE(((u + (s.lo - kStep) * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+    ASSERT_FALSE(((u + (s.hi + kStep) * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+  }
+  // The seeded draw reaches every branch.
+  EXPECT_GT(stuck, 100);
+  EXPECT_GT(empty, 100);
 }
 
 }  // namespace
