@@ -322,6 +322,9 @@ TEST(FeasibleShifts, MatchesItsDefinition) {
     const ShiftInterval s = feasible_shifts(u, d, r);
     // As documented, a motor with d <= 0 is one the shift does not move.
     const MotorVector moved = d.cwiseMax(0.0);
+    const auto fits_after = [&](double shift) {
+      return (u + shift * moved).array().unaryExpr(in_range).all();
+    };
     if (unmovable_out) {
       ASSERT_TRUE(s.empty()) << "case " << k;
       ++stuck;
@@ -337,15 +340,15 @@ TEST(FeasibleShifts, MatchesItsDefinition) {
       // The ends crossed: some pair of movable motors cannot both fit. At
       // the midpoint of the crossed ends at least one motor is out.
       const double mid = 0.5 * (s.lo + s.hi);
-      ASSERT_FALSE(((u + mid * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+      ASSERT_FALSE(fits_after(mid)) << "case " << k;
       ++empty;
       continue;
     }
     for (const double end : {s.lo, s.hi}) {
-      ASSERT_TRUE(((u + end * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+      ASSERT_TRUE(fits_after(end)) << "case " << k;
     }
-    ASSERT_FALSE(((u + (s.lo - kStep) * moved).array().unaryExpr(in_range)).all()) << "case " << k;
-    ASSERT_FALSE(((u + (s.hi + kStep) * moved).array().unaryExpr(in_range)).all()) << "case " << k;
+    ASSERT_FALSE(fits_after(s.lo - kStep)) << "case " << k;
+    ASSERT_FALSE(fits_after(s.hi + kStep)) << "case " << k;
   }
   // The seeded draw reaches every branch.
   EXPECT_GT(stuck, 100);
