@@ -2,7 +2,8 @@
 // The four control axes a mixer turns into motor commands, and the vector type
 // that carries one value per axis through the pipeline.
 
-#include <Eigen/Core>
+#include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
+
 #include <array>
 #include <cstdint>
 

@@ -4,7 +4,7 @@
 // y right, z down); positive roll lowers the right side, positive pitch raises
 // the nose, positive yaw turns the nose right (clockwise seen from above).
 
-#include <Eigen/Core>
+#include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
 
 #include <vector>
 

@@ -8,9 +8,8 @@
 
 #include <motormix/axes.hpp>
 #include <motormix/effectiveness.hpp>
+#include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
 #include <motormix/motor_vector.hpp>
-
-#include <Eigen/Core>
 
 #include <cstdint>
 #include <string>

@@ -2,7 +2,7 @@
 // Per-motor values with a fixed capacity, so the per-cycle path never touches
 // the heap: resizing within kMaxMotors only changes a size field.
 
-#include <Eigen/Core>
+#include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
 
 namespace motormix {
 

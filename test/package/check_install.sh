@@ -65,12 +65,13 @@ grep -q "^Version: $version\$" "$prefix/$libdir/pkgconfig/motormix.pc" \
   || fail "motormix.pc does not carry version $version"
 "$prefix/bin/motormix" run --check --config "$prefix/share/motormix/config/quad_x.yaml" > /dev/null
 
-consumer_build() {  # NAME SOURCE_DIR PREFIX
+consumer_build() {  # NAME SOURCE_DIR PREFIX [EXTRA CMAKE ARGUMENTS...]
   local name="$1" from="$2" pfx="$3"
+  shift 3
   rm -rf "$work/$name"
   cp -r "$from" "$work/$name"
   cmake -S "$work/$name" -B "$work/$name/build" -DCMAKE_PREFIX_PATH="$pfx" \
-    -DCMAKE_BUILD_TYPE=Release > "$work/$name.configure.log" \
+    -DCMAKE_BUILD_TYPE=Release "$@" > "$work/$name.configure.log" \
     || { cat "$work/$name.configure.log"; fail "$name: configure against $pfx"; }
   cmake --build "$work/$name/build" > "$work/$name.build.log" 2>&1 \
     || { cat "$work/$name.build.log"; fail "$name: build against $pfx"; }
@@ -90,17 +91,18 @@ if "$work/embedding/build/embed" "$work/no-such.yaml" 2> "$work/embed.err"; then
 fi
 grep -q 'cannot open' "$work/embed.err" || fail "embed: unclear error for a missing file"
 
-pc_build() {  # PREFIX
+pc_build() {  # PREFIX [EXTRA COMPILER FLAGS...]
   local pc_dir
   pc_dir=$(dirname "$(find "$1" -name motormix.pc | head -1)")
   export PKG_CONFIG_PATH="$pc_dir"
   local flags
   flags=$(pkg-config --cflags --libs motormix) || fail "pkg-config motormix failed under $1"
+  local extra=("${@:2}")
   # shellcheck disable=SC2086
-  c++ -std=c++17 -O1 "$src/test/package/consumer/core_and_types.cpp" -o "$work/pc_core_and_types" $flags \
-    || fail "pkg-config build of the consumer"
+  c++ -std=c++17 -O1 "${extra[@]}" "$src/test/package/consumer/core_and_types.cpp" \
+    -o "$work/pc_core_and_types" $flags || fail "pkg-config build of the consumer"
   # shellcheck disable=SC2086
-  c++ -std=c++17 -O1 "$src/examples/embedding/embed.cpp" -o "$work/pc_embed" $flags \
+  c++ -std=c++17 -O1 "${extra[@]}" "$src/examples/embedding/embed.cpp" -o "$work/pc_embed" $flags \
     || fail "pkg-config build of the embedding example"
   # A prefix outside the linker's path: what a user of pkg-config does for
   # shared libraries (static ones need nothing).
@@ -109,6 +111,47 @@ pc_build() {  # PREFIX
 }
 step "pkg-config motormix"
 pc_build "$prefix"
+
+# Eigen lays out the fixed-size objects in motormix's public types for the
+# widest SIMD the compiler is told about: a program built with -march=native
+# would read them at other offsets than the libraries (built for the baseline)
+# wrote them. The package pins the alignment (EIGEN_MAX_ALIGN_BYTES=16) and
+# the headers refuse a build without it.
+step "a program built for a wider SIMD than the libraries (-march=x86-64-v3)"
+wide=-march=x86-64-v3
+if [ "$(uname -m)" = x86_64 ] && echo 'int main() {}' | c++ -x c++ "$wide" - -o "$work/wide_probe" 2>/dev/null; then
+  # Without the package's flags: refused at compile time, naming the fix
+  # (compiling needs no AVX2 in this machine's CPU).
+  # shellcheck disable=SC2046
+  if c++ -std=c++17 "$wide" -fsyntax-only -I"$prefix/include" $(pkg-config --cflags eigen3) \
+      "$src/test/package/consumer/core_and_types.cpp" 2> "$work/wide_refused.log"; then
+    fail "motormix's headers compiled with $wide but without the Eigen alignment definition"
+  fi
+  grep -q 'EIGEN_MAX_ALIGN_BYTES=16' "$work/wide_refused.log" \
+    || { cat "$work/wide_refused.log"; fail "the refusal does not name EIGEN_MAX_ALIGN_BYTES=16"; }
+  # Through find_package and pkg-config: builds, and where this CPU runs it,
+  # answers as the baseline build did.
+  consumer_build consumer-wide "$src/test/package/consumer" "$prefix" -DCMAKE_CXX_FLAGS="$wide"
+  consumer_build embedding-wide "$src/examples/embedding" "$prefix" -DCMAKE_CXX_FLAGS="$wide"
+  pc_build "$prefix" "$wide"
+  if grep -qw avx2 /proc/cpuinfo && grep -qw fma /proc/cpuinfo; then
+    "$work/consumer-wide/build/core_and_types" > "$work/consumer-wide.txt" \
+      || fail "the consumer built with $wide failed"
+    "$work/consumer/build/core_and_types" | cmp -s - "$work/consumer-wide.txt" \
+      || fail "the consumer built with $wide answers differently"
+    "$work/embedding-wide/build/embed" "$prefix/share/motormix/config/quad_x.yaml" \
+      > "$work/embed-wide.txt" || fail "the embedding example built with $wide failed"
+    cmp -s "$work/embed.txt" "$work/embed-wide.txt" \
+      || { diff "$work/embed.txt" "$work/embed-wide.txt"; fail "embed built with $wide answers differently"; }
+    LD_LIBRARY_PATH="$(dirname "$(find "$prefix" -name motormix.pc | head -1)")/.." \
+      "$work/pc_embed" "$prefix/share/motormix/config/quad_x.yaml" | cmp -s - "$work/embed.txt" \
+      || fail "the pkg-config build with $wide answers differently"
+  else
+    echo "this CPU lacks AVX2 or FMA: built with $wide, not run"
+  fi
+else
+  echo "not an x86-64 compiler that takes $wide: skipped"
+fi
 
 step "Python message modules (from motormix import motor_pwm_t)"
 PYTHONPATH="$prefix/lib/python3/dist-packages" python3 - <<'PY'
