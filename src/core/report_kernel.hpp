@@ -9,7 +9,9 @@
 
 #include <cmath>
 
-#if defined(__SSE2__)
+#if defined(__AVX__)
+#include <immintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
@@ -18,13 +20,40 @@ namespace motormix::detail {
 // A command within this distance of a limit counts as sitting on it.
 inline constexpr double kSaturationTolerance = 1e-9;
 
+// Motors per SIMD packet in the kernels below at N motors: the packet Eigen
+// itself uses for an N-vector of doubles (the widest the target has whose
+// size divides N); 1, the scalar loops, at the dynamic size and where the
+// kernels have no packet code (targets without SSE2). The kernels write and
+// read the vectors Eigen reads and wrote at the same width: a packet stored
+// as two halves and loaded whole stalls the load on store forwarding (seen
+// with AVX before the kernels followed Eigen: `clip` and `shift` twice as
+// slow as at the SSE2 baseline).
+template <int N>
+constexpr int lanes() {
+#if defined(__SSE2__)
+  if constexpr (N != Eigen::Dynamic) {
+    using Packet = typename Eigen::internal::find_best_packet<double, N>::type;
+    return Eigen::internal::unpacket_traits<Packet>::size;
+  }
+#endif
+  return 1;
+}
+template <int N>
+inline constexpr int kLanes = lanes<N>();
+
 // `left` on the controlled axes, zero on the others (roll and pitch of a
 // wheeled vehicle): a bitwise and with the prepared mask, no branch and no
 // trip through memory.
 MOTORMIX_ALWAYS_INLINE AxisVector on_controlled_axes(const AxisVector& left,
                                                      const CycleConstants& limits) {
   AxisVector kept;
-#if defined(__SSE2__)
+#if defined(__AVX__)
+  // One packet of four, as Eigen reads an AxisVector here (see kLanes).
+  _mm256_storeu_pd(
+      kept.data(),
+      _mm256_and_pd(_mm256_loadu_pd(left.data()),
+                    _mm256_loadu_pd(reinterpret_cast<const double*>(limits.axis_kept))));
+#elif defined(__SSE2__)
   const __m128i* keep = reinterpret_cast<const __m128i*>(limits.axis_kept);
   _mm_store_pd(kept.data(),
                _mm_and_pd(_mm_load_pd(left.data()), _mm_castsi128_pd(_mm_load_si128(keep))));
@@ -42,8 +71,30 @@ MOTORMIX_ALWAYS_INLINE AxisVector on_controlled_axes(const AxisVector& left,
 // `lower`; the scalar loop says the same.
 template <int N>
 MOTORMIX_ALWAYS_INLINE void clamp_into_range(LocalMotors<N>& u, const CycleConstants& limits) {
+#if defined(__AVX512F__)
+  if constexpr (kLanes<N> == 8) {
+    const __m512d lower = _mm512_set1_pd(limits.lower[0]);
+    const __m512d upper = _mm512_set1_pd(limits.upper[0]);
+    for (int i = 0; i < N; i += 8) {
+      _mm512_storeu_pd(u.data() + i,
+                       _mm512_min_pd(_mm512_max_pd(_mm512_loadu_pd(u.data() + i), lower), upper));
+    }
+    return;
+  }
+#endif
+#if defined(__AVX__)
+  if constexpr (kLanes<N> == 4) {
+    const __m256d lower = _mm256_broadcast_sd(limits.lower);
+    const __m256d upper = _mm256_broadcast_sd(limits.upper);
+    for (int i = 0; i < N; i += 4) {
+      _mm256_storeu_pd(u.data() + i,
+                       _mm256_min_pd(_mm256_max_pd(_mm256_loadu_pd(u.data() + i), lower), upper));
+    }
+    return;
+  }
+#endif
 #if defined(__SSE2__)
-  if constexpr (N != Eigen::Dynamic && N % 2 == 0) {
+  if constexpr (kLanes<N> == 2) {
     const __m128d lower = _mm_load_pd(limits.lower);
     const __m128d upper = _mm_load_pd(limits.upper);
     for (int i = 0; i < N; i += 2) {
@@ -82,22 +133,53 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unalloca
   MotorMask upper = 0;
   MotorMask lower = 0;
   std::uint8_t limited = 0;
-#if defined(__SSE2__)
-  constexpr bool kPairs = N != Eigen::Dynamic && N % 2 == 0;
-#else
-  constexpr bool kPairs = false;
-#endif
-  if constexpr (kPairs) {
-#if defined(__SSE2__)
-    // Two motors per compare, their flags by movemask: the flags cost a
-    // few instructions instead of two compares and shifts per motor.
-    const __m128d top2 = _mm_load_pd(limits.at_upper);
-    const __m128d bottom2 = _mm_load_pd(limits.at_lower);
-    for (int i = 0; i < N; i += 2) {
-      const __m128d pair = _mm_loadu_pd(commands + i);
-      upper |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmpge_pd(pair, top2))) << i;
-      lower |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmple_pd(pair, bottom2))) << i;
+  if constexpr (kLanes < N >> 1) {
+    // A packet of motors per compare, their flags by movemask: the flags
+    // cost a few instructions instead of two compares and shifts per motor.
+#if defined(__AVX512F__)
+    if constexpr (kLanes<N> == 8) {
+      const __m512d top = _mm512_set1_pd(limits.at_upper[0]);
+      const __m512d bottom = _mm512_set1_pd(limits.at_lower[0]);
+      for (int i = 0; i < N; i += 8) {
+        const __m512d packet = _mm512_loadu_pd(commands + i);
+        upper |= static_cast<MotorMask>(_mm512_cmp_pd_mask(packet, top, _CMP_GE_OQ)) << i;
+        lower |= static_cast<MotorMask>(_mm512_cmp_pd_mask(packet, bottom, _CMP_LE_OQ)) << i;
+      }
     }
+#endif
+#if defined(__AVX__)
+    if constexpr (kLanes<N> == 4) {
+      const __m256d top = _mm256_broadcast_sd(limits.at_upper);
+      const __m256d bottom = _mm256_broadcast_sd(limits.at_lower);
+      for (int i = 0; i < N; i += 4) {
+        const __m256d packet = _mm256_loadu_pd(commands + i);
+        upper |= static_cast<MotorMask>(_mm256_movemask_pd(_mm256_cmp_pd(packet, top, _CMP_GE_OQ)))
+                 << i;
+        lower |=
+            static_cast<MotorMask>(_mm256_movemask_pd(_mm256_cmp_pd(packet, bottom, _CMP_LE_OQ)))
+            << i;
+      }
+    }
+#endif
+#if defined(__SSE2__)
+    if constexpr (kLanes<N> == 2) {
+      const __m128d top2 = _mm_load_pd(limits.at_upper);
+      const __m128d bottom2 = _mm_load_pd(limits.at_lower);
+      for (int i = 0; i < N; i += 2) {
+        const __m128d pair = _mm_loadu_pd(commands + i);
+        upper |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmpge_pd(pair, top2))) << i;
+        lower |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmple_pd(pair, bottom2))) << i;
+      }
+    }
+#endif
+#if defined(__AVX__)
+    // The four axes as one packet, as Eigen wrote `unallocated`.
+    const __m256d tolerance = _mm256_broadcast_sd(limits.delivered);
+    const __m256d magnitude = _mm256_broadcast_sd(limits.sign);  // the sign bit, cleared by andnot
+    const __m256d axes = _mm256_andnot_pd(magnitude, _mm256_loadu_pd(unallocated.data()));
+    limited =
+        static_cast<std::uint8_t>(_mm256_movemask_pd(_mm256_cmp_pd(axes, tolerance, _CMP_GT_OQ)));
+#elif defined(__SSE2__)
     const __m128d tolerance = _mm_load_pd(limits.delivered);
     const __m128d magnitude = _mm_load_pd(limits.sign);  // the sign bit, cleared by andnot
     const __m128d low_axes = _mm_andnot_pd(magnitude, _mm_loadu_pd(unallocated.data()));
