@@ -42,6 +42,26 @@ void check_clamp(Eigen::Index n) {
   }
 }
 
+// The kernels work in the packets Eigen uses for the same vectors: two
+// doubles at the SSE2 baseline, four with AVX where the motor count is a
+// multiple of four. The x86-64-v3 build of these tests (simd_kernel_tests)
+// checks it runs the wide paths at all.
+TEST(ReportKernel, PacketWidthFollowsEigen) {
+#if defined(MOTORMIX_EXPECT_AVX)
+  EXPECT_EQ(detail::kLanes<4>, 4);
+  EXPECT_EQ(detail::kLanes<8>, 4);
+  EXPECT_EQ(detail::kLanes<16>, 4);
+#elif defined(__SSE2__) && !defined(__AVX__)
+  EXPECT_EQ(detail::kLanes<4>, 2);
+  EXPECT_EQ(detail::kLanes<8>, 2);
+#endif
+#if defined(__SSE2__) && !defined(__AVX512F__)
+  EXPECT_EQ(detail::kLanes<6>, 2);  // four does not divide six: pairs, as Eigen does
+  EXPECT_EQ(detail::kLanes<14>, 2);
+#endif
+  EXPECT_EQ(detail::kLanes<Eigen::Dynamic>, 1);
+}
+
 TEST(ReportKernel, ClampSendsNanToTheLowerEndAtEveryMotorCount) {
   check_clamp<4>(4);
   check_clamp<6>(6);
