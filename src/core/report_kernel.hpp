@@ -133,7 +133,7 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unalloca
   MotorMask upper = 0;
   MotorMask lower = 0;
   std::uint8_t limited = 0;
-  if constexpr (kLanes < N >> 1) {
+  if constexpr (lanes<N>() > 1) {
     // A packet of motors per compare, their flags by movemask: the flags
     // cost a few instructions instead of two compares and shifts per motor.
 #if defined(__AVX512F__)

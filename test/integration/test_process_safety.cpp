@@ -5,7 +5,9 @@
 
 #include "integration/mixer_fixture.hpp"
 
+#include <algorithm>
 #include <csignal>
+#include <cstdlib>
 #include <random>
 #include <thread>
 
@@ -154,8 +156,18 @@ TEST_F(ProcessSafety, RefusedRealtimeRequestsDoNotStopTheProcess) {
   EXPECT_EQ(mixer_->wait_for(10s), 0);
 }
 
+// How much further behind than an optimized build the loop may fall on a
+// loaded machine: 1, or MOTORMIX_LOOP_SLACK where every cycle is several
+// times slower (the sanitizer build sets 2: its mean period at 2000 Hz was
+// seen at 1.62x the nominal one while CI ran).
+double loop_slack() {
+  const char* env = std::getenv("MOTORMIX_LOOP_SLACK");
+  return env ? std::max(1.0, std::atof(env)) : 1.0;
+}
+
 // Generous bounds: tight numbers belong to the benchmarks.
 TEST_F(ProcessSafety, LoopKeepsItsRate) {
+  const double slack = loop_slack();
   for (int rate : {400, 2000}) {
     SCOPED_TRACE(std::to_string(rate) + " Hz");
     start({"loop_rate_hz=" + std::to_string(rate)});
@@ -171,12 +183,12 @@ TEST_F(ProcessSafety, LoopKeepsItsRate) {
     // Generous: a loaded two-core machine delays wake-ups, and the loop does
     // not run missed cycles back to back (they would only repeat stale
     // inputs). It must never run fast, and never fall far behind.
-    EXPECT_LE(measured, 1.05 * rate);
-    EXPECT_GE(measured, 0.6 * rate);
+    EXPECT_LE(measured, 1.05 * rate);  // never fast, whatever the build
+    EXPECT_GE(measured, 0.6 * rate / slack);
     ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return s.size() >= 3; }, 5s));
     const auto status = bus_->status().back();
     EXPECT_GE(status.period_us[1], 0.95 * 1e6 / rate);  // mean period
-    EXPECT_LE(status.period_us[1], 1.6 * 1e6 / rate);
+    EXPECT_LE(status.period_us[1], 1.6 * slack * 1e6 / rate);
     EXPECT_GT(status.compute_us[2], 0.0F);
     mixer_->signal(SIGTERM);
     EXPECT_EQ(mixer_->wait_for(10s), 0);
