@@ -41,6 +41,74 @@ constexpr int lanes() {
 template <int N>
 inline constexpr int kLanes = lanes<N>();
 
+// The few operations of one SIMD width the kernels below use, so that each
+// kernel is written once for every width: Packet<2> (SSE2), Packet<4> (AVX),
+// Packet<8> (AVX-512). `splat` takes a CycleConstants entry, a value stored
+// twice: SSE2 loads it as a whole packet (the baseline has no broadcasting
+// load), the wider ones broadcast it. max and min keep the instruction's
+// operand order: where either operand is NaN, the second one is returned.
+template <int Lanes>
+struct Packet;
+#if defined(__SSE2__)
+template <>
+struct Packet<2> {
+  using V = __m128d;
+  MOTORMIX_ALWAYS_INLINE static V splat(const double* twice) { return _mm_load_pd(twice); }
+  MOTORMIX_ALWAYS_INLINE static V load(const double* p) { return _mm_loadu_pd(p); }
+  MOTORMIX_ALWAYS_INLINE static void store(double* p, V v) { _mm_storeu_pd(p, v); }
+  MOTORMIX_ALWAYS_INLINE static V max(V a, V b) { return _mm_max_pd(a, b); }
+  MOTORMIX_ALWAYS_INLINE static V min(V a, V b) { return _mm_min_pd(a, b); }
+  MOTORMIX_ALWAYS_INLINE static V and_not(V mask, V v) { return _mm_andnot_pd(mask, v); }
+  MOTORMIX_ALWAYS_INLINE static unsigned at_least(V a, V b) {
+    return unsigned(_mm_movemask_pd(_mm_cmpge_pd(a, b)));
+  }
+  MOTORMIX_ALWAYS_INLINE static unsigned at_most(V a, V b) {
+    return unsigned(_mm_movemask_pd(_mm_cmple_pd(a, b)));
+  }
+  MOTORMIX_ALWAYS_INLINE static unsigned above(V a, V b) {
+    return unsigned(_mm_movemask_pd(_mm_cmpgt_pd(a, b)));
+  }
+};
+#endif
+#if defined(__AVX__)
+template <>
+struct Packet<4> {
+  using V = __m256d;
+  MOTORMIX_ALWAYS_INLINE static V splat(const double* twice) { return _mm256_broadcast_sd(twice); }
+  MOTORMIX_ALWAYS_INLINE static V load(const double* p) { return _mm256_loadu_pd(p); }
+  MOTORMIX_ALWAYS_INLINE static void store(double* p, V v) { _mm256_storeu_pd(p, v); }
+  MOTORMIX_ALWAYS_INLINE static V max(V a, V b) { return _mm256_max_pd(a, b); }
+  MOTORMIX_ALWAYS_INLINE static V min(V a, V b) { return _mm256_min_pd(a, b); }
+  MOTORMIX_ALWAYS_INLINE static V and_not(V mask, V v) { return _mm256_andnot_pd(mask, v); }
+  MOTORMIX_ALWAYS_INLINE static unsigned at_least(V a, V b) {
+    return unsigned(_mm256_movemask_pd(_mm256_cmp_pd(a, b, _CMP_GE_OQ)));
+  }
+  MOTORMIX_ALWAYS_INLINE static unsigned at_most(V a, V b) {
+    return unsigned(_mm256_movemask_pd(_mm256_cmp_pd(a, b, _CMP_LE_OQ)));
+  }
+  MOTORMIX_ALWAYS_INLINE static unsigned above(V a, V b) {
+    return unsigned(_mm256_movemask_pd(_mm256_cmp_pd(a, b, _CMP_GT_OQ)));
+  }
+};
+#endif
+#if defined(__AVX512F__)
+template <>
+struct Packet<8> {
+  using V = __m512d;
+  MOTORMIX_ALWAYS_INLINE static V splat(const double* twice) { return _mm512_set1_pd(*twice); }
+  MOTORMIX_ALWAYS_INLINE static V load(const double* p) { return _mm512_loadu_pd(p); }
+  MOTORMIX_ALWAYS_INLINE static void store(double* p, V v) { _mm512_storeu_pd(p, v); }
+  MOTORMIX_ALWAYS_INLINE static V max(V a, V b) { return _mm512_max_pd(a, b); }
+  MOTORMIX_ALWAYS_INLINE static V min(V a, V b) { return _mm512_min_pd(a, b); }
+  MOTORMIX_ALWAYS_INLINE static unsigned at_least(V a, V b) {
+    return _mm512_cmp_pd_mask(a, b, _CMP_GE_OQ);
+  }
+  MOTORMIX_ALWAYS_INLINE static unsigned at_most(V a, V b) {
+    return _mm512_cmp_pd_mask(a, b, _CMP_LE_OQ);
+  }
+};
+#endif
+
 // `left` on the controlled axes, zero on the others (roll and pitch of a
 // wheeled vehicle): a bitwise and with the prepared mask, no branch and no
 // trip through memory.
@@ -71,38 +139,16 @@ MOTORMIX_ALWAYS_INLINE AxisVector on_controlled_axes(const AxisVector& left,
 // `lower`; the scalar loop says the same.
 template <int N>
 MOTORMIX_ALWAYS_INLINE void clamp_into_range(LocalMotors<N>& u, const CycleConstants& limits) {
-#if defined(__AVX512F__)
-  if constexpr (kLanes<N> == 8) {
-    const __m512d lower = _mm512_set1_pd(limits.lower[0]);
-    const __m512d upper = _mm512_set1_pd(limits.upper[0]);
-    for (int i = 0; i < N; i += 8) {
-      _mm512_storeu_pd(u.data() + i,
-                       _mm512_min_pd(_mm512_max_pd(_mm512_loadu_pd(u.data() + i), lower), upper));
+  constexpr int kWidth = kLanes<N>;
+  if constexpr (kWidth > 1) {
+    using P = Packet<kWidth>;
+    const typename P::V lower = P::splat(limits.lower);
+    const typename P::V upper = P::splat(limits.upper);
+    for (int i = 0; i < N; i += kWidth) {
+      P::store(u.data() + i, P::min(P::max(P::load(u.data() + i), lower), upper));
     }
     return;
   }
-#endif
-#if defined(__AVX__)
-  if constexpr (kLanes<N> == 4) {
-    const __m256d lower = _mm256_broadcast_sd(limits.lower);
-    const __m256d upper = _mm256_broadcast_sd(limits.upper);
-    for (int i = 0; i < N; i += 4) {
-      _mm256_storeu_pd(u.data() + i,
-                       _mm256_min_pd(_mm256_max_pd(_mm256_loadu_pd(u.data() + i), lower), upper));
-    }
-    return;
-  }
-#endif
-#if defined(__SSE2__)
-  if constexpr (kLanes<N> == 2) {
-    const __m128d lower = _mm_load_pd(limits.lower);
-    const __m128d upper = _mm_load_pd(limits.upper);
-    for (int i = 0; i < N; i += 2) {
-      _mm_storeu_pd(u.data() + i, _mm_min_pd(_mm_max_pd(_mm_loadu_pd(u.data() + i), lower), upper));
-    }
-    return;
-  }
-#endif
   const double lower = limits.lower[0];
   const double upper = limits.upper[0];
   for (Eigen::Index i = 0; i < u.size(); ++i) {
@@ -133,60 +179,27 @@ MOTORMIX_ALWAYS_INLINE AllocationResult describe_with(const AxisVector& unalloca
   MotorMask upper = 0;
   MotorMask lower = 0;
   std::uint8_t limited = 0;
-  if constexpr (lanes<N>() > 1) {
+  constexpr int kWidth = kLanes<N>;
+  if constexpr (kWidth > 1) {
     // A packet of motors per compare, their flags by movemask: the flags
     // cost a few instructions instead of two compares and shifts per motor.
-#if defined(__AVX512F__)
-    if constexpr (kLanes<N> == 8) {
-      const __m512d top = _mm512_set1_pd(limits.at_upper[0]);
-      const __m512d bottom = _mm512_set1_pd(limits.at_lower[0]);
-      for (int i = 0; i < N; i += 8) {
-        const __m512d packet = _mm512_loadu_pd(commands + i);
-        upper |= static_cast<MotorMask>(_mm512_cmp_pd_mask(packet, top, _CMP_GE_OQ)) << i;
-        lower |= static_cast<MotorMask>(_mm512_cmp_pd_mask(packet, bottom, _CMP_LE_OQ)) << i;
-      }
+    using P = Packet<kWidth>;
+    const typename P::V top = P::splat(limits.at_upper);
+    const typename P::V bottom = P::splat(limits.at_lower);
+    for (int i = 0; i < N; i += kWidth) {
+      const typename P::V packet = P::load(commands + i);
+      upper |= static_cast<MotorMask>(P::at_least(packet, top) << i);
+      lower |= static_cast<MotorMask>(P::at_most(packet, bottom) << i);
     }
-#endif
-#if defined(__AVX__)
-    if constexpr (kLanes<N> == 4) {
-      const __m256d top = _mm256_broadcast_sd(limits.at_upper);
-      const __m256d bottom = _mm256_broadcast_sd(limits.at_lower);
-      for (int i = 0; i < N; i += 4) {
-        const __m256d packet = _mm256_loadu_pd(commands + i);
-        upper |= static_cast<MotorMask>(_mm256_movemask_pd(_mm256_cmp_pd(packet, top, _CMP_GE_OQ)))
-                 << i;
-        lower |=
-            static_cast<MotorMask>(_mm256_movemask_pd(_mm256_cmp_pd(packet, bottom, _CMP_LE_OQ)))
-            << i;
-      }
+    // The four axes in the packets Eigen wrote `unallocated` with.
+    constexpr int kAxisWidth = kLanes<kNumAxes>;
+    using A = Packet<kAxisWidth>;
+    const typename A::V tolerance = A::splat(limits.delivered);
+    const typename A::V sign = A::splat(limits.sign);  // the sign bit, cleared by and_not
+    for (int a = 0; a < kNumAxes; a += kAxisWidth) {
+      const typename A::V magnitude = A::and_not(sign, A::load(unallocated.data() + a));
+      limited |= static_cast<std::uint8_t>(A::above(magnitude, tolerance) << a);
     }
-#endif
-#if defined(__SSE2__)
-    if constexpr (kLanes<N> == 2) {
-      const __m128d top2 = _mm_load_pd(limits.at_upper);
-      const __m128d bottom2 = _mm_load_pd(limits.at_lower);
-      for (int i = 0; i < N; i += 2) {
-        const __m128d pair = _mm_loadu_pd(commands + i);
-        upper |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmpge_pd(pair, top2))) << i;
-        lower |= static_cast<MotorMask>(_mm_movemask_pd(_mm_cmple_pd(pair, bottom2))) << i;
-      }
-    }
-#endif
-#if defined(__AVX__)
-    // The four axes as one packet, as Eigen wrote `unallocated`.
-    const __m256d tolerance = _mm256_broadcast_sd(limits.delivered);
-    const __m256d magnitude = _mm256_broadcast_sd(limits.sign);  // the sign bit, cleared by andnot
-    const __m256d axes = _mm256_andnot_pd(magnitude, _mm256_loadu_pd(unallocated.data()));
-    limited =
-        static_cast<std::uint8_t>(_mm256_movemask_pd(_mm256_cmp_pd(axes, tolerance, _CMP_GT_OQ)));
-#elif defined(__SSE2__)
-    const __m128d tolerance = _mm_load_pd(limits.delivered);
-    const __m128d magnitude = _mm_load_pd(limits.sign);  // the sign bit, cleared by andnot
-    const __m128d low_axes = _mm_andnot_pd(magnitude, _mm_loadu_pd(unallocated.data()));
-    const __m128d high_axes = _mm_andnot_pd(magnitude, _mm_loadu_pd(unallocated.data() + 2));
-    limited = static_cast<std::uint8_t>(_mm_movemask_pd(_mm_cmpgt_pd(low_axes, tolerance)) |
-                                        _mm_movemask_pd(_mm_cmpgt_pd(high_axes, tolerance)) << 2);
-#endif
   } else {
     const detail::ConstMotorsView<N> u(commands, n);
     const double top = limits.at_upper[0];
