@@ -118,7 +118,7 @@ class Node {
     }
     publish_pwm(r);
     compute_stats_.add(static_cast<double>(monotonic_us() - woke_us));
-    if (now_us >= next_status_us_) {
+    if (status_every_cycle_ || now_us >= next_status_us_) {
       publish_status(r);
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
       warn_about_rejections(now_us);
@@ -240,6 +240,11 @@ class Node {
   std::vector<uint8_t> pwm_buffer_;
   std::vector<uint8_t> status_buffer_;
   std::int64_t next_status_us_ = 0;
+  // status_rate_hz equal to loop_rate_hz: a status after every cycle's
+  // outputs, whatever the wake-ups' jitter (a due time, now + one period,
+  // would skip the cycle after a late one). Tests and diagnostics pair each
+  // cycle's outputs with its state and input ages this way.
+  const bool status_every_cycle_ = config_.status_rate_hz >= config_.loop_rate_hz;
   std::int64_t last_cycle_us_ = 0;
   std::int64_t overruns_ = 0;
   std::int64_t warned_total_ = 0;

@@ -60,6 +60,13 @@ class BusRecorder {
     std::lock_guard<std::mutex> lock(mutex_);
     return pwm_times_;
   }
+  // For each status_ entry, how many motor_pwm_t messages had arrived before
+  // it. The mixer publishes a cycle's outputs, then its status, on one
+  // socket, so with a status every cycle, entry k's outputs are pwm_[n_k - 1].
+  std::vector<std::size_t> pwm_before_status() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pwm_before_status_;
+  }
   std::size_t pwm_count() {
     std::lock_guard<std::mutex> lock(mutex_);
     return pwm_seen_;
@@ -103,6 +110,7 @@ class BusRecorder {
     std::lock_guard<std::mutex> lock(mutex_);
     if (ok) {
       status_.push_back(msg);
+      pwm_before_status_.push_back(pwm_seen_);
     } else {
       ++undecodable_;
     }
@@ -117,6 +125,7 @@ class BusRecorder {
   std::vector<motor_pwm_t> pwm_;
   std::vector<mixer_status_t> status_;
   std::vector<std::chrono::steady_clock::time_point> pwm_times_;  // arrival of each pwm_ entry
+  std::vector<std::size_t> pwm_before_status_;                    // see pwm_before_status()
   std::size_t pwm_seen_ = 0;
   motor_pwm_t last_pwm_{};
   int undecodable_ = 0;

@@ -8,6 +8,8 @@
 #include "integration/process.hpp"
 #include "test_support.hpp"
 
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
 
@@ -28,9 +30,15 @@ namespace motormix::test {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-// Two loopback hops and scheduling on a loaded two-core machine (or under the
-// sanitizers) on top of the mixer's own promise of timeout + one period.
-constexpr auto kTransportSlack = 40ms;
+// Input ages travel as float milliseconds: a few 1e-5 ms of rounding at the
+// ages of these tests, far below this.
+constexpr double kAgeRoundingMs = 0.01;
+
+// One loop cycle as the mixer published it: its status and its outputs.
+struct CycleRecord {
+  mixer_status_t status;
+  motor_pwm_t pwm;
+};
 
 inline std::int64_t wall_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -136,6 +144,70 @@ class MixerProcessTest : public ::testing::Test {
     return first;
   }
 
+  // The cycles from status `from` on, each paired with its outputs. Needs a
+  // status every cycle (status_rate_hz = loop_rate_hz); a cycle missing from
+  // the record (a lost message) fails the test rather than pairing a status
+  // with another cycle's outputs.
+  std::vector<CycleRecord> cycles_since(std::size_t from) {
+    const auto status = bus_->status();
+    const auto pwm = bus_->pwm();
+    const auto pwm_before = bus_->pwm_before_status();
+    std::vector<CycleRecord> cycles;
+    for (std::size_t k = from; k < status.size(); ++k) {
+      if (k > from && (status[k].cycles != status[k - 1].cycles + 1 ||
+                       pwm_before[k] != pwm_before[k - 1] + 1)) {
+        ADD_FAILURE() << "cycle " << status[k - 1].cycles + 1 << " missing from the record";
+        break;
+      }
+      if (pwm_before[k] == 0) continue;  // not a cycle's status: nothing before it
+      cycles.push_back({status[k], pwm[pwm_before[k] - 1]});
+    }
+    return cycles;
+  }
+
+  // The failsafe checked in the mixer's own clock, from a record of every
+  // cycle: each cycle before it flew on a setpoint and a pid younger than
+  // their timeouts, and it is the first cycle in which one was older (or in
+  // which the loop had stalled past a timeout). So the failsafe comes within
+  // one period of the timeout, as the mixer measures both; no bound here
+  // depends on how fast this machine runs (the wall-clock latency is in
+  // scripts/bench). What the failsafe cycle outputs (disarmed, held, idle)
+  // is the caller's to check. Returns its index in `cycles`.
+  std::optional<std::size_t> expect_failsafe_in_first_late_cycle(
+      const std::vector<CycleRecord>& cycles) {
+    const double setpoint_timeout_ms = config_.inputs.setpoint_timeout_s * 1e3;
+    const double pid_timeout_ms = config_.inputs.pid_timeout_s * 1e3;
+    for (std::size_t k = 0; k < cycles.size(); ++k) {
+      const mixer_status_t& s = cycles[k].status;
+      if (s.state == mixer_status_t::STATE_ARMED) {
+        EXPECT_TRUE(cycles[k].pwm.armed) << "cycle " << s.cycles;
+        EXPECT_LE(s.input_age_ms[0], setpoint_timeout_ms + kAgeRoundingMs) << "cycle " << s.cycles;
+        EXPECT_LE(s.input_age_ms[1], pid_timeout_ms + kAgeRoundingMs) << "cycle " << s.cycles;
+        continue;
+      }
+      if (s.state != mixer_status_t::STATE_FAILSAFE) continue;
+      if (k == 0 || cycles[k - 1].status.state != mixer_status_t::STATE_ARMED) {
+        ADD_FAILURE() << "no armed cycle recorded before the failsafe in cycle " << s.cycles;
+        return std::nullopt;
+      }
+      switch (s.failsafe_reason) {
+        case mixer_status_t::REASON_SETPOINT_STALE:
+          EXPECT_GT(s.input_age_ms[0], setpoint_timeout_ms - kAgeRoundingMs);
+          break;
+        case mixer_status_t::REASON_PID_STALE:
+          EXPECT_GT(s.input_age_ms[1], pid_timeout_ms - kAgeRoundingMs);
+          break;
+        case mixer_status_t::REASON_LOOP_STALLED:
+          break;  // a starved loop: documented, and safe the same way
+        default:
+          ADD_FAILURE() << "failsafe reason " << int{s.failsafe_reason} << " in cycle " << s.cycles;
+      }
+      return k;
+    }
+    ADD_FAILURE() << "no failsafe in " << cycles.size() << " recorded cycles";
+    return std::nullopt;
+  }
+
   // Every output so far: finite, in range when armed, the disarmed value otherwise.
   void expect_outputs_in_range() {
     for (const auto& m : bus_->pwm()) {
@@ -158,8 +230,7 @@ class MixerProcessTest : public ::testing::Test {
     // is here, so are they.
     ASSERT_TRUE(bus_->wait_until(
         [&](const auto&, const auto& s) {
-          return s.size() > statuses_before &&
-                 s.back().state == mixer_status_t::STATE_DISARMED;
+          return s.size() > statuses_before && s.back().state == mixer_status_t::STATE_DISARMED;
         },
         5s));
     EXPECT_FALSE(bus_->pwm().back().armed);

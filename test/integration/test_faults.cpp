@@ -112,11 +112,12 @@ TEST_F(Faults, MixerFrozenWhileThePilotFliesOn) {
 }
 
 // A publisher process frozen mid-flight and resumed: lcm-logplayer plays the
-// team quad flight; frozen for 300 ms, the mixer fails safe within its
-// timeout, and when the player resumes (still saying "armed") the motors stay
-// disarmed: no restart without a new arming transition.
+// team quad flight; frozen for 300 ms, the mixer fails safe in the first
+// cycle past its timeout (its own clock, a status every cycle), and when the
+// player resumes (still saying "armed") the motors stay disarmed: no restart
+// without a new arming transition.
 TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
-  start();
+  start({"status_rate_hz=400"});
   ChildProcess player({"lcm-logplayer", source_path("test/data/flights/team_quad.lcmlog")});
   ASSERT_TRUE(bus_->wait_until(
       [](const auto& pwm, const auto&) {
@@ -125,18 +126,23 @@ TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
         return armed > 800;  // two seconds into the armed flight
       },
       15s));
+  const std::size_t from = bus_->status().size();
   player.signal(SIGSTOP);
-  const Clock::time_point stopped = Clock::now();
-  const std::size_t before = bus_->pwm_count();
-  const auto first = first_disarmed_after(before, 2s);
-  ASSERT_TRUE(first.has_value());
-  const auto took = bus_->pwm_times()[*first] - stopped;
-  EXPECT_LE(took, 100ms + 2500us + kTransportSlack + 20ms);
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto&, const auto& status) {
+        return status.size() > from && status.back().state == mixer_status_t::STATE_FAILSAFE;
+      },
+      2s));
+  const std::vector<CycleRecord> cycles = cycles_since(from);
+  const auto failsafe = expect_failsafe_in_first_late_cycle(cycles);
+  ASSERT_TRUE(failsafe.has_value());
+  EXPECT_FALSE(cycles[*failsafe].pwm.armed);
+  const std::size_t first = bus_->pwm_before_status()[from + *failsafe] - 1;
   std::this_thread::sleep_for(300ms);
   player.signal(SIGCONT);
   ASSERT_TRUE(player.wait_for(30s).has_value());
   const auto pwm = bus_->pwm();
-  for (std::size_t i = *first; i < pwm.size(); ++i) ASSERT_FALSE(pwm[i].armed);
+  for (std::size_t i = first; i < pwm.size(); ++i) ASSERT_FALSE(pwm[i].armed);
   ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return !s.empty(); }, 2s));
   EXPECT_EQ(bus_->status().back().failsafe_events, 1);
   expect_outputs_in_range();

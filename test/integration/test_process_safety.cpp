@@ -1,13 +1,11 @@
 // `motormix run` as a process on a private bus: the publisher goes away and
-// comes back, garbage arrives, SIGTERM arrives mid-flight, and the loop keeps
-// its rate. Every wait is on messages, with a bounded timeout; every loop is
-// bounded in count.
+// comes back, garbage arrives, SIGTERM arrives mid-flight, and the loop never
+// runs fast. Every wait is on messages, with a bounded timeout; every loop is
+// bounded in count; no check depends on how fast the machine is.
 
 #include "integration/mixer_fixture.hpp"
 
-#include <algorithm>
 #include <csignal>
-#include <cstdlib>
 #include <random>
 #include <thread>
 
@@ -16,26 +14,36 @@ namespace {
 
 class ProcessSafety : public MixerProcessTest {};
 
-TEST_F(ProcessSafety, PublisherDropoutFailsSafeWithinTimeoutPlusOnePeriod) {
-  start();
+// The publisher stops: the first cycle past the timeout fails safe and
+// disarms (checked in the mixer's own clock, from a status every cycle), never
+// one before it, and a publisher that comes back still saying "armed" does
+// not restart the motors.
+TEST_F(ProcessSafety, PublisherDropoutFailsSafeInTheFirstCyclePastTheTimeout) {
+  start({"status_rate_hz=400"});  // the team quad loops at 400 Hz: a status every cycle
   const auto timeout =
       std::chrono::milliseconds(static_cast<int>(config_.inputs.setpoint_timeout_s * 1e3));
-  const auto period = std::chrono::microseconds(static_cast<int>(1e6 / config_.loop_rate_hz));
   for (int trial = 0; trial < 5; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     arm();
     const Clock::time_point stopped = pilot_->last_sent;
-    const std::size_t before = bus_->pwm_count();
-    const auto found = first_disarmed_after(before, 2s);
-    ASSERT_TRUE(found.has_value());
-    const std::size_t first = *found;
-    const auto pwm = bus_->pwm();
-    const auto times = bus_->pwm_times();
-    const auto took = times[first] - stopped;
-    EXPECT_LE(took, timeout + period + kTransportSlack)
-        << std::chrono::duration_cast<std::chrono::microseconds>(took).count() << " us";
-    EXPECT_GE(took, timeout - 5ms);  // and not before the timeout
-    for (int i = 0; i < 4; ++i) EXPECT_EQ(pwm[first].pwm[static_cast<std::size_t>(i)], 1000.0F);
+    const std::size_t from = bus_->status().size();
+    ASSERT_TRUE(bus_->wait_until(
+        [&](const auto&, const auto& status) {
+          return status.size() > from && status.back().state == mixer_status_t::STATE_FAILSAFE;
+        },
+        2s));
+    const std::vector<CycleRecord> cycles = cycles_since(from);
+    const auto failsafe = expect_failsafe_in_first_late_cycle(cycles);
+    ASSERT_TRUE(failsafe.has_value());
+    for (std::size_t k = *failsafe; k < cycles.size(); ++k) {
+      EXPECT_FALSE(cycles[k].pwm.armed);
+      for (float v : cycles[k].pwm.pwm) EXPECT_EQ(v, 1000.0F);
+    }
+    // Never before the timeout: the first disarmed output cannot arrive
+    // sooner than the timeout after the last input was sent (causality, not
+    // speed: a slow machine only makes it later).
+    const std::size_t first = bus_->pwm_before_status()[from + *failsafe] - 1;
+    EXPECT_GE(bus_->pwm_times()[first] - stopped, timeout);
 
     // The publisher comes back still saying "armed": no output until re-armed.
     ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return !m.armed; }));
@@ -43,11 +51,7 @@ TEST_F(ProcessSafety, PublisherDropoutFailsSafeWithinTimeoutPlusOnePeriod) {
       ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t&) { return true; }));
       ASSERT_FALSE(bus_->pwm().back().armed) << "motors restarted without a re-arm";
     }
-    ASSERT_TRUE(bus_->wait_until(
-        [](const auto&, const auto& status) {
-          return !status.empty() && status.back().state == mixer_status_t::STATE_FAILSAFE;
-        },
-        2s));
+    ASSERT_EQ(bus_->status().back().state, mixer_status_t::STATE_FAILSAFE);
   }
   EXPECT_GE(bus_->status().back().failsafe_events, 5);
   mixer_->signal(SIGTERM);
@@ -120,27 +124,44 @@ TEST_F(ProcessSafety, SigtermInFlightEndsWithADisarmedMessage) {
   for (float v : pwm.back().pwm) EXPECT_EQ(v, 1000.0F);
 }
 
+// hold_last: from the failsafe cycle on, the last outputs are held while the
+// failsafe is at most hold_last_ms old, and every cycle after that is
+// disarmed. Measured in the mixer's own clock: the setpoint's age grows by
+// exactly the time since the failsafe, as no input arrives.
 TEST_F(ProcessSafety, HoldLastKeepsOutputsForABoundedTimeThenDisarms) {
-  start({"inputs.failsafe=hold_last", "inputs.hold_last_ms=300"});
-  const auto timeout = std::chrono::milliseconds(100);
-  const auto hold = std::chrono::milliseconds(300);
-  const auto period = std::chrono::microseconds(static_cast<int>(1e6 / config_.loop_rate_hz));
+  start({"inputs.failsafe=hold_last", "inputs.hold_last_ms=300", "status_rate_hz=400"});
+  const double timeout_ms = config_.inputs.setpoint_timeout_s * 1e3;
+  const double hold_ms = 300.0;
   arm();
   const motor_pwm_t flying = bus_->pwm().back();
-  const Clock::time_point stopped = pilot_->last_sent;
-  const std::size_t before = bus_->pwm_count();
-  const auto found = first_disarmed_after(before, 3s);
-  ASSERT_TRUE(found.has_value());
-  const std::size_t first = *found;
-  const auto pwm = bus_->pwm();
-  const auto times = bus_->pwm_times();
-  for (std::size_t i = before; i < first; ++i) {
-    ASSERT_EQ(pwm[i].pwm, flying.pwm);  // held: the last outputs, unchanged
+  const std::size_t from = bus_->status().size();
+  // A status this old was published cycles after the disarming one.
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto&, const auto& status) {
+        return status.size() > from && status.back().input_age_ms[0] > timeout_ms + hold_ms + 20.0;
+      },
+      3s));
+  const std::vector<CycleRecord> cycles = cycles_since(from);
+  const auto failsafe = expect_failsafe_in_first_late_cycle(cycles);
+  ASSERT_TRUE(failsafe.has_value());
+  const double failed_at_ms = cycles[*failsafe].status.input_age_ms[0];
+  int held = 0;
+  int disarmed = 0;
+  for (std::size_t k = *failsafe; k < cycles.size(); ++k) {
+    const double since_ms = cycles[k].status.input_age_ms[0] - failed_at_ms;
+    SCOPED_TRACE("cycle " + std::to_string(cycles[k].status.cycles) + ", " +
+                 std::to_string(since_ms) + " ms into the failsafe");
+    if (since_ms <= hold_ms - kAgeRoundingMs) {
+      EXPECT_EQ(cycles[k].pwm.pwm, flying.pwm);  // held: the last outputs, unchanged
+      ++held;
+    } else if (since_ms > hold_ms + kAgeRoundingMs) {
+      EXPECT_FALSE(cycles[k].pwm.armed);
+      for (float v : cycles[k].pwm.pwm) EXPECT_EQ(v, 1000.0F);
+      ++disarmed;
+    }
   }
-  const auto took = times[first] - stopped;
-  EXPECT_GE(took, timeout + hold - 5ms);
-  EXPECT_LE(took, timeout + hold + period + kTransportSlack)
-      << std::chrono::duration_cast<std::chrono::microseconds>(took).count() << " us";
+  EXPECT_GT(held, 0);
+  EXPECT_GT(disarmed, 0);
   mixer_->signal(SIGTERM);
   EXPECT_EQ(mixer_->wait_for(10s), 0);
 }
@@ -156,39 +177,27 @@ TEST_F(ProcessSafety, RefusedRealtimeRequestsDoNotStopTheProcess) {
   EXPECT_EQ(mixer_->wait_for(10s), 0);
 }
 
-// How much further behind than an optimized build the loop may fall on a
-// loaded machine: 1, or MOTORMIX_LOOP_SLACK where every cycle is several
-// times slower (the sanitizer build sets 2: its mean period at 2000 Hz was
-// seen at 1.62x the nominal one while CI ran).
-double loop_slack() {
-  const char* env = std::getenv("MOTORMIX_LOOP_SLACK");
-  return env ? std::max(1.0, std::atof(env)) : 1.0;
-}
-
-// Generous bounds: tight numbers belong to the benchmarks.
-TEST_F(ProcessSafety, LoopKeepsItsRate) {
-  const double slack = loop_slack();
+// The loop never runs fast: over two seconds of outputs, the mean period
+// between their publication times (the mixer's clock) is at least the
+// configured one, less what a late first output can take off (bounded here
+// by a tenth). A loop that falls behind on a loaded machine is slower, not
+// wrong, and repeats no missed cycle; how close it keeps to its rate, and its
+// jitter, are measured in scripts/bench, not asserted here.
+TEST_F(ProcessSafety, LoopNeverRunsFast) {
   for (int rate : {400, 2000}) {
     SCOPED_TRACE(std::to_string(rate) + " Hz");
     start({"loop_rate_hz=" + std::to_string(rate)});
     const std::size_t from = bus_->pwm_count();
-    const auto t0 = Clock::now();
+    const auto count = static_cast<std::size_t>(rate * 2);
     ASSERT_TRUE(bus_->wait_until(
-        [&](const auto& pwm, const auto&) {
-          return pwm.size() >= from + static_cast<std::size_t>(rate * 2);
-        },
-        10s));
-    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    const double measured = static_cast<double>(rate * 2) / seconds;
-    // Generous: a loaded two-core machine delays wake-ups, and the loop does
-    // not run missed cycles back to back (they would only repeat stale
-    // inputs). It must never run fast, and never fall far behind.
-    EXPECT_LE(measured, 1.05 * rate);  // never fast, whatever the build
-    EXPECT_GE(measured, 0.6 * rate / slack);
+        [&](const auto& pwm, const auto&) { return pwm.size() >= from + count; }, 20s));
+    const auto pwm = bus_->pwm();
+    const double span_us = static_cast<double>(pwm[from + count - 1].utime - pwm[from].utime);
+    const double period_us = 1e6 / rate;
+    EXPECT_GE(span_us / static_cast<double>(count - 1), 0.9 * period_us);
     ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return s.size() >= 3; }, 5s));
     const auto status = bus_->status().back();
-    EXPECT_GE(status.period_us[1], 0.95 * 1e6 / rate);  // mean period
-    EXPECT_LE(status.period_us[1], 1.6 * slack * 1e6 / rate);
+    EXPECT_GT(status.period_us[1], 0.0F);  // the period and compute time are reported
     EXPECT_GT(status.compute_us[2], 0.0F);
     mixer_->signal(SIGTERM);
     EXPECT_EQ(mixer_->wait_for(10s), 0);
