@@ -165,6 +165,15 @@ class MixerProcessTest : public ::testing::Test {
     return cycles;
   }
 
+  // Waits (bounded) until a status after status `from` reports the failsafe.
+  bool wait_for_failsafe_status(std::size_t from) {
+    return bus_->wait_until(
+        [&](const auto&, const auto& status) {
+          return status.size() > from && status.back().state == mixer_status_t::STATE_FAILSAFE;
+        },
+        2s);
+  }
+
   // The failsafe checked in the mixer's own clock, from a record of every
   // cycle: each cycle before it flew on a setpoint and a pid younger than
   // their timeouts, and it is the first cycle in which one was older (or in

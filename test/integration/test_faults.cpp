@@ -128,11 +128,7 @@ TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
       15s));
   const std::size_t from = bus_->status().size();
   player.signal(SIGSTOP);
-  ASSERT_TRUE(bus_->wait_until(
-      [&](const auto&, const auto& status) {
-        return status.size() > from && status.back().state == mixer_status_t::STATE_FAILSAFE;
-      },
-      2s));
+  ASSERT_TRUE(wait_for_failsafe_status(from));
   const std::vector<CycleRecord> cycles = cycles_since(from);
   const auto failsafe = expect_failsafe_in_first_late_cycle(cycles);
   ASSERT_TRUE(failsafe.has_value());
