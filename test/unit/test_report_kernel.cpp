@@ -44,10 +44,18 @@ void check_clamp(Eigen::Index n) {
 
 // The kernels work in the packets Eigen uses for the same vectors: two
 // doubles at the SSE2 baseline, four with AVX where the motor count is a
-// multiple of four. The x86-64-v3 build of these tests (simd_kernel_tests)
-// checks it runs the wide paths at all.
+// multiple of four, eight with AVX-512 where it is a multiple of eight. The
+// x86-64-v3 and x86-64-v4 builds of these tests (simd_kernel_tests,
+// simd512_kernel_tests) check they run the wide paths at all.
 TEST(ReportKernel, PacketWidthFollowsEigen) {
-#if defined(MOTORMIX_EXPECT_AVX)
+#if defined(MOTORMIX_EXPECT_AVX512)
+  EXPECT_EQ(detail::kLanes<4>, 4);
+  EXPECT_EQ(detail::kLanes<8>, 8);
+  EXPECT_EQ(detail::kLanes<12>, 4);
+  EXPECT_EQ(detail::kLanes<16>, 8);
+  EXPECT_EQ(detail::kLanes<6>, 2);
+  EXPECT_EQ(detail::kLanes<14>, 2);
+#elif defined(MOTORMIX_EXPECT_AVX)
   EXPECT_EQ(detail::kLanes<4>, 4);
   EXPECT_EQ(detail::kLanes<8>, 4);
   EXPECT_EQ(detail::kLanes<16>, 4);
