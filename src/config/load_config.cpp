@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <sstream>
 #include <utility>
@@ -607,6 +608,24 @@ void read_channels(MapReader channels, Config& config) {
   c.motor_status = channels.text("motor_status", c.motor_status);
   c.battery = channels.text("battery", c.battery);
   channels.finish();
+  // One channel, one message type: a shared input channel would hand each
+  // message to two decoders (one of which rejects it, cycle after cycle),
+  // and an output on an input's channel would feed the mixer its own
+  // messages. Offline replay, reading each channel once, would behave
+  // differently again.
+  const std::pair<const char*, const std::string*> named[] = {
+      {"setpoint", &c.setpoint},         {"pid", &c.pid},
+      {"motor_pwm", &c.motor_pwm},       {"status", &c.status},
+      {"motor_status", &c.motor_status}, {"battery", &c.battery}};
+  for (std::size_t i = 0; i < std::size(named); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (*named[i].second == *named[j].second) {
+        fail(std::string("channels.") + named[i].first,
+             "'" + *named[i].second + "', the channel of channels." + named[j].first,
+             "a channel name no other input or output of this mixer uses");
+      }
+    }
+  }
 }
 
 Config read_document(const YAML::Node& document, LoadContext& context) {

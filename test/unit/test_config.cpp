@@ -113,6 +113,17 @@ TEST(Config, OverridesApplyBeforeValidation) {
   EXPECT_THAT(error_of(kMinimal, {"channels.nope=X"}), HasSubstr("channels.nope"));
 }
 
+TEST(Config, EveryChannelHasOneUse) {
+  EXPECT_THAT(
+      error_of(kMinimal, {"channels.pid=SETPOINT"}),
+      AllOf(HasSubstr("channels.pid"), HasSubstr("'SETPOINT'"), HasSubstr("channels.setpoint")));
+  EXPECT_THAT(error_of(kMinimal, {"channels.status=PID"}),
+              AllOf(HasSubstr("channels.status"), HasSubstr("channels.pid")));
+  EXPECT_THAT(error_of(kMinimal, {"channels.battery=MOTOR_PWM"}),
+              AllOf(HasSubstr("channels.battery"), HasSubstr("channels.motor_pwm")));
+  EXPECT_EQ(error_of(kMinimal, {"channels.pid=ATT", "channels.setpoint=SP"}), "(accepted)");
+}
+
 TEST(Config, StatusRateNotAboveLoopRate) {
   EXPECT_THAT(error_of(std::string(kMinimal) + "loop_rate_hz: 100\nstatus_rate_hz: 200\n"),
               HasSubstr("status_rate_hz"));
