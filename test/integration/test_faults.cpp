@@ -228,7 +228,9 @@ TEST_F(Faults, BurstAtFiftyTimesSpeedLosesNothing) {
 // and dropped, and a publisher whose clock jumps ahead is refused until its
 // clock is right again (and then the motors need a new arming transition).
 TEST_F(Faults, DuplicatesReorderingAndClockJumpsAreCountedAndFailSafe) {
-  start();
+  // 500 ms timeouts: a stall of a loaded machine cannot end the first part's
+  // flight, and the refused clock jump still fails safe well within the wait.
+  start({"inputs.setpoint_timeout_ms=500", "inputs.pid_timeout_ms=500"});
   arm();
   // Duplicates and reordering: each message twice, then an older one.
   setpoint_t sp{};
