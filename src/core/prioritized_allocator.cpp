@@ -164,14 +164,12 @@ class PrioritizedAllocator::Kernel {
           desaturate(u, effective, Axis::kThrust);
         }
         {
-          // desaturate() written out: the one step between the mix and the
-          // range check here, and where the compiler keeps desaturate_along
-          // out of line (hexa, octo) a call passed the motors through memory
-          // both ways (a fifth of the octo's time).
-          const InRangeGains& g = a_.gains_[index(Axis::kYaw)];
-          const Motors position = u.cwiseProduct(View(g.inverse.data(), n_));
-          step(u, effective, Axis::kYaw, (View(g.lowest.data(), n_) - position).maxCoeff(),
-               (View(g.highest.data(), n_) - position).minCoeff(), false);
+          // desaturate() inlined: the one step between the mix and the range
+          // check here, and where the compiler keeps desaturate_along out of
+          // line (hexa, octo) a call passed the motors through memory both
+          // ways (a fifth of the octo's time).
+          const Needs needs = needs_along(u, a_.gains_[index(Axis::kYaw)]);
+          step(u, effective, Axis::kYaw, needs.up, needs.down, false);
         }
         break;
     }
@@ -270,10 +268,17 @@ class PrioritizedAllocator::Kernel {
   }
   void desaturate_along(Motors& u, AxisVector& effective, Axis axis, const InRangeGains& g,
                         bool decrease_only) const {
+    const Needs needs = needs_along(u, g);
+    step(u, effective, axis, needs.up, needs.down, decrease_only);
+  }
+  struct Needs {
+    double up;    // max a_i
+    double down;  // min b_i
+  };
+  MOTORMIX_ALWAYS_INLINE Needs needs_along(const Motors& u, const InRangeGains& g) const {
     const Motors position = u.cwiseProduct(View(g.inverse.data(), n_));
-    const double need_up = (View(g.lowest.data(), n_) - position).maxCoeff();     // max a_i
-    const double need_down = (View(g.highest.data(), n_) - position).minCoeff();  // min b_i
-    step(u, effective, axis, need_up, need_down, decrease_only);
+    return {(View(g.lowest.data(), n_) - position).maxCoeff(),
+            (View(g.highest.data(), n_) - position).minCoeff()};
   }
   // The same for thrust when every motor has the same share of it (1 / c
   // in every entry of its gains): max a_i and min b_i are the lowest and
