@@ -38,6 +38,7 @@ constexpr double kAgeRoundingMs = 0.01;
 struct CycleRecord {
   mixer_status_t status;
   motor_pwm_t pwm;
+  std::size_t pwm_index;  // where those outputs stand in BusRecorder::pwm()
 };
 
 inline std::int64_t wall_us() {
@@ -160,7 +161,7 @@ class MixerProcessTest : public ::testing::Test {
         break;
       }
       if (pwm_before[k] == 0) continue;  // not a cycle's status: nothing before it
-      cycles.push_back({status[k], pwm[pwm_before[k] - 1]});
+      cycles.push_back({status[k], pwm[pwm_before[k] - 1], pwm_before[k] - 1});
     }
     return cycles;
   }

@@ -156,7 +156,7 @@ TEST_F(Faults, PublisherFrozenAndResumedFailsSafeAndStaysDisarmed) {
   const auto failsafe = expect_failsafe_in_first_late_cycle(cycles);
   ASSERT_TRUE(failsafe.has_value());
   EXPECT_FALSE(cycles[*failsafe].pwm.armed);
-  const std::size_t first = bus_->pwm_before_status()[from + *failsafe] - 1;
+  const std::size_t first = cycles[*failsafe].pwm_index;
   std::this_thread::sleep_for(300ms);
   player.signal(SIGCONT);
   ASSERT_TRUE(player.wait_for(30s).has_value());

@@ -38,7 +38,7 @@ TEST_F(ProcessSafety, PublisherDropoutFailsSafeInTheFirstCyclePastTheTimeout) {
     // Never before the timeout: the first disarmed output cannot arrive
     // sooner than the timeout after the last input was sent (causality, not
     // speed: a slow machine only makes it later).
-    const std::size_t first = bus_->pwm_before_status()[from + *failsafe] - 1;
+    const std::size_t first = cycles[*failsafe].pwm_index;
     EXPECT_GE(bus_->pwm_times()[first] - stopped, timeout);
 
     // The publisher comes back still saying "armed": no output until re-armed.
