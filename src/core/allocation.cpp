@@ -103,10 +103,7 @@ AllocationResult MatrixAllocator::finish(const AxisVector& target, MotorVector& 
   return detail::with_motor_count(n, [&](auto size) {
     constexpr int N = decltype(size)::value;
     detail::MotorsView<N> u(commands.data(), n);
-    // NaN cannot come from finite inputs; if it ever did, the safe end.
-    for (Eigen::Index i = 0; i < detail::count<N>(n); ++i) {
-      u[i] = std::isnan(u[i]) ? range_.lower : std::clamp(u[i], range_.lower, range_.upper);
-    }
+    detail::clamp_into_range<N>(u, cycle_constants_);
     return detail::describe_fixed<N>(effectiveness_, target, commands.data(), n, cycle_constants_);
   });
 }

@@ -136,9 +136,10 @@ MOTORMIX_ALWAYS_INLINE AxisVector on_controlled_axes(const AxisVector& left,
 // u into the command range, a NaN (which finite inputs cannot produce) to
 // the lower end, the safe one. maxpd(u, lower) gives its second operand
 // unless u is greater, so a NaN (and a -0 at a lower limit of 0) becomes
-// `lower`; the scalar loop says the same.
-template <int N>
-MOTORMIX_ALWAYS_INLINE void clamp_into_range(LocalMotors<N>& u, const CycleConstants& limits) {
+// `lower`; the scalar loop says the same. `Motors`: LocalMotors<N>, or a
+// MotorsView<N> of commands already stored.
+template <int N, typename Motors>
+MOTORMIX_ALWAYS_INLINE void clamp_into_range(Motors& u, const CycleConstants& limits) {
   constexpr int kWidth = kLanes<N>;
   if constexpr (kWidth > 1) {
     using P = Packet<kWidth>;
