@@ -38,12 +38,6 @@ ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, Comman
   return k;
 }
 
-MixingBasis::MixingBasis(const MixingMatrix& m)
-    : mixing(m), effectiveness(effectiveness_of(m)), controlled(controlled_axes(m)) {}
-
-MixingBasis::MixingBasis(const MixingMatrix& m, const EffectivenessMatrix& e, AxisMask c)
-    : mixing(m), effectiveness(e), controlled(c) {}
-
 CycleConstants::CycleConstants(CommandRange range, AxisMask controlled)
     : lower{range.lower, range.lower},
       upper{range.upper, range.upper},
