@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -59,6 +60,10 @@ class Pilot {
   bool good() { return lcm_.good(); }
 
   void send(bool armed, double throttle, double roll = 0.0) {
+    // Taken before the pair is published: no receiver can hold either message
+    // earlier. (A time taken after publishing is late by however long this
+    // thread was preempted in between.)
+    const Clock::time_point started = Clock::now();
     setpoint_t sp{};
     sp.utime = wall_us();
     sp.throttle = static_cast<float>(throttle);
@@ -69,7 +74,15 @@ class Pilot {
     pid.roll = static_cast<float>(roll);
     lcm_.publish(c_.channels.pid, &pid);
     last_utime = sp.utime;
-    last_sent = Clock::now();
+    sent_[next_sent_++ % sent_.size()] = {sp.utime, started};
+  }
+  // When the pair stamped `utime` began to be sent, if it is among the
+  // last sends remembered.
+  std::optional<Clock::time_point> send_started(std::int64_t utime) const {
+    for (const auto& s : sent_) {
+      if (s.utime == utime) return s.started;
+    }
+    return std::nullopt;
   }
   void raw(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
     lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
@@ -80,10 +93,15 @@ class Pilot {
   }
 
   std::int64_t last_utime = 0;
-  Clock::time_point last_sent;
 
  private:
+  struct Sent {
+    std::int64_t utime = 0;
+    Clock::time_point started;
+  };
   const config::Config& c_;
+  std::array<Sent, 64> sent_{};
+  std::size_t next_sent_ = 0;
   lcm::LCM lcm_;
 };
 

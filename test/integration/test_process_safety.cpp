@@ -5,7 +5,9 @@
 
 #include "integration/mixer_fixture.hpp"
 
+#include <algorithm>
 #include <csignal>
+#include <iostream>
 #include <random>
 #include <thread>
 
@@ -25,7 +27,6 @@ TEST_F(ProcessSafety, PublisherDropoutFailsSafeInTheFirstCyclePastTheTimeout) {
   for (int trial = 0; trial < 5; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     arm();
-    const Clock::time_point stopped = pilot_->last_sent;
     const std::size_t from = bus_->status().size();
     ASSERT_TRUE(wait_for_failsafe_status(from));
     const std::vector<CycleRecord> cycles = cycles_since(from);
@@ -36,10 +37,24 @@ TEST_F(ProcessSafety, PublisherDropoutFailsSafeInTheFirstCyclePastTheTimeout) {
       for (float v : cycles[k].pwm.pwm) EXPECT_EQ(v, 1000.0F);
     }
     // Never before the timeout: the first disarmed output cannot arrive
-    // sooner than the timeout after the last input was sent (causality, not
-    // speed: a slow machine only makes it later).
+    // sooner than the timeout after the older of the inputs the mixer held
+    // began to be sent (causality, not speed: a slow machine only makes it
+    // later). Usually both are the last pair sent; a pid lost on the bus
+    // leaves the mixer holding an older one, which goes stale sooner.
+    const motor_pwm_t& held = cycles[*failsafe].pwm;
+    const auto setpoint_sent = pilot_->send_started(held.setpoint_utime);
+    const auto pid_sent = pilot_->send_started(held.pid_utime);
+    ASSERT_TRUE(setpoint_sent && pid_sent) << "the failsafe names inputs this test did not send";
+    if (held.pid_utime != pilot_->last_utime || held.setpoint_utime != pilot_->last_utime) {
+      std::cerr << "note: the mixer did not hold the last pair sent (setpoint "
+                << held.setpoint_utime << ", pid " << held.pid_utime << ", last "
+                << pilot_->last_utime << ")\n";
+    }
     const std::size_t first = cycles[*failsafe].pwm_index;
-    EXPECT_GE(bus_->pwm_times()[first] - stopped, timeout);
+    const auto after = bus_->pwm_times()[first] - std::min(*setpoint_sent, *pid_sent);
+    EXPECT_GE(after, timeout) << "first disarmed output "
+                              << std::chrono::duration<double, std::milli>(after).count()
+                              << " ms after the held inputs were sent";
 
     // The publisher comes back still saying "armed": no output until re-armed.
     ASSERT_TRUE(fly_until(true, 0.5, [](const motor_pwm_t& m) { return !m.armed; }));
