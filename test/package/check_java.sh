@@ -1,19 +1,35 @@
 #!/usr/bin/env bash
 # Checks the jar of the message types: one class per .lcm type, each an LCM
-# encodable with a fingerprint, loadable next to LCM's own lcm.jar (what
-# lcm-spy needs to decode the motormix channels).
-#   check_java.sh JAR LCM_JAR TYPE...
+# encodable with a fingerprint, loadable next to LCM's own lcm.jar; then the
+# way lcm-spy uses it: a flight replayed by motormix (C++ encoder) is read back
+# in Java and every event on the motormix channels decodes with its class.
+#   check_java.sh JAR LCM_JAR MOTORMIX CONFIG FLIGHT WORKDIR PWM_MIN PWM_MAX \
+#                 CHANNEL=TYPE... -- TYPE...
 set -euo pipefail
-jar_file="$1" lcm_jar="$2"
-shift 2
+jar_file="$1" lcm_jar="$2" motormix="$3" config="$4" flight="$5" work="$6" pwm_min="$7" pwm_max="$8"
+shift 8
+channels=()
+while [ $# -gt 0 ] && [ "$1" != "--" ]; do channels+=("$1"); shift; done
+[ $# -gt 0 ] && shift
 fail() { echo "check_java: FAIL: $*" >&2; exit 1; }
+# JAVA, JAVAC: the JDK the jar was built with (ctest passes them).
+java="${JAVA:-java}" javac="${JAVAC:-javac}"
+javap="$(dirname "$(command -v "$javac")")/javap"
 [ -f "$jar_file" ] || fail "no jar at $jar_file"
-listing=$(unzip -Z1 "$jar_file" 2>/dev/null || jar tf "$jar_file")
+listing=$(unzip -Z1 "$jar_file" 2>/dev/null || "$(dirname "$javap")/jar" tf "$jar_file")
 for type in "$@"; do
   grep -qx "motormix/$type.class" <<<"$listing" || fail "motormix/$type.class is not in the jar"
-  sig=$(javap -cp "$jar_file:$lcm_jar" "motormix.$type") || fail "javap cannot load motormix.$type"
+  sig=$("$javap" -cp "$jar_file:$lcm_jar" "motormix.$type") || fail "javap cannot load motormix.$type"
   grep -q "implements lcm.lcm.LCMEncodable" <<<"$sig" || fail "motormix.$type is not an LCMEncodable"
   grep -q "LCM_FINGERPRINT" <<<"$sig" || fail "motormix.$type has no LCM_FINGERPRINT"
   echo "motormix.$type ok"
 done
+
+rm -rf "$work" && mkdir -p "$work"
+"$motormix" replay --config "$config" "$flight" "$work/replay.lcmlog" > "$work/replay.txt" ||
+  fail "motormix replay failed (see $work/replay.txt)"
+"$javac" -cp "$jar_file:$lcm_jar" -d "$work" "$(dirname "$0")/java/DecodeLog.java" ||
+  fail "DecodeLog.java does not compile against the jar"
+"$java" -cp "$jar_file:$lcm_jar:$work" DecodeLog "$work/replay.lcmlog" "$pwm_min" "$pwm_max" \
+  "${channels[@]}" || fail "the replayed log does not decode with the jar's classes"
 echo "check_java: all checks passed"
