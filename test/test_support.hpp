@@ -4,6 +4,7 @@
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
 
+#include <cstdint>
 #include <string>
 
 namespace motormix::test {
@@ -14,6 +15,11 @@ inline constexpr double kExact = 1e-12;
 inline constexpr double kFloatPwmUs = 1e-3;
 // Float32 normalized commands against double references.
 inline constexpr double kFloatCommand = 1e-6;
+
+// The control loop's clocks in its unit tests, in microseconds: one
+// millisecond, and this host's wall clock, ahead of every utime used.
+inline constexpr std::int64_t kMs = 1000;
+inline constexpr std::int64_t kWall = 1'800'000'000'000'000;
 
 inline std::string source_path(const std::string& relative) {
   return std::string(MOTORMIX_SOURCE_DIR) + "/" + relative;

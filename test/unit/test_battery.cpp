@@ -1,6 +1,8 @@
 // Battery-voltage compensation: the gain law, the filter, and every way a
 // voltage can be unusable.
 
+#include "test_support.hpp"
+
 #include <motormix/battery_compensation.hpp>
 
 #include <gtest/gtest.h>
@@ -10,10 +12,10 @@
 namespace motormix::test {
 namespace {
 
-constexpr double kGain = 1e-12;
+// The gain is the power law itself: the same arithmetic, to the last bits.
+constexpr double kGainExact = kExact;
 // A first-order step response sampled at 1 kHz against its exponential.
 constexpr double kFilterStep = 2e-3;
-constexpr std::int64_t kMs = 1000;
 
 BatterySettings settings() {
   BatterySettings s;
@@ -29,13 +31,13 @@ BatterySettings settings() {
 
 TEST(BatteryGain, PowerLawKeptBetweenOneAndMaxGain) {
   const BatterySettings s = settings();
-  EXPECT_NEAR(battery_gain(s, 16.8), 1.0, kGain);
-  EXPECT_NEAR(battery_gain(s, 14.0), 16.8 / 14.0, kGain);
-  EXPECT_NEAR(battery_gain(s, 17.5), 1.0, kGain) << "a pack above nominal is not turned down";
-  EXPECT_NEAR(battery_gain(s, 9.0), 1.5, kGain) << "capped at max_gain";
+  EXPECT_NEAR(battery_gain(s, 16.8), 1.0, kGainExact);
+  EXPECT_NEAR(battery_gain(s, 14.0), 16.8 / 14.0, kGainExact);
+  EXPECT_NEAR(battery_gain(s, 17.5), 1.0, kGainExact) << "a pack above nominal is not turned down";
+  EXPECT_NEAR(battery_gain(s, 9.0), 1.5, kGainExact) << "capped at max_gain";
   BatterySettings squared = s;
   squared.exponent = 2.0;
-  EXPECT_NEAR(battery_gain(squared, 14.0), std::pow(16.8 / 14.0, 2.0), kGain);
+  EXPECT_NEAR(battery_gain(squared, 14.0), std::pow(16.8 / 14.0, 2.0), kGainExact);
   EXPECT_EQ(battery_gain(s, std::nan("")), 1.0);
   EXPECT_EQ(battery_gain(s, 0.0), 1.0);
   EXPECT_EQ(battery_gain(s, -3.0), 1.0);
@@ -52,7 +54,7 @@ TEST(BatteryFilter, FirstOrderStepResponse) {
   const double expected = 14.0 + 2.0 * std::exp(-static_cast<double>(steps) / 1000.0 / tau_s);
   EXPECT_NEAR(b.filtered_v(), expected, kFilterStep);
   EXPECT_EQ(b.state(steps * kMs), BatteryState::kOk);
-  EXPECT_NEAR(b.gain(steps * kMs), 16.8 / b.filtered_v(), kGain);
+  EXPECT_NEAR(b.gain(steps * kMs), 16.8 / b.filtered_v(), kGainExact);
 }
 
 TEST(BatteryFilter, StaleMissingAndImplausibleMeanNoCompensation) {

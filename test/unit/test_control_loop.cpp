@@ -18,10 +18,6 @@ using node::PidSample;
 using node::Rejection;
 using node::SetpointSample;
 
-constexpr std::int64_t kMs = 1000;
-// This host's wall clock in the tests: ahead of every utime used.
-constexpr std::int64_t kWall = 1'800'000'000'000'000;
-
 class ControlLoopTest : public ::testing::Test {
  protected:
   // These tests arm at half throttle; the arming check has a test of its own.

@@ -22,9 +22,8 @@ using node::PidSample;
 using node::Rejection;
 using node::SetpointSample;
 
-constexpr std::int64_t kMs = 1000;
-constexpr std::int64_t kWall = 1'800'000'000'000'000;
-constexpr double kGain = 1e-9;
+// The compensated gain and command after the loop's float and double steps.
+constexpr double kCompensatedGain = 1e-9;
 
 class FailureInputsTest : public ::testing::Test {
  protected:
@@ -111,8 +110,8 @@ TEST_F(FailureInputsTest, BatteryScalesTheThrustDemandWhileFresh) {
   inputs(2 * kMs, true);
   const node::CycleResult& r = loop_->cycle(2 * kMs);
   EXPECT_EQ(r.battery, BatteryState::kOk);
-  EXPECT_NEAR(r.thrust_gain, 16.8 / 14.0, kGain);
-  EXPECT_NEAR(r.mix.command[0], healthy * 16.8 / 14.0, kGain);
+  EXPECT_NEAR(r.thrust_gain, 16.8 / 14.0, kCompensatedGain);
+  EXPECT_NEAR(r.mix.command[0], healthy * 16.8 / 14.0, kCompensatedGain);
   // Stale: back to no compensation, and the status says why (the loop keeps
   // cycling with fresh setpoints and pid meanwhile).
   for (std::int64_t t = 50; t < 600; t += 50) {
@@ -123,7 +122,7 @@ TEST_F(FailureInputsTest, BatteryScalesTheThrustDemandWhileFresh) {
   const node::CycleResult& stale = loop_->cycle(600 * kMs);
   EXPECT_EQ(stale.battery, BatteryState::kStale);
   EXPECT_EQ(stale.thrust_gain, 1.0);
-  EXPECT_NEAR(stale.mix.command[0], healthy, kGain);
+  EXPECT_NEAR(stale.mix.command[0], healthy, kCompensatedGain);
   // Implausible and non-finite readings are counted and not used.
   EXPECT_EQ(loop_->on_battery(BatterySample{utime_ += 1000, 2.0}, 601 * kMs, kWall),
             Rejection::kOutOfRange);
