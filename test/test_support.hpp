@@ -1,6 +1,8 @@
 #pragma once
 // Shared helpers for the tests: named tolerances and config loading.
 
+#include "test_paths.hpp"
+
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
 
@@ -22,7 +24,7 @@ inline constexpr std::int64_t kMs = 1000;
 inline constexpr std::int64_t kWall = 1'800'000'000'000'000;
 
 inline std::string source_path(const std::string& relative) {
-  return std::string(MOTORMIX_SOURCE_DIR) + "/" + relative;
+  return std::string(source_dir()) + "/" + relative;
 }
 
 inline config::Config team_quad_config() {

@@ -121,7 +121,7 @@ TEST_F(FailuresLive, BatteryCompensatesAndStopsWhenTheVoltageGoesStale) {
 
 TEST_F(FailuresLive, MonitorShowsARunningMixerOnce) {
   start({"mixer.failed_motors=[m2]"}, "config/hexa_x.yaml");
-  const auto [rc, out] = capture(std::string(MOTORMIX_BINARY) + " monitor --once --config " +
+  const auto [rc, out] = capture(std::string(motormix_binary()) + " monitor --once --config " +
                                  source_path("config/hexa_x.yaml") + " 2>&1");
   EXPECT_EQ(rc, 0) << out;
   for (const char* needle : {"state     DISARMED", "m2 failed: reallocated", "  m6 ", "cycles"}) {
@@ -129,7 +129,7 @@ TEST_F(FailuresLive, MonitorShowsARunningMixerOnce) {
   }
   EXPECT_EQ(out.find("\x1b"), std::string::npos) << "--once prints no escape codes";
   // The live view redraws with ANSI and stops by itself.
-  const auto [live_rc, live] = capture(std::string(MOTORMIX_BINARY) + " monitor --duration 1 2>&1");
+  const auto [live_rc, live] = capture(std::string(motormix_binary()) + " monitor --duration 1 2>&1");
   EXPECT_EQ(live_rc, 0);
   EXPECT_NE(live.find("\x1b[H\x1b[2J"), std::string::npos);
   stop_and_expect_disarmed_exit();
@@ -138,7 +138,7 @@ TEST_F(FailuresLive, MonitorShowsARunningMixerOnce) {
 TEST(MonitorAlone, NoMixerOnTheBusExitsNonZeroWithinSeconds) {
   ASSERT_TRUE(in_private_bus()) << "run through scripts/private-bus";
   const auto started = Clock::now();
-  const auto [rc, out] = capture(std::string(MOTORMIX_BINARY) + " monitor --once 2>&1");
+  const auto [rc, out] = capture(std::string(motormix_binary()) + " monitor --once 2>&1");
   const auto took = Clock::now() - started;
   EXPECT_EQ(rc, 1);
   EXPECT_LT(took, 5s);
@@ -151,7 +151,7 @@ TEST(MonitorAlone, NoMixerOnTheBusExitsNonZeroWithinSeconds) {
 TEST(BatteryReplay, SaggingPackIsCompensatedAndFailuresOfTheMonitorAreNot) {
   const std::string in = source_path("test/data/flights/battery_sag.lcmlog");
   const std::string out = ::testing::TempDir() + "battery_sag_replay.lcmlog";
-  const std::string cmd = std::string(MOTORMIX_BINARY) + " replay --config " +
+  const std::string cmd = std::string(motormix_binary()) + " replay --config " +
                           source_path("config/quad_x.yaml") +
                           " --set battery.nominal_v=16.8 --set status_rate_hz=400 --set "
                           "mixer.strategy=clip " +

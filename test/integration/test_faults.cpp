@@ -338,7 +338,7 @@ TEST_F(Faults, FloodsOfUndecodableAndOversizedMessagesAreCounted) {
 TEST_F(Faults, NoMulticastRouteIsAClearErrorNotABusyLoop) {
   ASSERT_EQ(std::system("ip route del 224.0.0.0/4 dev lo"), 0);
   const auto t0 = Clock::now();
-  const std::string cmd = std::string(MOTORMIX_BINARY) + " run --config " +
+  const std::string cmd = std::string(motormix_binary()) + " run --config " +
                           source_path("config/team_quad.yaml") + " 2>&1";
   FILE* pipe = popen(cmd.c_str(), "r");
   ASSERT_NE(pipe, nullptr);

@@ -141,7 +141,7 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   std::vector<std::unique_ptr<ChildProcess>> mixers;
   for (int v = 0; v < kVehicles; ++v) {
     mixers.push_back(std::make_unique<ChildProcess>(std::vector<std::string>{
-        MOTORMIX_BINARY, "run", "--config", source_path("config/team_quad.yaml"), "--set",
+        motormix_binary(), "run", "--config", source_path("config/team_quad.yaml"), "--set",
         "channels.setpoint=" + channel("SETPOINT", v), "--set", "channels.pid=" + channel("PID", v),
         "--set", "channels.motor_pwm=" + channel("PWM", v), "--set",
         "channels.status=" + channel("STATUS", v),

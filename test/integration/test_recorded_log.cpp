@@ -64,7 +64,7 @@ TEST(RecordedLog, ReplaysLikeTheOriginal) {
   ASSERT_TRUE(logger.wait_for(10s).has_value());
 
   const std::string out = dir + "/recorded_dropout.out.lcmlog";
-  const std::string cmd = std::string(MOTORMIX_BINARY) + " replay --every-input --config " +
+  const std::string cmd = std::string(motormix_binary()) + " replay --every-input --config " +
                           source_path("config/quad_x.yaml") + " --set inputs.yaw_source=setpoint " +
                           recorded + " " + out + " > /dev/null 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;

@@ -106,7 +106,7 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
   const auto armed_by_setpoint = setpoint_armed(flight, config.channels.setpoint);
 
   BusRecorder bus(config.channels.motor_pwm, config.channels.status);
-  std::vector<std::string> argv = {MOTORMIX_BINARY, "run", "--config", config_path};
+  std::vector<std::string> argv = {motormix_binary(), "run", "--config", config_path};
   for (const auto& o : g_args.overrides) {
     argv.push_back("--set");
     argv.push_back(o);

@@ -60,7 +60,7 @@ bool in_private_bus() {
 // The offline replay: same mixer and loop logic, log time as the clock.
 std::vector<motor_pwm_t> replay_outputs(const std::string& log, const std::string& out,
                                         const std::string& channel) {
-  const std::string cmd = std::string(MOTORMIX_BINARY) + " replay --config " +
+  const std::string cmd = std::string(motormix_binary()) + " replay --config " +
                           source_path("config/team_quad.yaml") + " " + log + " " + out +
                           " > /dev/null 2>&1";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
@@ -92,7 +92,7 @@ TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
 
   // Staleness is exercised elsewhere; here generous timeouts keep a loaded CI
   // machine's scheduling hiccups from turning a correct run into a failsafe.
-  ChildProcess mixer({MOTORMIX_BINARY, "run", "--config", source_path("config/team_quad.yaml"),
+  ChildProcess mixer({motormix_binary(), "run", "--config", source_path("config/team_quad.yaml"),
                       "--set", "inputs.setpoint_timeout_ms=2000", "--set",
                       "inputs.pid_timeout_ms=2000"});
   ASSERT_TRUE(mixer.started());

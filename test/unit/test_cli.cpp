@@ -23,7 +23,7 @@ struct Result {
 };
 
 Result run(const std::string& args) {
-  const std::string cmd = std::string(MOTORMIX_BINARY) + " " + args + " 2>/dev/null";
+  const std::string cmd = std::string(motormix_binary()) + " " + args + " 2>/dev/null";
   FILE* pipe = popen(cmd.c_str(), "r");
   Result r;
   if (!pipe) return r;
