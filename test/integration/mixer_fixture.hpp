@@ -116,7 +116,8 @@ class MixerProcessTest : public ::testing::Test {
     config_ = config::load_config_file(source_path(config_file), overrides);
     bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
     pilot_ = std::make_unique<Pilot>(config_);
-    std::vector<std::string> argv = {motormix_binary(), "run", "--config", source_path(config_file)};
+    std::vector<std::string> argv = {motormix_binary(), "run", "--config",
+                                     source_path(config_file)};
     for (const auto& o : overrides) {
       argv.push_back("--set");
       argv.push_back(o);

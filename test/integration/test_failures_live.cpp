@@ -129,7 +129,8 @@ TEST_F(FailuresLive, MonitorShowsARunningMixerOnce) {
   }
   EXPECT_EQ(out.find("\x1b"), std::string::npos) << "--once prints no escape codes";
   // The live view redraws with ANSI and stops by itself.
-  const auto [live_rc, live] = capture(std::string(motormix_binary()) + " monitor --duration 1 2>&1");
+  const auto [live_rc, live] =
+      capture(std::string(motormix_binary()) + " monitor --duration 1 2>&1");
   EXPECT_EQ(live_rc, 0);
   EXPECT_NE(live.find("\x1b[H\x1b[2J"), std::string::npos);
   stop_and_expect_disarmed_exit();
