@@ -73,8 +73,11 @@ class Pilot {
     pid.utime = sp.utime;
     pid.roll = static_cast<float>(roll);
     lcm_.publish(c_.channels.pid, &pid);
-    last_utime = sp.utime;
     sent_[next_sent_++ % sent_.size()] = {sp.utime, started};
+  }
+  // The utime of the last pair sent (0 before the first).
+  std::int64_t last_utime() const {
+    return sent_[(next_sent_ + sent_.size() - 1) % sent_.size()].utime;
   }
   // When the pair stamped `utime` began to be sent, if it is among the
   // last sends remembered.
@@ -91,8 +94,6 @@ class Pilot {
   void message(const std::string& channel, const Message& m) {
     lcm_.publish(channel, &m);
   }
-
-  std::int64_t last_utime = 0;
 
  private:
   struct Sent {
@@ -133,7 +134,7 @@ class MixerProcessTest : public ::testing::Test {
                  int max_sends = 400) {
     for (int k = 0; k < max_sends; ++k) {
       pilot_->send(armed, throttle);
-      const std::int64_t sent = pilot_->last_utime;
+      const std::int64_t sent = pilot_->last_utime();
       if (bus_->wait_until(
               [&](const auto& pwm, const auto&) {
                 return !pwm.empty() && pwm.back().setpoint_utime == sent && want(pwm.back());

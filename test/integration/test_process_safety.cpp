@@ -45,10 +45,10 @@ TEST_F(ProcessSafety, PublisherDropoutFailsSafeInTheFirstCyclePastTheTimeout) {
     const auto setpoint_sent = pilot_->send_started(held.setpoint_utime);
     const auto pid_sent = pilot_->send_started(held.pid_utime);
     ASSERT_TRUE(setpoint_sent && pid_sent) << "the failsafe names inputs this test did not send";
-    if (held.pid_utime != pilot_->last_utime || held.setpoint_utime != pilot_->last_utime) {
+    if (held.pid_utime != pilot_->last_utime() || held.setpoint_utime != pilot_->last_utime()) {
       std::cerr << "note: the mixer did not hold the last pair sent (setpoint "
                 << held.setpoint_utime << ", pid " << held.pid_utime << ", last "
-                << pilot_->last_utime << ")\n";
+                << pilot_->last_utime() << ")\n";
     }
     const std::size_t first = cycles[*failsafe].pwm_index;
     const auto after = bus_->pwm_times()[first] - std::min(*setpoint_sent, *pid_sent);
