@@ -3,6 +3,7 @@
 // 0 ok, 1 runtime error, 2 usage or configuration error, 3 (replay) damaged
 // input log.
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,6 +16,8 @@ inline constexpr int kExitUsage = 2;
 // replay: the output was written from every valid event, but the input log
 // had damaged stretches that were skipped (listed on stderr).
 inline constexpr int kExitDamagedLog = 3;
+// sim: the run ended in a crash (the JSON result says how and when).
+inline constexpr int kExitCrashed = 4;
 
 struct CommonOptions {
   std::string config_path;
@@ -70,5 +73,22 @@ struct ReplayCommand {
   double max_gap_s = 10.0;
 };
 int replay(const ReplayCommand& cmd);
+
+struct SimCommand {
+  std::string config_path;  // one of config_path and preset
+  std::string preset;
+  std::vector<std::string> overrides;
+  std::string scenario = "hover";
+  std::vector<std::string> fail;  // MOTOR@SECONDS
+  bool undetected = false;
+  std::uint64_t seed = 1;
+  bool json = false;
+  std::string log_path;
+  bool lcm = false;
+  std::string lcm_url;
+  bool controller = true;
+  double duration_s = 0.0;
+};
+int sim(const SimCommand& cmd);
 
 }  // namespace motormix::app

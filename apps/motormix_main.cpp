@@ -108,8 +108,40 @@ int main(int argc, char** argv) {
                    "stop the live view by itself after this many seconds (default: until Ctrl-C)")
       ->check(CLI::Range(0.0, 1e6));
 
+  SimCommand sim_cmd;
+  CLI::App* sim_app = app.add_subcommand(
+      "sim", "fly the configuration in closed loop: lockstep (default) or live beside motormix run");
+  auto* sim_config = sim_app->add_option("--config", sim_cmd.config_path, "YAML configuration file")
+                         ->check(CLI::ExistingFile);
+  auto* sim_preset = sim_app->add_option("--preset", sim_cmd.preset, "a preset vehicle");
+  sim_config->excludes(sim_preset);
+  sim_app->add_option("--set", sim_cmd.overrides, "override a config value: key.path=value");
+  sim_app->add_option("--scenario", sim_cmd.scenario,
+                      "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
+                      "drive) or a YAML file (default hover)");
+  sim_app->add_option("--fail", sim_cmd.fail,
+                      "stop a motor: MOTOR@SECONDS, motor numbered as motormix matrix prints it "
+                      "or named (repeatable)");
+  sim_app->add_flag("--undetected", sim_cmd.undetected,
+                    "never report stopped motors on motor_status (a silent failure)");
+  sim_app->add_option("--seed", sim_cmd.seed, "seed of the sensor noise (default 1)");
+  sim_app->add_flag("--json", sim_cmd.json, "print only the JSON result");
+  sim_app->add_option("--log", sim_cmd.log_path, "write the run as an LCM event log (lockstep)");
+  sim_app->add_flag("--lcm", sim_cmd.lcm,
+                    "run in real time on the bus against a separate motormix run");
+  sim_app->add_option("--lcm-url", sim_cmd.lcm_url,
+                      "LCM URL with --lcm (default: $LCM_DEFAULT_URL, then LCM's default)");
+  sim_app->add_flag("!--no-controller", sim_cmd.controller,
+                    "with --lcm: publish no setpoint or pid (your controller flies from "
+                    "VEHICLE_STATE)");
+  sim_app->add_option("--duration", sim_cmd.duration_s, "seconds to run instead of the scenario's")
+      ->check(CLI::Range(0.01, 86400.0));
+
   try {
     app.parse(argc, argv);
+    if (sim_app->parsed() && sim_cmd.config_path.empty() == sim_cmd.preset.empty()) {
+      throw CLI::RequiredError("exactly one of --config and --preset");
+    }
     if (matrix_app->parsed() && matrix_cmd.config_path.empty() == matrix_cmd.preset.empty()) {
       throw CLI::RequiredError("exactly one of --config and --preset");
     }
@@ -128,5 +160,6 @@ int main(int argc, char** argv) {
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);
   if (monitor_app->parsed()) return monitor(monitor_cmd);
+  if (sim_app->parsed()) return sim(sim_cmd);
   return kExitUsage;
 }

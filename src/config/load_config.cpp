@@ -1,6 +1,7 @@
 #include <motormix/config/load_config.hpp>
 
 #include "config/paparazzi_import.hpp"
+#include "config/vehicle_physics_reader.hpp"
 #include "config/yaml_reader.hpp"
 
 #include <motormix/presets.hpp>
@@ -645,6 +646,7 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
   config.loop_rate_hz = root.number("loop_rate_hz", 400.0, 50.0, 10000.0);
   config.status_rate_hz = root.number("status_rate_hz", 10.0, 0.1, 1000.0);
   if (root.has("battery")) read_battery(root.map("battery"), config);
+  read_vehicle_physics(root.map("vehicle"), config);
   if (config.status_rate_hz > config.loop_rate_hz) {
     std::ostringstream found;
     found << config.status_rate_hz << " with loop_rate_hz " << config.loop_rate_hz;

@@ -4,6 +4,7 @@
 // at start-up by load_config(); nothing downstream re-validates it.
 
 #include <motormix/battery_compensation.hpp>
+#include <motormix/config/vehicle_physics.hpp>
 #include <motormix/geometry.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
@@ -97,6 +98,7 @@ struct Config {
   double status_rate_hz = 10.0;
   PublishMode publish = PublishMode::kTimer;
   Realtime realtime;
+  VehiclePhysics physics;  // the `vehicle:` section, for motormix sim only
   std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }

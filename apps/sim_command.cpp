@@ -1,0 +1,171 @@
+// `motormix sim`: wiring of the simulator (src/sim) to the command line.
+
+#include "commands.hpp"
+
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/load_config.hpp>
+#include "sim/bus/live_sim.hpp"
+#include "sim/bus/sim_log.hpp"
+#include "sim/lockstep.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <iostream>
+
+namespace motormix::app {
+
+namespace {
+
+const char* airmode_name(Airmode a) {
+  return a == Airmode::kRollPitch ? "roll_pitch" : a == Airmode::kRollPitchYaw ? "roll_pitch_yaw" : "off";
+}
+
+// "3@6.5" or "FL@6.5": motor number as `motormix matrix` prints it, or name.
+bool parse_failure(const std::string& text, const config::Config& config, sim::MotorFailure& out) {
+  const auto at = text.find('@');
+  if (at == std::string::npos || at == 0 || at + 1 == text.size()) return false;
+  const std::string motor = text.substr(0, at);
+  char* end = nullptr;
+  const double seconds = std::strtod(text.c_str() + at + 1, &end);
+  if (*end != '\0' || !std::isfinite(seconds) || seconds < 0) return false;
+  out.at_s = seconds;
+  const auto& names = config.motor_names();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == motor) {
+      out.motor = static_cast<int>(i);
+      return true;
+    }
+  }
+  const long n = std::strtol(motor.c_str(), &end, 10);
+  if (*end != '\0' || n < 1 || n > config.motors()) return false;
+  out.motor = static_cast<int>(n - 1);
+  return true;
+}
+
+nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
+  nlohmann::json j;
+  j["crashed"] = r.crashed;
+  if (r.crashed) {
+    j["crash_reason"] = r.crash_reason;
+    j["crash_time_s"] = r.crash_time_s;
+  }
+  if (wheeled) {
+    j["speed_error_rms_mps"] = r.speed_error_rms_mps;
+    j["yaw_rate_error_rms_dps"] = r.yaw_rate_error_rms_dps;
+  }
+  j["attitude_error_rms_deg"] = r.attitude_error_rms_deg;
+  j["attitude_error_max_deg"] = r.attitude_error_max_deg;
+  j["yaw_error_rms_deg"] = r.yaw_error_rms_deg;
+  j["altitude_loss_m"] = r.altitude_loss_m;
+  j["saturated_fraction"] = r.saturated_fraction;
+  j["min_battery_v"] = r.min_battery_v;
+  j["final_charge"] = r.final_charge;
+  j["failsafe_events"] = r.failsafe_events;
+  j["cycles"] = r.cycles;
+  j["sim_seconds"] = r.sim_seconds;
+  j["wall_seconds"] = r.wall_seconds;
+  j["realtime_factor"] = r.wall_seconds > 0 ? r.sim_seconds / r.wall_seconds : 0.0;
+  return j;
+}
+
+}  // namespace
+
+int sim(const SimCommand& cmd) {
+  std::optional<config::Config> config;
+  std::optional<sim::Scenario> scenario;
+  try {
+    config = cmd.preset.empty()
+                 ? config::load_config_file(cmd.config_path, cmd.overrides)
+                 : config::load_config_text("geometry: {preset: " + cmd.preset + "}\n",
+                                            "preset " + cmd.preset, cmd.overrides);
+    scenario = sim::load_scenario(cmd.scenario);
+    if (!config->physics.incomplete.empty()) throw config::ConfigError(config->physics.incomplete);
+    sim::scenario_config(*config, *scenario);  // the scenario fits the vehicle
+  } catch (const config::ConfigError& e) {
+    std::cerr << "motormix sim: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  sim::SimOptions options;
+  options.seed = cmd.seed;
+  options.undetected = cmd.undetected;
+  options.duration_s = cmd.duration_s;
+  for (const std::string& f : cmd.fail) {
+    sim::MotorFailure failure;
+    if (!parse_failure(f, *config, failure)) {
+      std::cerr << "motormix sim: --fail " << f << ": expected MOTOR@SECONDS with MOTOR 1.."
+                << config->motors() << " or a motor name\n";
+      return kExitUsage;
+    }
+    options.failures.push_back(failure);
+  }
+  if (!cmd.lcm && !cmd.controller) {
+    std::cerr << "motormix sim: --no-controller needs --lcm (a controller of your own flies the "
+                 "vehicle over the bus)\n";
+    return kExitUsage;
+  }
+  if (cmd.lcm && !cmd.log_path.empty()) {
+    std::cerr << "motormix sim: --log is for lockstep runs; record a live run with lcm-logger\n";
+    return kExitUsage;
+  }
+
+  const bool wheeled = config->thrust_range() == ThrustRange::kBipolar;
+  nlohmann::json j;
+  try {
+    if (cmd.lcm) {
+      sim::LiveOptions live;
+      live.sim = options;
+      live.lcm_url = cmd.lcm_url;
+      live.controller = cmd.controller;
+      sim::LiveResult result;
+      if (!sim::run_live(*config, *scenario, live, result, std::cerr)) return kExitRuntime;
+      j = to_json(result.sim, wheeled);
+      j["mode"] = "live";
+      j["pwm_received"] = result.pwm_received;
+      j["pwm_rejected"] = result.pwm_rejected;
+    } else {
+      std::optional<sim::SimLogWriter> log;
+      if (!cmd.log_path.empty()) {
+        log.emplace(cmd.log_path, *config);
+        if (!log->good()) {
+          std::cerr << "motormix sim: cannot write " << cmd.log_path << "\n";
+          return kExitRuntime;
+        }
+      }
+      sim::FrameObserver observer;
+      if (log) observer = [&log](const sim::SimFrame& f) { log->write(f, *f.counters); };
+      const sim::SimResult r =
+          sim::run_lockstep(*config, config::build_mixer(*config), *scenario, options, observer);
+      j = to_json(r, wheeled);
+      j["mode"] = "lockstep";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "motormix sim: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  j["scenario"] = scenario->name;
+  j["vehicle"] = config->name;
+  j["strategy"] = config::to_string(config->strategy);
+  if (config->strategy == config::Strategy::kPrioritized) j["airmode"] = airmode_name(config->airmode);
+  j["seed"] = cmd.seed;
+  nlohmann::json failures = nlohmann::json::array();
+  sim::ScenarioClock clock(*scenario, *config, options.failures);
+  for (const auto& [at, motor] : clock.failures()) {
+    failures.push_back({{"motor", config->motor_names()[static_cast<std::size_t>(motor)]},
+                        {"at_s", at},
+                        {"reported", !cmd.undetected}});
+  }
+  j["failures"] = failures;
+  if (!cmd.json) {
+    std::cerr << "motormix sim: " << config->name << " (" << config::to_string(config->strategy)
+              << "), scenario " << scenario->name << ", " << j["sim_seconds"].get<double>()
+              << " s simulated in " << j["wall_seconds"].get<double>() << " s: "
+              << (j["crashed"].get<bool>() ? "CRASHED (" + j["crash_reason"].get<std::string>() + ")"
+                                            : std::string("not crashed"))
+              << "\n";
+  }
+  std::cout << j.dump() << "\n";
+  return j["crashed"].get<bool>() ? kExitCrashed : kExitOk;
+}
+
+}  // namespace motormix::app

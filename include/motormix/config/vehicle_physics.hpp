@@ -1,0 +1,69 @@
+#pragma once
+// The physical vehicle behind a configuration, for `motormix sim`: mass,
+// inertia, what each rotor or wheel can do, how fast the motors answer, the
+// ESC curve, drag and the battery. Read from the configuration's `vehicle:`
+// section (validated like every other key); every value has a documented
+// default derived from the geometry, so a preset flies without one. The
+// mixer process itself never reads any of it.
+//
+// Units are SI throughout; frames are the geometry's (body FRD).
+
+#include <motormix/geometry.hpp>
+
+#include <string>
+#include <vector>
+
+namespace motormix::config {
+
+struct RotorPhysics {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // from the centre of mass, FRD
+  Eigen::Vector3d axis{0.0, 0.0, -1.0};                  // thrust direction, FRD, unit
+  Spin spin = Spin::kCcw;
+  double max_thrust_n = 0.0;    // at full ESC command and the battery's reference voltage
+  double torque_ratio_m = 0.0;  // drag torque per newton of thrust
+};
+
+struct BatteryPhysics {
+  int cells = 4;                          // lithium-polymer cells in series
+  double capacity_mah = 5000.0;
+  double internal_resistance_ohm = 0.02;  // whole pack
+  double initial_charge = 1.0;            // state of charge at the start, 0..1
+  double reference_v = 15.4;              // voltage at which max_thrust_n is measured
+  double full_throttle_current_a = 0.0;   // one motor at full thrust
+  double avionics_current_a = 0.5;
+};
+
+struct WheelPhysics {
+  double radius_m = 0.05;
+  double track_m = 0.30;                // between the left and right wheels
+  double max_speed_rad_s = 20.0;        // wheel speed at full command and reference voltage
+  int per_side = 1;
+};
+
+struct VehiclePhysics {
+  bool wheeled = false;
+  double mass_kg = 0.0;
+  Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Zero();  // principal, about x, y, z (FRD)
+  std::vector<RotorPhysics> rotors;                        // aircraft, in output order
+  WheelPhysics wheels;                                     // ground vehicles
+  double time_constant_up_s = 0.03;    // first-order motor lag while speeding up
+  double time_constant_down_s = 0.05;  // and while slowing down
+  // The driver's physical input range, per motor in output order, in the
+  // output unit: thrust (or wheel speed) is zero at esc_min and full at
+  // esc_max. Defaults to the output stage's range, as after an ESC
+  // calibration with the mixer's endpoints.
+  std::vector<double> esc_min;
+  std::vector<double> esc_max;
+  std::vector<double> esc_center;  // centered (reversible) drives: the stop value
+  // Thrust fraction = e x^2 + (1 - e) x of the ESC input fraction x: the
+  // curve output.thrust_model_factor inverts when it is set to the same e.
+  double thrust_expo = 0.3;
+  double drag_linear_n_per_mps = 0.0;       // force against the air-relative velocity
+  double drag_rotational_nm_per_radps = 0.0;  // torque against the body rates
+  BatteryPhysics battery;
+  // Empty when the physics is complete; otherwise why the vehicle cannot be
+  // simulated (e.g. a mixing table with no `vehicle.rotors`).
+  std::string incomplete;
+};
+
+}  // namespace motormix::config

@@ -1,0 +1,223 @@
+// The `vehicle:` section: physical parameters for `motormix sim`, with
+// defaults derived from the geometry and the output stage (documented in
+// docs/simulation.md).
+
+#include "config/vehicle_physics_reader.hpp"
+
+#include "config/yaml_reader.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace motormix::config {
+
+namespace {
+
+constexpr double kGravity = 9.80665;
+// Defaults of the 250-500 mm class: 0.3 kg per rotor (frame, motor, ESC,
+// share of battery and avionics), twice the weight in thrust.
+constexpr double kMassPerRotorKg = 0.3;
+constexpr double kThrustToWeight = 2.0;
+// Half the mass sits in the motors and arms (point masses at the rotors),
+// half in a central box of this size.
+constexpr double kCentralBoxM[3] = {0.15, 0.15, 0.08};
+constexpr double kDefaultTorqueRatioM = 0.016;  // 10-inch class propeller, k_M / k_F
+constexpr double kLinearDragPerKg = 0.25;       // N per m/s per kg: ~40 m/s terminal velocity
+constexpr double kRotationalDrag = 0.002;       // N m per rad/s
+constexpr double kCellNominalV = 3.85;
+// One motor at full thrust draws this many amperes per newton of its
+// maximum thrust (a 10-inch propeller on 4S: ~13 A for 6 N).
+constexpr double kAmpsPerNewton = 2.2;
+
+std::vector<double> numbers(const YAML::Node& node, const std::string& path, std::size_t len,
+                            double lo, double hi) {
+  if (!node.IsSequence() || node.size() != len) {
+    fail(path, describe(node), "a list of " + std::to_string(len) + " numbers");
+  }
+  std::vector<double> out;
+  for (std::size_t i = 0; i < len; ++i) {
+    out.push_back(to_number(node[i], path + "[" + std::to_string(i) + "]", lo, hi));
+  }
+  return out;
+}
+
+// The team quad's table is an X quad, FL, FR, RL, RR; positive yaw raises FL
+// and RR, so those two spin counter-clockwise.
+std::vector<Rotor> team_quad_rotors() {
+  const double a = 0.25 / std::sqrt(2.0);
+  const double xy[4][2] = {{a, -a}, {a, a}, {-a, -a}, {-a, a}};
+  const Spin spin[4] = {Spin::kCcw, Spin::kCw, Spin::kCw, Spin::kCcw};
+  std::vector<Rotor> rotors(4);
+  for (int i = 0; i < 4; ++i) {
+    rotors[static_cast<std::size_t>(i)].position = {xy[i][0], xy[i][1], 0.0};
+    rotors[static_cast<std::size_t>(i)].spin = spin[i];
+  }
+  return rotors;
+}
+
+std::vector<Rotor> explicit_rotors(const YAML::Node& list, const std::string& path, int motors) {
+  if (!list.IsSequence() || static_cast<int>(list.size()) != motors) {
+    fail(path, describe(list),
+         "a list of " + std::to_string(motors) + " rotors, one per motor in output order");
+  }
+  std::vector<Rotor> rotors;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    MapReader r(list[i], path + "[" + std::to_string(i) + "]");
+    Rotor rotor;
+    if (!r.has("position")) fail(r.path_of("position"), "nothing", "[x, y, z] in metres (required)");
+    const auto p = numbers(r.raw("position"), r.path_of("position"), 3, -10.0, 10.0);
+    rotor.position = {p[0], p[1], p[2]};
+    rotor.spin = r.choice("spin", "", {"cw", "ccw"}) == "cw" ? Spin::kCw : Spin::kCcw;
+    if (r.has("axis")) {
+      const auto a = numbers(r.raw("axis"), r.path_of("axis"), 3, -1e3, 1e3);
+      rotor.axis = {a[0], a[1], a[2]};
+      if (rotor.axis.norm() < 1e-9) fail(r.path_of("axis"), "a zero vector", "a thrust direction");
+    } else {
+      r.raw("axis");
+    }
+    r.finish();
+    rotors.push_back(rotor);
+  }
+  return rotors;
+}
+
+Eigen::Vector3d default_inertia(const std::vector<RotorPhysics>& rotors, double mass) {
+  const double arm_share = 0.5 * mass / static_cast<double>(rotors.size());
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+  for (const RotorPhysics& r : rotors) {
+    const Eigen::Vector3d& p = r.position_m;
+    inertia += arm_share * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose());
+  }
+  const double body = 0.5 * mass;
+  const double a = kCentralBoxM[0], b = kCentralBoxM[1], c = kCentralBoxM[2];
+  inertia.diagonal() += Eigen::Vector3d(body * (b * b + c * c), body * (a * a + c * c),
+                                        body * (a * a + b * b)) / 12.0;
+  return inertia.diagonal();
+}
+
+void read_battery(MapReader b, VehiclePhysics& v, double default_full_current) {
+  BatteryPhysics& bat = v.battery;
+  bat.cells = static_cast<int>(std::lround(b.number("cells", 4, 1, 14)));
+  bat.capacity_mah = b.number("capacity_mah", bat.capacity_mah, 10.0, 1e6);
+  bat.internal_resistance_ohm =
+      b.number("internal_resistance_ohm", bat.internal_resistance_ohm, 0.0, 10.0);
+  bat.initial_charge = b.number("initial_charge", 1.0, 0.0, 1.0);
+  bat.reference_v = b.number("reference_v", kCellNominalV * bat.cells, 0.5, 100.0);
+  bat.full_throttle_current_a =
+      b.number("full_throttle_current_a", default_full_current, 0.0, 1000.0);
+  bat.avionics_current_a = b.number("avionics_current_a", 0.5, 0.0, 100.0);
+  b.finish();
+}
+
+void read_escs(MapReader esc, const Config& config, VehiclePhysics& v) {
+  const std::size_t n = config.outputs.size();
+  v.esc_min.resize(n);
+  v.esc_max.resize(n);
+  v.esc_center.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const OutputChannel& ch = config.outputs[i];
+    v.esc_min[i] = ch.mode == OutputMode::kUnipolar && ch.reversed ? ch.max : ch.min;
+    v.esc_max[i] = ch.mode == OutputMode::kUnipolar && ch.reversed ? ch.min : ch.max;
+    v.esc_center[i] = ch.center;
+  }
+  // One physical range for every driver, when given.
+  if (esc.has("min") || esc.has("max")) {
+    const double lo = esc.number("min", v.esc_min[0], 0.0, 1e5);
+    const double hi = esc.number("max", v.esc_max[0], 0.0, 1e5);
+    if (!(lo != hi)) {
+      std::ostringstream found;
+      found << "min " << lo << " and max " << hi;
+      fail(esc.path_of("max"), found.str(), "a max different from min");
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      v.esc_min[i] = lo;
+      v.esc_max[i] = hi;
+    }
+  }
+  esc.raw("min");
+  esc.raw("max");
+  v.thrust_expo = esc.number("thrust_expo", 0.3, 0.0, 1.0);
+  esc.finish();
+}
+
+}  // namespace
+
+void read_vehicle_physics(MapReader vehicle, Config& config) {
+  VehiclePhysics& v = config.physics;
+  v = VehiclePhysics{};
+  v.wheeled = config.thrust_range() == ThrustRange::kBipolar;
+  const int motors = config.motors();
+
+  if (v.wheeled) {
+    if (vehicle.has("rotors")) {
+      fail(vehicle.path_of("rotors"), "rotors on a ground vehicle", "wheel_radius_m, track_m");
+    }
+    vehicle.raw("rotors");
+    v.mass_kg = vehicle.number("mass_kg", 2.0, 0.01, 1e4);
+    v.wheels.per_side = config.wheel_base ? config.wheel_base->wheels_per_side : motors / 2;
+    v.wheels.radius_m = vehicle.number("wheel_radius_m", v.wheels.radius_m, 1e-3, 10.0);
+    v.wheels.track_m = vehicle.number("track_m", v.wheels.track_m, 1e-3, 100.0);
+    v.wheels.max_speed_rad_s =
+        vehicle.number("max_wheel_speed_rad_s", v.wheels.max_speed_rad_s, 1e-3, 1e4);
+    v.inertia_kgm2 = {0.0, 0.0, v.mass_kg * v.wheels.track_m * v.wheels.track_m / 8.0};
+    v.time_constant_up_s = 0.1;
+    v.time_constant_down_s = 0.1;
+  } else {
+    for (const char* key : {"wheel_radius_m", "track_m", "max_wheel_speed_rad_s"}) {
+      if (vehicle.has(key)) fail(vehicle.path_of(key), "a wheel setting on an aircraft", "rotor settings");
+      vehicle.raw(key);
+    }
+    const double scale = vehicle.number("length_scale", 1.0, 1e-6, 1e6);
+    std::vector<Rotor> rotors = config.vehicle.rotors;
+    if (vehicle.has("rotors")) {
+      rotors = explicit_rotors(vehicle.raw("rotors"), vehicle.path_of("rotors"), motors);
+    } else {
+      vehicle.raw("rotors");
+      if (rotors.empty() && config.vehicle.name == "team_quad") rotors = team_quad_rotors();
+    }
+    const std::string rotor_path = vehicle.path_of("rotors");
+    const int n = static_cast<int>(rotors.size());
+    v.mass_kg = vehicle.number("mass_kg", kMassPerRotorKg * std::max(n, 2), 0.01, 1e4);
+    const double weight = v.mass_kg * kGravity;
+    const double thrust = vehicle.number("max_thrust_n", n > 0 ? kThrustToWeight * weight / n : 1.0,
+                                         1e-3, 1e5);
+    const double torque_ratio = vehicle.number("torque_ratio_m", kDefaultTorqueRatioM, 0.0, 1.0);
+    for (const Rotor& r : rotors) {
+      RotorPhysics p;
+      p.position_m = scale * r.position;
+      p.axis = r.axis.normalized();
+      p.spin = r.spin;
+      p.max_thrust_n = thrust * r.thrust_coefficient;
+      p.torque_ratio_m = torque_ratio;
+      v.rotors.push_back(p);
+    }
+    if (rotors.empty()) {
+      v.incomplete = "a " + config.geometry_source +
+                     " geometry says nothing of where the rotors are: give '" + rotor_path +
+                     "' (position [x, y, z] in metres and spin, one per motor) to simulate it";
+    }
+    if (vehicle.has("inertia_kgm2")) {
+      const auto i = numbers(vehicle.raw("inertia_kgm2"), vehicle.path_of("inertia_kgm2"), 3,
+                             1e-7, 1e4);
+      v.inertia_kgm2 = {i[0], i[1], i[2]};
+    } else {
+      vehicle.raw("inertia_kgm2");
+      if (!v.rotors.empty()) v.inertia_kgm2 = default_inertia(v.rotors, v.mass_kg);
+    }
+  }
+  v.time_constant_up_s = vehicle.number("time_constant_up_s", v.time_constant_up_s, 1e-4, 5.0);
+  v.time_constant_down_s =
+      vehicle.number("time_constant_down_s", v.time_constant_down_s, 1e-4, 5.0);
+  MapReader drag = vehicle.map("drag");
+  v.drag_linear_n_per_mps = drag.number("linear", kLinearDragPerKg * v.mass_kg, 0.0, 1e4);
+  v.drag_rotational_nm_per_radps = drag.number("rotational", kRotationalDrag, 0.0, 1e3);
+  drag.finish();
+  read_escs(vehicle.map("esc"), config, v);
+
+  double full_current = 10.0;  // a wheel motor
+  if (!v.rotors.empty()) full_current = kAmpsPerNewton * v.rotors.front().max_thrust_n;
+  read_battery(vehicle.map("battery"), v, full_current);
+  vehicle.finish();
+}
+
+}  // namespace motormix::config

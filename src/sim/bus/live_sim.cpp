@@ -1,0 +1,223 @@
+#include "sim/bus/live_sim.hpp"
+
+#include "sim/bus/sim_log.hpp"
+
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/battery_t.hpp>
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+#include <motormix/motor_status_t.hpp>
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <ostream>
+#include <thread>
+
+namespace motormix::sim {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// What the simulated ESCs last heard from the mixer. Decoding happens here,
+// inside the callback, and never throws out of it.
+struct MixerOutputs {
+  int motors = 0;
+  MotorVector outputs;
+  DirectionVector direction{};
+  bool armed = false;
+  Clock::time_point received{};
+  bool any = false;
+  std::int64_t accepted = 0;
+  std::int64_t rejected = 0;
+  std::uint8_t axis_limited = 0;
+
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    motor_pwm_t msg;
+    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
+            static_cast<int>(rbuf->data_size) ||
+        msg.num_motors != motors) {
+      ++rejected;
+      return;
+    }
+    for (int i = 0; i < motors; ++i) {
+      if (!std::isfinite(msg.pwm[static_cast<std::size_t>(i)])) {
+        ++rejected;
+        return;
+      }
+    }
+    outputs.resize(motors);
+    for (int i = 0; i < motors; ++i) {
+      outputs[i] = msg.pwm[static_cast<std::size_t>(i)];
+      direction[static_cast<std::size_t>(i)] = msg.direction[static_cast<std::size_t>(i)];
+    }
+    armed = msg.armed;
+    received = Clock::now();
+    any = true;
+    ++accepted;
+  }
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    mixer_status_t msg;
+    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
+        static_cast<int>(rbuf->data_size)) {
+      return;
+    }
+    axis_limited = 0;
+    for (int a = 0; a < kNumAxes; ++a) {
+      if (msg.axis_limited[a]) axis_limited |= static_cast<std::uint8_t>(1U << a);
+    }
+  }
+};
+
+template <typename Message>
+void publish(lcm::LCM& lcm, const std::string& channel, const Message& msg) {
+  lcm.publish(channel, &msg);
+}
+
+}  // namespace
+
+bool run_live(const config::Config& config_in, const Scenario& scenario,
+              const LiveOptions& options, LiveResult& result, std::ostream& err) {
+  const config::Config config = scenario_config(config_in, scenario);
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) {
+    err << "motormix sim: cannot open the LCM bus"
+        << (options.lcm_url.empty() ? "" : " '" + options.lcm_url + "'") << "\n";
+    result.bus_ok = false;
+    return false;
+  }
+  const bool wheeled = config.thrust_range() == ThrustRange::kBipolar;
+  VehicleModel vehicle(config);
+  const Mixer mixer = config::build_mixer(config);  // only linearized by the controller
+  const double tau = (config.physics.time_constant_up_s + config.physics.time_constant_down_s) / 2;
+  Controller controller(config, mixer, vehicle.command_effect(), config.physics.mass_kg,
+                        config.physics.inertia_kgm2, tau);
+  ScenarioClock clock(scenario, config, options.sim.failures);
+  Sensors sensors(scenario.noise, options.sim.seed);
+  Scorer scorer(scenario, config);
+
+  MixerOutputs mix;
+  mix.motors = config.motors();
+  lcm.subscribe(config.channels.motor_pwm, &MixerOutputs::on_pwm, &mix);
+  lcm.subscribe(config.channels.status, &MixerOutputs::on_status, &mix);
+
+  const double period = 1.0 / config.loop_rate_hz;
+  const int substeps = static_cast<int>(std::ceil(period / 1e-3 - 1e-9));
+  const double dt = period / substeps;
+  const double duration = options.sim.duration_s > 0 ? options.sim.duration_s : scenario.duration_s;
+  const auto cycles = static_cast<std::int64_t>(std::floor(duration * config.loop_rate_hz + 1e-9));
+  const auto stale_after = std::chrono::duration<double>(
+      std::min(config.inputs.setpoint_timeout_s, config.inputs.pid_timeout_s));
+  const MotorMask all = static_cast<MotorMask>((1U << config.motors()) - 1U);
+
+  SimResult& r = result.sim;
+  r.min_battery_v = vehicle.battery().terminal_v();
+  const auto start = Clock::now();
+  double next_battery = 0.0, next_status = 0.0;
+  MotorMask reported = 0;
+  vehicle_state_t state;
+  for (std::int64_t k = 0; k < cycles; ++k) {
+    const auto due = start + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(static_cast<double>(k) * period));
+    // Serve the bus until this cycle is due.
+    for (;;) {
+      const auto left = due - Clock::now();
+      if (left <= Clock::duration::zero()) break;
+      const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(left).count();
+      if (ms >= 1) {
+        if (lcm.handleTimeout(static_cast<int>(ms)) < 0) break;
+      } else {
+        while (lcm.handleTimeout(0) > 0) {
+        }
+        std::this_thread::sleep_until(due);
+      }
+    }
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    const double t = static_cast<double>(k) * period;
+    const std::int64_t now = wall_us();
+    clock.advance(t);
+    const Reference& ref = clock.reference();
+    ControllerCommand cmd;
+    cmd.attitude_sp = from_euler(ref.roll, ref.pitch, ref.yaw);
+    if (options.controller) {
+      cmd = controller.update(ref, sensors.measure(vehicle.body()),
+                              sensors.speed(vehicle.forward_speed()), mix.any && mix.armed,
+                              vehicle.landed() && !wheeled, mix.axis_limited, period);
+      setpoint_t sp;
+      sp.utime = now;
+      sp.throttle = static_cast<float>(cmd.thrust);
+      sp.yaw = static_cast<float>(cmd.yaw);
+      sp.armed = cmd.armed;
+      publish(lcm, config.channels.setpoint, sp);
+      pid_t pid;
+      pid.utime = now;
+      pid.roll = static_cast<float>(cmd.roll);
+      pid.pitch = static_cast<float>(cmd.pitch);
+      pid.yaw = static_cast<float>(cmd.yaw);
+      publish(lcm, config.channels.pid, pid);
+    }
+    if (t + 1e-9 >= next_battery) {
+      battery_t b;
+      b.utime = now;
+      b.voltage = static_cast<float>(vehicle.battery().terminal_v());
+      publish(lcm, config.channels.battery, b);
+      next_battery += 0.02;
+    }
+    if (!options.sim.undetected) {
+      MotorMask detected = 0;
+      for (const auto& [at, motor] : clock.failures()) {
+        if (t + 1e-9 >= at + scenario.failure_detection_s) detected |= MotorMask{1} << motor;
+      }
+      if (detected != 0 && (detected != reported || t + 1e-9 >= next_status)) {
+        motor_status_t m;
+        m.utime = now;
+        m.num_motors = config.motors();
+        for (int i = 0; i < m.num_motors; ++i) m.failed.push_back((detected >> i) & 1U);
+        publish(lcm, config.channels.motor_status, m);
+        reported = detected;
+        next_status = t + 0.1;
+      }
+    }
+    fill_vehicle_state(state, vehicle, now);
+    publish(lcm, kVehicleStateChannel, state);
+
+    const bool fresh = mix.any && Clock::now() - mix.received <= stale_after;
+    const bool armed = fresh && mix.armed;
+    scorer.add(t, ref, cmd, vehicle, armed, mix.axis_limited);
+    for (int s = 0; s < substeps; ++s) {
+      vehicle.step(mix.outputs.size() == config.motors() ? mix.outputs
+                                                         : MotorVector::Zero(config.motors()),
+                   mix.direction, fresh ? clock.stopped() : all, clock.environment(t + s * dt), dt);
+    }
+    r.min_battery_v = std::min(r.min_battery_v, vehicle.battery().terminal_v());
+    r.cycles = k + 1;
+    if (vehicle.crashed()) {
+      r.crashed = true;
+      r.crash_reason = vehicle.crash_reason();
+      r.crash_time_s = t + period;
+      fill_vehicle_state(state, vehicle, wall_us());
+      publish(lcm, kVehicleStateChannel, state);
+      break;
+    }
+  }
+  scorer.finish(r);
+  r.final_charge = vehicle.battery().charge();
+  r.sim_seconds = static_cast<double>(r.cycles) * period;
+  r.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  result.pwm_received = mix.accepted;
+  result.pwm_rejected = mix.rejected;
+  return true;
+}
+
+}  // namespace motormix::sim

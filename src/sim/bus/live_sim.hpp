@@ -1,0 +1,34 @@
+#pragma once
+// `motormix sim --lcm`: the simulated vehicle on a real bus, in real time,
+// beside a separate `motormix run` (software in the loop). It takes
+// motor_pwm_t from the mixer and publishes vehicle_state_t, battery_t,
+// motor_status_t and, unless the controller is off, the controller's
+// setpoint_t and pid_t, on the configuration's channels. Motor outputs older
+// than the mixer's input timeout, or none yet, count as disarmed (the ESCs
+// stop). The run is bounded by the scenario's duration or `duration_s`.
+
+#include "sim/lockstep.hpp"
+
+#include <iosfwd>
+#include <string>
+
+namespace motormix::sim {
+
+struct LiveOptions {
+  SimOptions sim;
+  std::string lcm_url;      // empty: LCM's default ($LCM_DEFAULT_URL)
+  bool controller = true;   // false: a controller of the user's flies from VEHICLE_STATE
+};
+
+struct LiveResult {
+  SimResult sim;
+  std::int64_t pwm_received = 0;   // motor_pwm_t accepted from the mixer
+  std::int64_t pwm_rejected = 0;   // undecodable, wrong size or not finite
+  bool bus_ok = true;
+};
+
+// Returns false with a message on `err` when the bus cannot be opened.
+bool run_live(const config::Config& config, const Scenario& scenario, const LiveOptions& options,
+              LiveResult& result, std::ostream& err);
+
+}  // namespace motormix::sim

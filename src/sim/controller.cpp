@@ -1,0 +1,139 @@
+#include "sim/controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace motormix::sim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kStep = 0.02;  // demand step of the linearization
+constexpr double kMaxRateDps = 400.0;
+constexpr double kMaxYawRateDps = 200.0;
+constexpr double kMaxDescent = 1.5;          // m/s
+constexpr double kRateIntegralLimit = 0.5;   // rad: integral term at most rate_i x this
+constexpr double kClimbIntegralLimit = 2.0;  // m/s
+constexpr double kMinTiltCosine = 0.5;       // thrust is tilt-compensated up to 60 degrees
+
+// d command / d demand around `at`, motor by motor (columns: axes).
+Eigen::MatrixXd mixer_slope(const Mixer& mixer, const AxisVector& at, int motors) {
+  Eigen::MatrixXd d(motors, kNumAxes);
+  MixerOutput out;
+  for (int a = 0; a < kNumAxes; ++a) {
+    AxisVector hi = at, lo = at;
+    hi[a] += kStep;
+    lo[a] -= kStep;
+    mixer.mix(hi, out);
+    const Eigen::VectorXd up = out.command.head(motors);
+    mixer.mix(lo, out);
+    d.col(a) = (up - out.command.head(motors)) / (2 * kStep);
+  }
+  return d;
+}
+
+}  // namespace
+
+Controller::Controller(const config::Config& config, const Mixer& mixer,
+                       const Eigen::Matrix<double, 4, Eigen::Dynamic>& command_effect,
+                       double mass_kg, const Eigen::Vector3d& inertia, double time_constant_s)
+    : wheeled_(config.thrust_range() == ThrustRange::kBipolar),
+      mass_kg_(mass_kg),
+      inertia_(inertia) {
+  const int n = config.motors();
+  AxisVector at = AxisVector::Zero();
+  if (!wheeled_) {
+    // Linearize around hover: the thrust demand that holds the weight, found
+    // by a few fixed-point steps (the mix is linear in thrust away from the
+    // limits, so two suffice).
+    at[index(Axis::kThrust)] = 0.5;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::MatrixXd d = mixer_slope(mixer, at, n);
+      const double per_demand = (command_effect.row(3) * d.col(index(Axis::kThrust)))(0);
+      if (per_demand > 0) {
+        at[index(Axis::kThrust)] = std::clamp(mass_kg * kGravity / per_demand, 0.05, 0.95);
+      }
+    }
+  }
+  g_ = command_effect * mixer_slope(mixer, at, n);
+  g_inv_ = g_.completeOrthogonalDecomposition().pseudoInverse();
+  gains_.hover_thrust = at[index(Axis::kThrust)];
+
+  const double tau = time_constant_s + 1.0 / config.loop_rate_hz;
+  gains_.rate_p = 0.5 / tau;
+  gains_.rate_i = gains_.rate_p * gains_.rate_p / 5.0;
+  gains_.attitude_p = gains_.rate_p / 4.0;
+  gains_.yaw_p = gains_.rate_p / 8.0;
+  gains_.max_rate = kMaxRateDps * kPi / 180.0;
+  gains_.max_yaw_rate = kMaxYawRateDps * kPi / 180.0;
+}
+
+void Controller::reset() {
+  rate_integral_.setZero();
+  climb_integral_ = 0.0;
+  speed_integral_ = 0.0;
+  yaw_rate_integral_ = 0.0;
+}
+
+ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
+                                     double forward_speed, bool mixer_armed, bool on_ground,
+                                     std::uint8_t axis_limited, double dt) {
+  const auto free = [axis_limited](Axis a) { return (axis_limited & bit(a)) == 0 ? 1.0 : 0.0; };
+  ControllerCommand c;
+  c.armed = ref.armed;
+  c.attitude_sp = from_euler(ref.roll, ref.pitch, ref.yaw);
+  if (!ref.armed || !mixer_armed) {
+    // Zero throttle until the mixer has accepted the arming.
+    reset();
+    return c;
+  }
+  Eigen::Vector4d want = Eigen::Vector4d::Zero();
+  if (wheeled_) {
+    const double speed_error = ref.speed_mps - forward_speed;
+    const double rate_error = ref.yaw_rate - m.rates.z();
+    speed_integral_ += free(Axis::kThrust) * speed_error * dt;
+    yaw_rate_integral_ += free(Axis::kYaw) * rate_error * dt;
+    want[2] = ref.yaw_rate + gains_.speed_p * rate_error + gains_.speed_i * yaw_rate_integral_;
+    want[3] = ref.speed_mps + gains_.speed_p * speed_error + gains_.speed_i * speed_integral_;
+  } else {
+    Eigen::Quaterniond err = m.attitude.conjugate() * c.attitude_sp;
+    if (err.w() < 0) err.coeffs() *= -1.0;
+    const Eigen::Vector3d e = 2.0 * err.vec();
+    Eigen::Vector3d rate_sp(gains_.attitude_p * e.x(), gains_.attitude_p * e.y(),
+                            gains_.yaw_p * e.z());
+    const double tilt_rate = rate_sp.head<2>().norm();
+    if (tilt_rate > gains_.max_rate) rate_sp.head<2>() *= gains_.max_rate / tilt_rate;
+    rate_sp.z() = std::clamp(rate_sp.z(), -gains_.max_yaw_rate, gains_.max_yaw_rate);
+    const Eigen::Vector3d rate_error = rate_sp - m.rates;
+    if (on_ground) {
+      reset();
+    } else {
+      const Eigen::Vector3d integrating(free(Axis::kRoll), free(Axis::kPitch), free(Axis::kYaw));
+      rate_integral_ = (rate_integral_ + integrating.cwiseProduct(rate_error) * dt)
+                           .cwiseMax(-kRateIntegralLimit)
+                           .cwiseMin(kRateIntegralLimit);
+    }
+    const Eigen::Vector3d accel = gains_.rate_p * rate_error + gains_.rate_i * rate_integral_;
+    want.head<3>() = inertia_.cwiseProduct(accel) + m.rates.cross(inertia_.cwiseProduct(m.rates));
+
+    const double altitude = -m.position.z();
+    const double climb_sp =
+        std::clamp(gains_.altitude_p * (ref.altitude_m - altitude), -kMaxDescent, gains_.max_climb);
+    const double climb_error = climb_sp - (-m.velocity.z());
+    if (!on_ground) {
+      climb_integral_ = std::clamp(climb_integral_ + free(Axis::kThrust) * climb_error * dt,
+                                   -kClimbIntegralLimit, kClimbIntegralLimit);
+    }
+    const double up_accel = gains_.climb_p * climb_error + gains_.climb_i * climb_integral_;
+    const double cos_tilt = std::max(std::cos(tilt(m.attitude)), kMinTiltCosine);
+    want[3] = std::max(0.0, mass_kg_ * (kGravity + up_accel) / cos_tilt);
+  }
+  const Eigen::Vector4d d = g_inv_ * want;
+  c.roll = std::clamp(d[0], -1.0, 1.0);
+  c.pitch = std::clamp(d[1], -1.0, 1.0);
+  c.yaw = std::clamp(d[2], -1.0, 1.0);
+  c.thrust = std::clamp(d[3], wheeled_ ? -1.0 : 0.0, 1.0);
+  return c;
+}
+
+}  // namespace motormix::sim

@@ -1,0 +1,255 @@
+#include "sim/lockstep.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace motormix::sim {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+constexpr double kMaxPhysicsStepS = 1e-3;
+constexpr double kBatteryPeriodS = 0.02;       // battery_t at 50 Hz
+constexpr double kMotorStatusPeriodS = 0.1;    // motor_status_t at 10 Hz once a failure is seen
+constexpr double kReachedM = 0.1;  // within this of the commanded altitude: arrived
+
+double wrap(double angle) { return std::remainder(angle, 2 * kPi); }
+
+std::int64_t to_us(double s) { return static_cast<std::int64_t>(std::llround(s * 1e6)); }
+
+}  // namespace
+
+ScenarioClock::ScenarioClock(const Scenario& scenario, const config::Config& config,
+                             const std::vector<MotorFailure>& extra_failures)
+    : scenario_(scenario) {
+  for (const ScenarioEvent& e : scenario.timeline) {
+    if (e.fail) failures_.emplace_back(e.at_s, *e.fail);
+  }
+  for (const MotorFailure& f : extra_failures) failures_.emplace_back(f.at_s, f.motor);
+  std::stable_sort(failures_.begin(), failures_.end());
+  for (const auto& f : failures_) {
+    if (f.second < 0 || f.second >= config.motors()) {
+      throw config::ConfigError("motor " + std::to_string(f.second + 1) +
+                                " to fail: the vehicle has motors 1 to " +
+                                std::to_string(config.motors()));
+    }
+  }
+  ref_.armed = false;
+  ref_.altitude_m = scenario.altitude_m;
+}
+
+MotorMask ScenarioClock::advance(double t) {
+  ref_.armed = t >= scenario_.arm_at_s;
+  while (next_ < scenario_.timeline.size() && scenario_.timeline[next_].at_s <= t) {
+    const ScenarioEvent& e = scenario_.timeline[next_++];
+    if (e.roll_deg) ref_.roll = *e.roll_deg * kDeg;
+    if (e.pitch_deg) ref_.pitch = *e.pitch_deg * kDeg;
+    if (e.yaw_deg) ref_.yaw = wrap(*e.yaw_deg * kDeg);
+    if (e.altitude_m) ref_.altitude_m = *e.altitude_m;
+    if (e.speed_mps) ref_.speed_mps = *e.speed_mps;
+    if (e.yaw_rate_dps) ref_.yaw_rate = *e.yaw_rate_dps * kDeg;
+    if (e.wind_mps) wind_ = *e.wind_mps;
+    if (e.gust) gusts_.emplace_back(e.at_s, *e.gust);
+  }
+  MotorMask now = 0;
+  while (next_failure_ < failures_.size() && failures_[next_failure_].first <= t) {
+    now |= MotorMask{1} << failures_[next_failure_++].second;
+  }
+  stopped_ |= now;
+  return now;
+}
+
+Environment ScenarioClock::environment(double t) const {
+  Environment env;
+  env.wind_ned = wind_;
+  for (const auto& [start, g] : gusts_) {
+    if (t >= start && t < start + g.for_s) {
+      env.force_world += g.force_n;
+      env.torque_body += g.torque_nm;
+    }
+  }
+  return env;
+}
+
+Scorer::Scorer(const Scenario& scenario, const config::Config& config)
+    : from_s_(scenario.score_from_s),
+      to_s_(scenario.score_to_s),
+      wheeled_(config.thrust_range() == ThrustRange::kBipolar),
+      controlled_(config.vehicle.controlled) {}
+
+void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
+                 const VehicleModel& vehicle, bool armed, std::uint8_t axis_limited) {
+  if (t < from_s_ || t > to_s_) return;
+  ++scored_;
+  const BodyState& b = vehicle.body();
+  if (wheeled_) {
+    const double ds = ref.speed_mps - vehicle.forward_speed();
+    const double dr = (ref.yaw_rate - b.rates.z()) / kDeg;
+    speed_sq_ += ds * ds;
+    rate_sq_ += dr * dr;
+  } else {
+    const Eigen::Vector3d z = b.attitude * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d z_sp = cmd.attitude_sp * Eigen::Vector3d::UnitZ();
+    const double att = std::acos(std::clamp(z.dot(z_sp), -1.0, 1.0)) / kDeg;
+    const double yaw = wrap(ref.yaw - euler(b.attitude).z()) / kDeg;
+    att_sq_ += att * att;
+    yaw_sq_ += yaw * yaw;
+    att_max_ = std::max(att_max_, att);
+    // A drop counts once the vehicle has reached the commanded altitude
+    // (within kReachedM) since the command last changed: a climb still on
+    // its way is not a loss.
+    const double below = ref.altitude_m + b.position.z();
+    if (ref.altitude_m != commanded_altitude_) {
+      commanded_altitude_ = ref.altitude_m;
+      reached_ = false;
+    }
+    if (below < kReachedM) reached_ = true;
+    if (reached_) altitude_loss_ = std::max(altitude_loss_, below);
+  }
+  if (armed && (axis_limited & controlled_) != 0) ++saturated_;
+}
+
+void Scorer::finish(SimResult& r) const {
+  r.attitude_error_max_deg = att_max_;
+  r.altitude_loss_m = altitude_loss_;
+  if (scored_ == 0) return;
+  const auto n = static_cast<double>(scored_);
+  r.attitude_error_rms_deg = std::sqrt(att_sq_ / n);
+  r.yaw_error_rms_deg = std::sqrt(yaw_sq_ / n);
+  r.speed_error_rms_mps = std::sqrt(speed_sq_ / n);
+  r.yaw_rate_error_rms_dps = std::sqrt(rate_sq_ / n);
+  r.saturated_fraction = static_cast<double>(saturated_) / n;
+}
+
+config::Config scenario_config(const config::Config& config_in, const Scenario& scenario) {
+  const bool wheeled = config_in.thrust_range() == ThrustRange::kBipolar;
+  if (scenario.vehicle == ScenarioVehicle::kAircraft && wheeled) {
+    throw config::ConfigError("scenario " + scenario.name + " is for aircraft, and " +
+                              config_in.name + " is a ground vehicle");
+  }
+  if (scenario.vehicle == ScenarioVehicle::kGround && !wheeled) {
+    throw config::ConfigError("scenario " + scenario.name + " is for ground vehicles, and " +
+                              config_in.name + " is an aircraft");
+  }
+  config::Config config = config_in;
+  if (scenario.battery_initial_charge)
+    config.physics.battery.initial_charge = *scenario.battery_initial_charge;
+  if (scenario.battery_resistance_ohm)
+    config.physics.battery.internal_resistance_ohm = *scenario.battery_resistance_ohm;
+  return config;
+}
+
+SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scenario& scenario,
+                       const SimOptions& options, const FrameObserver& observer) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const bool wheeled = config_in.thrust_range() == ThrustRange::kBipolar;
+  const config::Config config = scenario_config(config_in, scenario);
+  VehicleModel vehicle(config);
+  node::ControlLoop loop(config, std::move(mixer));
+  const double tau = (config.physics.time_constant_up_s + config.physics.time_constant_down_s) / 2;
+  Controller controller(config, loop.mixer(), vehicle.command_effect(), config.physics.mass_kg,
+                        config.physics.inertia_kgm2, tau);
+  ScenarioClock clock(scenario, config, options.failures);
+  Sensors sensors(scenario.noise, options.seed);
+
+  const double period = 1.0 / config.loop_rate_hz;
+  const int substeps = static_cast<int>(std::ceil(period / kMaxPhysicsStepS - 1e-9));
+  const double dt = period / substeps;
+  const double duration = options.duration_s > 0 ? options.duration_s : scenario.duration_s;
+  const auto cycles = static_cast<std::int64_t>(std::floor(duration * config.loop_rate_hz + 1e-9));
+
+  SimResult r;
+  r.min_battery_v = vehicle.battery().terminal_v();
+  Scorer scorer(scenario, config);
+  bool mixer_armed = false;
+  std::uint8_t axis_limited = 0;
+  double next_battery = 0.0;
+  double next_motor_status = 0.0;
+  MotorMask reported = 0;
+  node::SetpointSample setpoint;
+  node::PidSample pid;
+  node::BatterySample battery;
+  node::MotorStatusSample motor_status;
+
+  for (std::int64_t k = 0; k < cycles; ++k) {
+    const double t = static_cast<double>(k) * period;
+    const std::int64_t now = kEpochUs + to_us(t);
+    clock.advance(t);
+    const Reference& ref = clock.reference();
+
+    const BodyState measured = sensors.measure(vehicle.body());
+    const ControllerCommand cmd =
+        controller.update(ref, measured, sensors.speed(vehicle.forward_speed()), mixer_armed,
+                          vehicle.landed() && !wheeled, axis_limited, period);
+    setpoint = {now, cmd.thrust, cmd.yaw, cmd.armed};
+    pid = {now, cmd.roll, cmd.pitch, cmd.yaw};
+    loop.on_setpoint(setpoint, now, now);
+    loop.on_pid(pid, now, now);
+
+    bool battery_sent = false;
+    if (t + 1e-9 >= next_battery) {
+      battery = {now, vehicle.battery().terminal_v()};
+      loop.on_battery(battery, now, now);
+      battery_sent = true;
+      next_battery += kBatteryPeriodS;
+    }
+    bool status_sent = false;
+    if (!options.undetected) {
+      MotorMask detected = 0;
+      for (const auto& [at, motor] : clock.failures()) {
+        if (t + 1e-9 >= at + scenario.failure_detection_s) detected |= MotorMask{1} << motor;
+      }
+      if (detected != 0 && (detected != reported || t + 1e-9 >= next_motor_status)) {
+        motor_status = {now, config.motors(), detected};
+        loop.on_motor_status(motor_status, now, now);
+        reported = detected;
+        status_sent = true;
+        next_motor_status = t + kMotorStatusPeriodS;
+      }
+    }
+
+    const node::CycleResult& cycle = loop.cycle(now);
+    mixer_armed = cycle.state == node::LoopState::kArmed;
+    axis_limited = mixer_armed ? cycle.mix.allocation.axis_limited : 0;
+    if (observer) {
+      SimFrame f;
+      f.utime = now;
+      f.setpoint = &setpoint;
+      f.pid = &pid;
+      f.cycle = &cycle;
+      f.vehicle = &vehicle;
+      f.battery = battery_sent ? &battery : nullptr;
+      f.motor_status = status_sent ? &motor_status : nullptr;
+      f.reference = &ref;
+      f.command = &cmd;
+      f.counters = &loop.counters();
+      observer(f);
+    }
+
+    scorer.add(t, ref, cmd, vehicle, mixer_armed, cycle.mix.allocation.axis_limited);
+
+    for (int s = 0; s < substeps; ++s) {
+      vehicle.step(cycle.mix.output, cycle.mix.direction, clock.stopped(),
+                   clock.environment(t + s * dt), dt);
+    }
+    r.min_battery_v = std::min(r.min_battery_v, vehicle.battery().terminal_v());
+    r.cycles = k + 1;
+    if (vehicle.crashed()) {
+      r.crashed = true;
+      r.crash_reason = vehicle.crash_reason();
+      r.crash_time_s = t + period;
+      break;
+    }
+  }
+  scorer.finish(r);
+  r.failsafe_events = loop.counters().failsafe_events;
+  r.final_charge = vehicle.battery().charge();
+  r.sim_seconds = static_cast<double>(r.cycles) * period;
+  r.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return r;
+}
+
+}  // namespace motormix::sim

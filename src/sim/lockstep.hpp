@@ -1,0 +1,163 @@
+#pragma once
+// One simulated run in lockstep: the scenario, the built-in controller, the
+// real control loop (node::ControlLoop: arming, staleness, battery
+// compensation, motor_status handling) around the real Mixer and output
+// stage, and the vehicle model, all on the simulated clock. Nothing waits
+// on a wall clock, so a run is as fast as the CPU and the same inputs and
+// seed give the same results, bit for bit.
+//
+// Each loop period: the scenario's events due are applied; the controller
+// reads the (noisy) state and sends a setpoint and a pid; a battery reading
+// (50 Hz) and a motor_status (from the failure's detection on, 10 Hz) are
+// delivered when due; the control loop cycles; the vehicle integrates the
+// outputs over the period in steps of at most 1 ms.
+
+#include "node/control_loop.hpp"
+#include "sim/controller.hpp"
+#include "sim/scenario.hpp"
+#include "sim/vehicle_model.hpp"
+
+#include <motormix/config/config.hpp>
+#include <motormix/mixer.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace motormix::sim {
+
+inline constexpr std::int64_t kEpochUs = 1700000000000000;  // utime of simulated time 0
+inline constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
+struct MotorFailure {
+  int motor = 0;  // 0-based
+  double at_s = 0.0;
+};
+
+struct SimOptions {
+  std::vector<MotorFailure> failures;  // on top of the scenario's
+  bool undetected = false;             // never report the failures on motor_status
+  std::uint64_t seed = 1;
+  double duration_s = 0.0;  // > 0: instead of the scenario's
+};
+
+// The metrics of one run, over the scenario's scored window (armed cycles).
+struct SimResult {
+  bool crashed = false;
+  std::string crash_reason;
+  double crash_time_s = -1.0;
+  double attitude_error_rms_deg = 0.0;  // tilt between the attitude asked and flown
+  double attitude_error_max_deg = 0.0;
+  double yaw_error_rms_deg = 0.0;
+  double altitude_loss_m = 0.0;  // largest drop below the commanded altitude, once reached
+  double saturated_fraction = 0.0;  // cycles with some axis not fully delivered
+  double speed_error_rms_mps = 0.0;   // ground vehicles
+  double yaw_rate_error_rms_dps = 0.0;  // ground vehicles
+  double min_battery_v = 0.0;
+  double final_charge = 0.0;
+  std::int64_t cycles = 0;
+  std::int64_t failsafe_events = 0;
+  double sim_seconds = 0.0;
+  double wall_seconds = 0.0;
+};
+
+// Everything one loop period produced, for logs and plots.
+struct SimFrame {
+  std::int64_t utime = 0;
+  const node::SetpointSample* setpoint = nullptr;
+  const node::PidSample* pid = nullptr;
+  const node::CycleResult* cycle = nullptr;
+  const VehicleModel* vehicle = nullptr;
+  const node::BatterySample* battery = nullptr;            // when one was sent this period
+  const node::MotorStatusSample* motor_status = nullptr;   // when one was sent this period
+  const Reference* reference = nullptr;
+  const ControllerCommand* command = nullptr;  // what the controller sent
+  const node::Counters* counters = nullptr;
+};
+using FrameObserver = std::function<void(const SimFrame&)>;
+
+// The configuration as the scenario flies it (its battery settings applied).
+// Throws config::ConfigError when the scenario is for the other kind of
+// vehicle.
+config::Config scenario_config(const config::Config& config, const Scenario& scenario);
+
+// `mixer` is what the control loop flies with (build_mixer(config), or a
+// comparison allocator); the controller linearizes it.
+SimResult run_lockstep(const config::Config& config, Mixer mixer, const Scenario& scenario,
+                       const SimOptions& options, const FrameObserver& observer = {});
+
+// What the controller sees: the state with the scenario's sensor noise.
+class Sensors {
+ public:
+  Sensors(const SensorNoise& noise, std::uint64_t seed) : noise_(noise), rng_(seed) {}
+  BodyState measure(const BodyState& truth) {
+    BodyState m = truth;
+    const Eigen::Vector3d tilt_noise(gauss(noise_.attitude_deg * kRadPerDeg),
+                                     gauss(noise_.attitude_deg * kRadPerDeg),
+                                     gauss(noise_.attitude_deg * kRadPerDeg));
+    if (tilt_noise.norm() > 0) {
+      m.attitude = (truth.attitude * Eigen::AngleAxisd(tilt_noise.norm(), tilt_noise.normalized()))
+                       .normalized();
+    }
+    m.rates += Eigen::Vector3d(gauss(noise_.gyro_rad_s), gauss(noise_.gyro_rad_s),
+                               gauss(noise_.gyro_rad_s));
+    m.position.z() += gauss(noise_.altitude_m);
+    m.velocity.z() += gauss(noise_.altitude_m);
+    return m;
+  }
+  double speed(double truth) { return truth + gauss(noise_.speed_mps); }
+
+ private:
+  double gauss(double sigma) { return sigma > 0 ? sigma * normal_(rng_) : 0.0; }
+  SensorNoise noise_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+};
+
+// The metrics of SimResult, accumulated cycle by cycle (lockstep and live).
+class Scorer {
+ public:
+  Scorer(const Scenario& scenario, const config::Config& config);
+  // One cycle at time t: what was asked, what the vehicle did, whether the
+  // mixer was armed and which axes it could not deliver.
+  void add(double t, const Reference& ref, const ControllerCommand& cmd, const VehicleModel& vehicle,
+           bool armed, std::uint8_t axis_limited);
+  void finish(SimResult& r) const;
+
+ private:
+  double from_s_, to_s_;
+  bool wheeled_;
+  AxisMask controlled_;
+  double att_sq_ = 0, yaw_sq_ = 0, speed_sq_ = 0, rate_sq_ = 0;
+  double att_max_ = 0, altitude_loss_ = 0;
+  double commanded_altitude_ = -1.0;
+  bool reached_ = false;
+  std::int64_t scored_ = 0, saturated_ = 0;
+};
+
+// The scenario's references at time t, and what the events due change.
+class ScenarioClock {
+ public:
+  ScenarioClock(const Scenario& scenario, const config::Config& config,
+                const std::vector<MotorFailure>& extra_failures);
+  // Applies every event due at t; returns motors that stopped just now.
+  MotorMask advance(double t);
+  const Reference& reference() const { return ref_; }
+  MotorMask stopped() const { return stopped_; }
+  Environment environment(double t) const;
+  std::vector<std::pair<double, int>> failures() const { return failures_; }  // (at, motor)
+
+ private:
+  const Scenario& scenario_;
+  std::vector<std::pair<double, int>> failures_;
+  std::size_t next_ = 0;
+  std::size_t next_failure_ = 0;
+  Reference ref_;
+  MotorMask stopped_ = 0;
+  Eigen::Vector3d wind_ = Eigen::Vector3d::Zero();
+  std::vector<std::pair<double, Gust>> gusts_;  // (start, gust)
+};
+
+}  // namespace motormix::sim

@@ -1,0 +1,183 @@
+#include "sim/vehicle_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace motormix::sim {
+
+namespace {
+
+constexpr double kTakenOffAltitudeM = 0.2;  // above this the vehicle has flown
+constexpr double kPi = 3.14159265358979323846;
+
+// Exact discretization of a first-order lag over one step.
+double lag(double value, double target, double alpha_up, double alpha_down) {
+  return value + (target - value) * (std::abs(target) > std::abs(value) ? alpha_up : alpha_down);
+}
+
+}  // namespace
+
+VehicleModel::VehicleModel(const config::Config& config)
+    : p_(config.physics), battery_(config.physics.battery) {
+  if (!p_.incomplete.empty()) throw std::invalid_argument(p_.incomplete);
+  for (const OutputChannel& ch : config.outputs) modes_.push_back(ch.mode);
+  speed_.assign(static_cast<std::size_t>(config.motors()), 0.0);
+  mass_.mass_kg = p_.mass_kg;
+  mass_.inertia = p_.inertia_kgm2;
+}
+
+void VehicleModel::set_body(const BodyState& body, bool landed) {
+  body_ = body;
+  landed_ = landed;
+  taken_off_ = !landed;
+}
+
+double VehicleModel::thrust_n(int i) const {
+  if (p_.wheeled) return 0.0;
+  const auto k = static_cast<std::size_t>(i);
+  return p_.rotors[k].max_thrust_n * speed_[k];
+}
+
+double VehicleModel::driver_fraction(int i, double output, int direction) const {
+  const auto k = static_cast<std::size_t>(i);
+  const double lo = p_.esc_min[k], hi = p_.esc_max[k], mid = p_.esc_center[k];
+  switch (modes_[k]) {
+    case OutputMode::kUnipolar:
+      return std::clamp((output - lo) / (hi - lo), 0.0, 1.0);
+    case OutputMode::kCentered:
+      return std::clamp(output >= mid ? (output - mid) / (hi - mid) : (output - mid) / (mid - lo),
+                        -1.0, 1.0);
+    case OutputMode::kMagnitudeDirection:
+      return std::clamp((output - lo) / (hi - lo), 0.0, 1.0) * (direction > 0   ? 1.0
+                                                                : direction < 0 ? -1.0
+                                                                                : 0.0);
+  }
+  return 0.0;
+}
+
+Eigen::Matrix<double, 4, Eigen::Dynamic> VehicleModel::command_effect() const {
+  Eigen::Matrix<double, 4, Eigen::Dynamic> e = Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, motors());
+  for (int i = 0; i < motors(); ++i) {
+    if (p_.wheeled) {
+      const double side = i % 2 == 0 ? 1.0 : -1.0;  // even: left; left faster turns right (+yaw)
+      const double wheel = p_.wheels.radius_m * p_.wheels.max_speed_rad_s / p_.wheels.per_side;
+      e(2, i) = side * wheel / p_.wheels.track_m;
+      e(3, i) = wheel / 2.0;
+    } else {
+      const config::RotorPhysics& r = p_.rotors[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d f = r.max_thrust_n * r.axis;
+      const Eigen::Vector3d tau =
+          r.position_m.cross(f) + static_cast<double>(r.spin) * r.torque_ratio_m * -f;
+      e.block<3, 1>(0, i) = tau;
+      e(3, i) = -f.z();
+    }
+  }
+  return e;
+}
+
+void VehicleModel::sum_rotors() {
+  rotor_force_.setZero();
+  rotor_torque_.setZero();
+  for (int i = 0; i < motors(); ++i) {
+    const config::RotorPhysics& r = p_.rotors[static_cast<std::size_t>(i)];
+    const Eigen::Vector3d f = thrust_n(i) * r.axis;
+    rotor_force_ += f;
+    rotor_torque_ += r.position_m.cross(f) + static_cast<double>(r.spin) * r.torque_ratio_m * -f;
+  }
+}
+
+Wrench VehicleModel::wrench(const BodyState& s, const Environment& env) const {
+  Wrench w;
+  w.force_world = s.attitude * rotor_force_ + Eigen::Vector3d(0, 0, mass_.mass_kg * kGravity) -
+                  p_.drag_linear_n_per_mps * (s.velocity - env.wind_ned) + env.force_world;
+  w.torque_body = rotor_torque_ - p_.drag_rotational_nm_per_radps * s.rates + env.torque_body;
+  return w;
+}
+
+void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direction,
+                        MotorMask stopped, const Environment& env, double dt) {
+  if (crashed_) return;
+  if (dt != lag_dt_) {
+    lag_dt_ = dt;
+    alpha_up_ = 1.0 - std::exp(-dt / p_.time_constant_up_s);
+    alpha_down_ = 1.0 - std::exp(-dt / p_.time_constant_down_s);
+  }
+  const double v = battery_.terminal_v() / battery_.physics().reference_v;
+  double current = battery_.physics().avionics_current_a;
+  for (int i = 0; i < motors(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    double target = 0.0;
+    if (((stopped >> i) & 1U) == 0) {
+      const double x = driver_fraction(i, outputs[i], direction[k]);
+      if (p_.wheeled) {
+        target = x * p_.wheels.max_speed_rad_s * v;
+      } else {
+        const double e = p_.thrust_expo;
+        target = ((1 - e) * v + e * v * v) * (e * x * x + (1 - e) * x);
+      }
+    }
+    speed_[k] = lag(speed_[k], target, alpha_up_, alpha_down_);
+    // Electrical power grows with thrust^1.5 (momentum theory); a wheel
+    // motor's current with its speed.
+    const double s = std::max(speed_[k], 0.0);
+    const double load = p_.wheeled ? std::abs(speed_[k]) / p_.wheels.max_speed_rad_s : s * std::sqrt(s);
+    current += battery_.physics().full_throttle_current_a * load;
+  }
+  battery_.step(current, dt);
+  if (p_.wheeled) {
+    step_wheels(dt);
+  } else {
+    step_aircraft(env, dt);
+  }
+}
+
+void VehicleModel::step_aircraft(const Environment& env, double dt) {
+  sum_rotors();
+  if (landed_) {
+    // Resting on the ground: lift off once the net force points up.
+    if (wrench(body_, env).force_world.z() >= 0.0) return;
+    landed_ = false;
+  }
+  body_ = rk4_step(body_, mass_, [&](const BodyState& s) { return wrench(s, env); }, dt);
+  if (!taken_off_ && body_.position.z() < -kTakenOffAltitudeM) taken_off_ = true;
+  if (body_.position.z() >= 0.0) {
+    const double impact = body_.velocity.z();
+    if (taken_off_ && impact > kCrashSpeedMps) {
+      std::ostringstream why;
+      why.precision(3);
+      why << "hit the ground at " << impact << " m/s";
+      crashed_ = true;
+      crash_reason_ = why.str();
+    }
+    // On the ground: at rest, level, heading kept.
+    body_.position.z() = 0.0;
+    body_.velocity.setZero();
+    body_.rates.setZero();
+    body_.attitude = from_euler(0.0, 0.0, euler(body_.attitude).z());
+    landed_ = true;
+    return;
+  }
+  if (taken_off_ && tilt(body_.attitude) > kPi / 2) {
+    crashed_ = true;
+    crash_reason_ = "tilted past 90 degrees";
+  }
+}
+
+void VehicleModel::step_wheels(double dt) {
+  double left = 0.0, right = 0.0;
+  for (int i = 0; i < motors(); ++i) (i % 2 == 0 ? left : right) += speed_[static_cast<std::size_t>(i)];
+  left /= p_.wheels.per_side;
+  right /= p_.wheels.per_side;
+  forward_speed_ = p_.wheels.radius_m * (left + right) / 2.0;
+  const double yaw_rate = p_.wheels.radius_m * (left - right) / p_.wheels.track_m;
+  double yaw = euler(body_.attitude).z() + yaw_rate * dt;
+  body_.velocity = {forward_speed_ * std::cos(yaw), forward_speed_ * std::sin(yaw), 0.0};
+  body_.position += body_.velocity * dt;
+  body_.attitude = from_euler(0.0, 0.0, yaw);
+  body_.rates = {0.0, 0.0, yaw_rate};
+  landed_ = true;
+}
+
+}  // namespace motormix::sim

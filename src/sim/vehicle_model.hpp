@@ -1,0 +1,93 @@
+#pragma once
+// The simulated vehicle: what the drivers do with the mixer's outputs, and
+// what the vehicle does with that. One class for both kinds the geometry can
+// describe:
+// - aircraft: each rotor's ESC maps its input (PWM microseconds by default)
+//   to a thrust fraction through the physical curve e x^2 + (1 - e) x,
+//   scaled with the pack voltage as (1 - e) v + e v^2 of v = V / V_ref; the
+//   rotor follows with a first-order lag (separate up and down time
+//   constants), pushes along its axis and drags against its spin; a 6-DOF
+//   rigid body (rigid_body.hpp) with linear and rotational drag, gravity, a
+//   flat ground at z = 0 and crash detection;
+// - ground vehicles: each wheel's driver maps centered PWM or duty plus
+//   direction pin to a wheel speed (linear in the pack voltage), the wheel
+//   follows with a first-order lag, and a unicycle without slip moves by
+//   the mean speed of each side (skid steer: the wheels of a side together).
+// Every driver's input is read as a physical ESC would: anything outside its
+// range is clipped, the disarmed value stops the motor.
+
+#include "sim/battery_model.hpp"
+#include "sim/rigid_body.hpp"
+
+#include <motormix/config/config.hpp>
+#include <motormix/output_stage.hpp>
+
+#include <string>
+#include <vector>
+
+namespace motormix::sim {
+
+inline constexpr double kGravity = 9.80665;
+inline constexpr double kCrashSpeedMps = 2.0;  // hitting the ground faster than this is a crash
+
+struct Environment {
+  Eigen::Vector3d wind_ned = Eigen::Vector3d::Zero();     // m/s: drag acts on the air-relative velocity
+  Eigen::Vector3d force_world = Eigen::Vector3d::Zero();  // N, e.g. a gust's push
+  Eigen::Vector3d torque_body = Eigen::Vector3d::Zero();  // N m, e.g. a gust on one side
+};
+
+class VehicleModel {
+ public:
+  // Throws std::invalid_argument when config.physics is incomplete.
+  explicit VehicleModel(const config::Config& config);
+
+  // Advances dt seconds with `outputs` (the mixer's output-stage values) and
+  // `direction` held; motors in `stopped` produce nothing (physical failures).
+  void step(const MotorVector& outputs, const DirectionVector& direction, MotorMask stopped,
+            const Environment& env, double dt);
+
+  int motors() const { return static_cast<int>(speed_.size()); }
+  bool wheeled() const { return p_.wheeled; }
+  const BodyState& body() const { return body_; }
+  double thrust_n(int i) const;
+  double motor_speed(int i) const { return speed_[static_cast<std::size_t>(i)]; }
+  const BatteryModel& battery() const { return battery_; }
+  bool landed() const { return landed_; }
+  bool crashed() const { return crashed_; }
+  const std::string& crash_reason() const { return crash_reason_; }
+  double forward_speed() const { return forward_speed_; }  // wheels, m/s
+  const config::VehiclePhysics& physics() const { return p_; }
+
+  // Per unit thrust fraction (rotors) or unit wheel command (wheels) of each
+  // motor, at the reference voltage: rows roll, pitch, yaw torque (N m) and
+  // upward thrust (N) for aircraft; 0, 0, yaw rate (rad/s) and forward speed
+  // (m/s) for wheels. What a controller's gains are derived from.
+  Eigen::Matrix<double, 4, Eigen::Dynamic> command_effect() const;
+
+  // Places the vehicle (e.g. in the air, for tests).
+  void set_body(const BodyState& body, bool landed);
+
+ private:
+  double driver_fraction(int i, double output, int direction) const;
+  void sum_rotors();  // the rotors' force and torque, held over one step
+  Wrench wrench(const BodyState& s, const Environment& env) const;
+  void step_aircraft(const Environment& env, double dt);
+  void step_wheels(double dt);
+
+  config::VehiclePhysics p_;
+  std::vector<OutputMode> modes_;
+  MassProperties mass_;
+  BodyState body_;
+  BatteryModel battery_;
+  std::vector<double> speed_;  // rotors: thrust fraction; wheels: rad/s
+  double forward_speed_ = 0.0;
+  Eigen::Vector3d rotor_force_ = Eigen::Vector3d::Zero();   // body
+  Eigen::Vector3d rotor_torque_ = Eigen::Vector3d::Zero();  // body
+  double lag_dt_ = 0.0, alpha_up_ = 0.0, alpha_down_ = 0.0;
+  bool landed_ = true;
+  bool taken_off_ = false;
+  bool crashed_ = false;
+  std::string crash_reason_;
+};
+
+}  // namespace motormix::sim
