@@ -81,7 +81,11 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
   const auto free = [axis_limited](Axis a) { return (axis_limited & bit(a)) == 0 ? 1.0 : 0.0; };
   ControllerCommand c;
   c.armed = ref.armed;
-  c.attitude_sp = from_euler(ref.roll, ref.pitch, ref.yaw);
+  if (ref.roll != sp_euler_.x() || ref.pitch != sp_euler_.y() || ref.yaw != sp_euler_.z()) {
+    sp_euler_ = {ref.roll, ref.pitch, ref.yaw};
+    attitude_sp_ = from_euler(ref.roll, ref.pitch, ref.yaw);
+  }
+  c.attitude_sp = attitude_sp_;
   if (!ref.armed || !mixer_armed) {
     // Zero throttle until the mixer has accepted the arming.
     reset();
@@ -125,7 +129,8 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
                                    -kClimbIntegralLimit, kClimbIntegralLimit);
     }
     const double up_accel = gains_.climb_p * climb_error + gains_.climb_i * climb_integral_;
-    const double cos_tilt = std::max(std::cos(tilt(m.attitude)), kMinTiltCosine);
+    const double cos_tilt =
+        std::max((m.attitude * Eigen::Vector3d::UnitZ()).z(), kMinTiltCosine);
     want[3] = std::max(0.0, mass_kg_ * (kGravity + up_accel) / cos_tilt);
   }
   const Eigen::Vector4d d = g_inv_ * want;

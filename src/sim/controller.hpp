@@ -94,6 +94,8 @@ class Controller {
   double climb_integral_ = 0.0;
   double speed_integral_ = 0.0;
   double yaw_rate_integral_ = 0.0;
+  Eigen::Vector3d sp_euler_ = Eigen::Vector3d::Zero();  // the attitude_sp_ below, as asked
+  Eigen::Quaterniond attitude_sp_ = Eigen::Quaterniond::Identity();
 };
 
 }  // namespace motormix::sim

@@ -93,7 +93,7 @@ void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
     const Eigen::Vector3d z = b.attitude * Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d z_sp = cmd.attitude_sp * Eigen::Vector3d::UnitZ();
     const double att = std::acos(std::clamp(z.dot(z_sp), -1.0, 1.0)) / kDeg;
-    const double yaw = wrap(ref.yaw - euler(b.attitude).z()) / kDeg;
+    const double yaw = wrap(ref.yaw - heading(b.attitude)) / kDeg;
     att_sq_ += att * att;
     yaw_sq_ += yaw * yaw;
     att_max_ = std::max(att_max_, att);

@@ -14,6 +14,7 @@
 
 #include "node/control_loop.hpp"
 #include "sim/controller.hpp"
+#include "sim/noise.hpp"
 #include "sim/scenario.hpp"
 #include "sim/vehicle_model.hpp"
 
@@ -22,7 +23,6 @@
 
 #include <cstdint>
 #include <functional>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -91,14 +91,16 @@ SimResult run_lockstep(const config::Config& config, Mixer mixer, const Scenario
 // What the controller sees: the state with the scenario's sensor noise.
 class Sensors {
  public:
-  Sensors(const SensorNoise& noise, std::uint64_t seed) : noise_(noise), rng_(seed) {}
+  Sensors(const SensorNoise& noise, std::uint64_t seed) : noise_(noise), gauss(seed) {}
   BodyState measure(const BodyState& truth) {
     BodyState m = truth;
     const Eigen::Vector3d tilt_noise(gauss(noise_.attitude_deg * kRadPerDeg),
                                      gauss(noise_.attitude_deg * kRadPerDeg),
                                      gauss(noise_.attitude_deg * kRadPerDeg));
-    if (tilt_noise.norm() > 0) {
-      m.attitude = (truth.attitude * Eigen::AngleAxisd(tilt_noise.norm(), tilt_noise.normalized()))
+    if (tilt_noise.squaredNorm() > 0) {
+      // A small rotation: (1, v/2) normalized is exp(v) to second order.
+      m.attitude = (truth.attitude * Eigen::Quaterniond(1.0, tilt_noise.x() / 2,
+                                                        tilt_noise.y() / 2, tilt_noise.z() / 2))
                        .normalized();
     }
     m.rates += Eigen::Vector3d(gauss(noise_.gyro_rad_s), gauss(noise_.gyro_rad_s),
@@ -110,10 +112,8 @@ class Sensors {
   double speed(double truth) { return truth + gauss(noise_.speed_mps); }
 
  private:
-  double gauss(double sigma) { return sigma > 0 ? sigma * normal_(rng_) : 0.0; }
   SensorNoise noise_;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
+  GaussianNoise gauss;
 };
 
 // The metrics of SimResult, accumulated cycle by cycle (lockstep and live).

@@ -5,16 +5,9 @@
 
 namespace motormix::sim {
 
-namespace {
+namespace detail {
 
-struct Derivative {
-  Eigen::Vector3d dp, dv;
-  Eigen::Vector4d dq;  // w, x, y, z
-  Eigen::Vector3d dw;
-};
-
-Derivative derivative(const BodyState& s, const MassProperties& m, const WrenchOf& wrench) {
-  const Wrench f = wrench(s);
+Derivative derivative(const BodyState& s, const MassProperties& m, const Wrench& f) {
   Derivative d;
   d.dp = s.velocity;
   d.dv = f.force_world / m.mass_kg;
@@ -37,14 +30,8 @@ BodyState advance(const BodyState& s, const Derivative& d, double h) {
   return out;
 }
 
-}  // namespace
-
-BodyState rk4_step(const BodyState& s, const MassProperties& m, const WrenchOf& wrench,
-                   double dt) {
-  const Derivative k1 = derivative(s, m, wrench);
-  const Derivative k2 = derivative(advance(s, k1, dt / 2), m, wrench);
-  const Derivative k3 = derivative(advance(s, k2, dt / 2), m, wrench);
-  const Derivative k4 = derivative(advance(s, k3, dt), m, wrench);
+BodyState combine(const BodyState& s, const Derivative& k1, const Derivative& k2,
+                  const Derivative& k3, const Derivative& k4, double dt) {
   Derivative sum;
   sum.dp = (k1.dp + 2 * k2.dp + 2 * k3.dp + k4.dp) / 6;
   sum.dv = (k1.dv + 2 * k2.dv + 2 * k3.dv + k4.dv) / 6;
@@ -54,6 +41,8 @@ BodyState rk4_step(const BodyState& s, const MassProperties& m, const WrenchOf& 
   out.attitude.normalize();
   return out;
 }
+
+}  // namespace detail
 
 double tilt(const Eigen::Quaterniond& attitude) {
   const Eigen::Vector3d z = attitude * Eigen::Vector3d::UnitZ();
@@ -66,6 +55,10 @@ Eigen::Vector3d euler(const Eigen::Quaterniond& q) {
   const double pitch = std::asin(std::clamp(2 * (w * y - z * x), -1.0, 1.0));
   const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z));
   return {roll, pitch, yaw};
+}
+
+double heading(const Eigen::Quaterniond& q) {
+  return std::atan2(2 * (q.w() * q.z() + q.x() * q.y()), 1 - 2 * (q.y() * q.y() + q.z() * q.z()));
 }
 
 Eigen::Quaterniond from_euler(double roll, double pitch, double yaw) {

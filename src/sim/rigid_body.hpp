@@ -12,7 +12,6 @@
 
 #include <Eigen/Geometry>
 
-#include <functional>
 
 namespace motormix::sim {
 
@@ -33,14 +32,44 @@ struct Wrench {
   Eigen::Vector3d torque_body = Eigen::Vector3d::Zero();  // N m
 };
 
-using WrenchOf = std::function<Wrench(const BodyState&)>;
-
+// One RK4 step; `wrench` is called four times, with the state of each stage.
+template <typename WrenchOf>
 BodyState rk4_step(const BodyState& s, const MassProperties& m, const WrenchOf& wrench, double dt);
 
 // Tilt of the body's z axis from the world's, radians (0 level, pi upside down).
 double tilt(const Eigen::Quaterniond& attitude);
 // Euler angles roll, pitch, yaw (Z-Y-X), radians.
 Eigen::Vector3d euler(const Eigen::Quaterniond& attitude);
+double heading(const Eigen::Quaterniond& attitude);  // the yaw of euler(), alone
 Eigen::Quaterniond from_euler(double roll, double pitch, double yaw);
+
+namespace detail {
+
+struct Derivative {
+  Eigen::Vector3d dp, dv;
+  Eigen::Vector4d dq;  // w, x, y, z
+  Eigen::Vector3d dw;
+};
+
+Derivative derivative(const BodyState& s, const MassProperties& m, const Wrench& f);
+BodyState advance(const BodyState& s, const Derivative& d, double h);
+BodyState combine(const BodyState& s, const Derivative& k1, const Derivative& k2,
+                  const Derivative& k3, const Derivative& k4, double dt);
+
+}  // namespace detail
+
+template <typename WrenchOf>
+BodyState rk4_step(const BodyState& s, const MassProperties& m, const WrenchOf& wrench, double dt) {
+  using detail::advance;
+  using detail::derivative;
+  const detail::Derivative k1 = derivative(s, m, wrench(s));
+  const BodyState s2 = advance(s, k1, dt / 2);
+  const detail::Derivative k2 = derivative(s2, m, wrench(s2));
+  const BodyState s3 = advance(s, k2, dt / 2);
+  const detail::Derivative k3 = derivative(s3, m, wrench(s3));
+  const BodyState s4 = advance(s, k3, dt);
+  const detail::Derivative k4 = derivative(s4, m, wrench(s4));
+  return detail::combine(s, k1, k2, k3, k4, dt);
+}
 
 }  // namespace motormix::sim

@@ -26,18 +26,22 @@ VehicleModel::VehicleModel(const config::Config& config)
   speed_.assign(static_cast<std::size_t>(config.motors()), 0.0);
   mass_.mass_kg = p_.mass_kg;
   mass_.inertia = p_.inertia_kgm2;
+  // Force (body) and torque of each rotor per newton of its thrust: along
+  // its axis, about the centre of mass, and its drag against the spin.
+  per_newton_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(p_.rotors.size()));
+  for (std::size_t i = 0; i < p_.rotors.size(); ++i) {
+    const config::RotorPhysics& r = p_.rotors[i];
+    const auto col = static_cast<Eigen::Index>(i);
+    per_newton_.block<3, 1>(0, col) = r.axis;
+    per_newton_.block<3, 1>(3, col) =
+        r.position_m.cross(r.axis) + static_cast<double>(r.spin) * r.torque_ratio_m * -r.axis;
+  }
 }
 
 void VehicleModel::set_body(const BodyState& body, bool landed) {
   body_ = body;
   landed_ = landed;
   taken_off_ = !landed;
-}
-
-double VehicleModel::thrust_n(int i) const {
-  if (p_.wheeled) return 0.0;
-  const auto k = static_cast<std::size_t>(i);
-  return p_.rotors[k].max_thrust_n * speed_[k];
 }
 
 double VehicleModel::driver_fraction(int i, double output, int direction) const {
@@ -78,14 +82,11 @@ Eigen::Matrix<double, 4, Eigen::Dynamic> VehicleModel::command_effect() const {
 }
 
 void VehicleModel::sum_rotors() {
-  rotor_force_.setZero();
-  rotor_torque_.setZero();
-  for (int i = 0; i < motors(); ++i) {
-    const config::RotorPhysics& r = p_.rotors[static_cast<std::size_t>(i)];
-    const Eigen::Vector3d f = thrust_n(i) * r.axis;
-    rotor_force_ += f;
-    rotor_torque_ += r.position_m.cross(f) + static_cast<double>(r.spin) * r.torque_ratio_m * -f;
-  }
+  Eigen::VectorXd thrust(motors());
+  for (int i = 0; i < motors(); ++i) thrust[i] = thrust_n(i);
+  const Eigen::Matrix<double, 6, 1> w = per_newton_ * thrust;
+  rotor_force_ = w.head<3>();
+  rotor_torque_ = w.tail<3>();
 }
 
 Wrench VehicleModel::wrench(const BodyState& s, const Environment& env) const {

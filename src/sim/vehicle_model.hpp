@@ -49,7 +49,10 @@ class VehicleModel {
   int motors() const { return static_cast<int>(speed_.size()); }
   bool wheeled() const { return p_.wheeled; }
   const BodyState& body() const { return body_; }
-  double thrust_n(int i) const;
+  double thrust_n(int i) const {
+    const auto k = static_cast<std::size_t>(i);
+    return p_.wheeled ? 0.0 : p_.rotors[k].max_thrust_n * speed_[k];
+  }
   double motor_speed(int i) const { return speed_[static_cast<std::size_t>(i)]; }
   const BatteryModel& battery() const { return battery_; }
   bool landed() const { return landed_; }
@@ -81,6 +84,7 @@ class VehicleModel {
   BatteryModel battery_;
   std::vector<double> speed_;  // rotors: thrust fraction; wheels: rad/s
   double forward_speed_ = 0.0;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> per_newton_;     // rotor i: force and torque per N
   Eigen::Vector3d rotor_force_ = Eigen::Vector3d::Zero();   // body
   Eigen::Vector3d rotor_torque_ = Eigen::Vector3d::Zero();  // body
   double lag_dt_ = 0.0, alpha_up_ = 0.0, alpha_down_ = 0.0;

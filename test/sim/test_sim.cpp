@@ -71,7 +71,7 @@ TEST(RigidBody, FreeRotationConservesMomentumAndEnergy) {
   m.inertia = {0.01, 0.02, 0.035};
   BodyState s;
   s.rates = {0.3, 4.0, 0.2};
-  const WrenchOf none = [](const BodyState&) { return Wrench{}; };
+  const auto none = [](const BodyState&) { return Wrench{}; };
   const auto momentum = [&](const BodyState& b) {
     return Eigen::Vector3d(b.attitude * m.inertia.cwiseProduct(b.rates));
   };
