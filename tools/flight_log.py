@@ -11,9 +11,10 @@ import lcm_python  # noqa: E402
 
 lcm_python.add_types_path()
 import lcm  # noqa: E402
-from motormix import mixer_status_t, motor_pwm_t, pid_t, setpoint_t  # noqa: E402
+from motormix import mixer_status_t, motor_pwm_t, pid_t, setpoint_t, vehicle_state_t  # noqa: E402
 
-TYPES = (("setpoint", setpoint_t), ("pid", pid_t), ("pwm", motor_pwm_t), ("status", mixer_status_t))
+TYPES = (("setpoint", setpoint_t), ("pid", pid_t), ("pwm", motor_pwm_t), ("status", mixer_status_t),
+         ("state", vehicle_state_t))
 
 
 class Flight:
@@ -60,6 +61,23 @@ class Flight:
         self.armed = np.array([m.armed for _, m in rows["pwm"]], dtype=bool)
         self.status = [m for _, m in rows["status"]]
         self.status_t = np.array([t for t, _ in rows["status"]])
+        # vehicle_state_t, in logs of `motormix sim` (empty otherwise).
+        st = rows["state"]
+        self.state_t = np.array([t for t, _ in st])
+        self.position = np.array([m.position for _, m in st]).reshape(len(st), 3)
+        self.q = np.array([m.q for _, m in st]).reshape(len(st), 4)
+        self.body_rates = np.array([m.rates for _, m in st]).reshape(len(st), 3)
+        self.thrust = [list(m.thrust) for _, m in st]
+        self.battery_v = np.array([m.battery_v for _, m in st])
+        self.crashed = bool(st) and bool(st[-1][1].crashed)
+
+    def euler_deg(self):
+        """Roll, pitch, yaw in degrees (Z-Y-X) of the simulated attitude."""
+        w, x, y, z = self.q.T
+        roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+        pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1, 1))
+        yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return np.degrees(np.stack([roll, pitch, yaw], axis=1))
 
     @property
     def motors(self):

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Plots a motormix flight log to PNG: inputs, per-motor commands and PWM,
-and armed state over time. With --compare, overlays the motor commands of a
+and armed state over time; for a log of `motormix sim` (vehicle_state_t on
+the bus) also the simulated attitude, altitude and battery voltage. With --compare, overlays the motor commands of a
 second log (e.g. the same flight through another strategy)."""
 
 import argparse
@@ -32,8 +33,10 @@ def motor_labels(motormix, config, count):
 
 def plot(f, output, compare=None, title=None, labels=None):
     labels = labels or [f"m{i + 1}" for i in range(f.motors)]
-    fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True,
-                             gridspec_kw={"height_ratios": [2, 2, 2, 0.7]})
+    simulated = f.state_t.size > 0
+    ratios = [2, 2, 2, 0.7] + ([2, 1.5] if simulated else [])
+    fig, axes = plt.subplots(len(ratios), 1, figsize=(11, 10 + (5 if simulated else 0)), sharex=True,
+                             gridspec_kw={"height_ratios": ratios})
     ax = axes[0]
     ax.plot(f.setpoint_t, f.throttle, label="throttle", color="k")
     ax.plot(f.setpoint_t, f.yaw, label="yaw")
@@ -64,8 +67,26 @@ def plot(f, output, compare=None, title=None, labels=None):
         sat = [bin(s.saturated_upper | s.saturated_lower).count("1") / max(1, f.motors) for s in f.status]
         ax.step(f.status_t, sat, where="post", color="r", label="saturated motors (share)")
     ax.set_ylim(-0.05, 1.05)
-    ax.set_xlabel("time (s)")
     ax.legend(loc="upper right", ncol=2, fontsize=8)
+    if simulated:
+        ax = axes[4]
+        e = f.euler_deg()
+        for i, name in enumerate(("roll", "pitch", "yaw")):
+            ax.plot(f.state_t, e[:, i], lw=0.9, label=name)
+        ax.set_ylabel("attitude (deg)")
+        ax.legend(loc="upper right", ncol=3, fontsize=8)
+        ax = axes[5]
+        ax.plot(f.state_t, -f.position[:, 2], color="k", label="altitude (m)")
+        ax.set_ylabel("altitude (m)")
+        ax2 = ax.twinx()
+        ax2.plot(f.state_t, f.battery_v, color="tab:orange", lw=0.8, label="battery (V)")
+        ax2.set_ylabel("battery (V)")
+        ax.legend(loc="upper left", fontsize=8)
+        ax2.legend(loc="upper right", fontsize=8)
+        if f.crashed:
+            ax.axvline(f.state_t[-1], color="r", ls="--")
+            ax.text(f.state_t[-1], ax.get_ylim()[1], " crashed", color="r", va="top")
+    axes[-1].set_xlabel("time (s)")
     fig.suptitle(title or os.path.basename(f.path))
     fig.tight_layout()
     fig.savefig(output, dpi=90)

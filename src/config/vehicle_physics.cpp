@@ -28,6 +28,8 @@ constexpr double kCellNominalV = 3.85;
 // One motor at full thrust draws this many amperes per newton of its
 // maximum thrust (a 10-inch propeller on 4S: ~13 A for 6 N).
 constexpr double kAmpsPerNewton = 2.2;
+constexpr double kMahPerRotor = 1250.0;
+constexpr double kPackOhmsTimesRotors = 0.08;
 
 std::vector<double> numbers(const YAML::Node& node, const std::string& path, std::size_t len,
                             double lo, double hi) {
@@ -95,12 +97,16 @@ Eigen::Vector3d default_inertia(const std::vector<RotorPhysics>& rotors, double 
   return inertia.diagonal();
 }
 
+// The pack grows with the vehicle: 1250 mAh per rotor (a quad's 4S 5000 mAh)
+// at 0.08 ohm divided among them (parallel cells), so every default
+// multirotor hovers on about the same share of its pack.
 void read_battery(MapReader b, VehiclePhysics& v, double default_full_current) {
   BatteryPhysics& bat = v.battery;
+  const double packs = v.rotors.empty() ? 4.0 : static_cast<double>(v.rotors.size());
   bat.cells = static_cast<int>(std::lround(b.number("cells", 4, 1, 14)));
-  bat.capacity_mah = b.number("capacity_mah", bat.capacity_mah, 10.0, 1e6);
+  bat.capacity_mah = b.number("capacity_mah", kMahPerRotor * packs, 10.0, 1e6);
   bat.internal_resistance_ohm =
-      b.number("internal_resistance_ohm", bat.internal_resistance_ohm, 0.0, 10.0);
+      b.number("internal_resistance_ohm", kPackOhmsTimesRotors / packs, 0.0, 10.0);
   bat.initial_charge = b.number("initial_charge", 1.0, 0.0, 1.0);
   bat.reference_v = b.number("reference_v", kCellNominalV * bat.cells, 0.5, 100.0);
   bat.full_throttle_current_a =

@@ -136,8 +136,8 @@ config::Config scenario_config(const config::Config& config_in, const Scenario& 
   config::Config config = config_in;
   if (scenario.battery_initial_charge)
     config.physics.battery.initial_charge = *scenario.battery_initial_charge;
-  if (scenario.battery_resistance_ohm)
-    config.physics.battery.internal_resistance_ohm = *scenario.battery_resistance_ohm;
+  if (scenario.battery_resistance_factor)
+    config.physics.battery.internal_resistance_ohm *= *scenario.battery_resistance_factor;
   return config;
 }
 

@@ -97,9 +97,9 @@ Scenario parse_scenario(const std::string& yaml_text, const std::string& source)
     if (battery.has("initial_charge"))
       s.battery_initial_charge = battery.number("initial_charge", 1.0, 0.0, 1.0);
     battery.raw("initial_charge");
-    if (battery.has("internal_resistance_ohm"))
-      s.battery_resistance_ohm = battery.number("internal_resistance_ohm", 0.0, 0.0, 10.0);
-    battery.raw("internal_resistance_ohm");
+    if (battery.has("resistance_factor"))
+      s.battery_resistance_factor = battery.number("resistance_factor", 1.0, 0.0, 100.0);
+    battery.raw("resistance_factor");
     battery.finish();
     const YAML::Node timeline = root.raw("timeline");
     if (timeline.IsDefined() && !timeline.IsNull()) {

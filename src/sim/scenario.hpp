@@ -11,7 +11,7 @@
 //   altitude_m: 3                # initial altitude reference
 //   noise: {gyro_rad_s: 0.003, attitude_deg: 0.1, altitude_m: 0.01, speed_mps: 0.01}
 //   failure_detection_ms: 100    # a stopped motor is reported this much later
-//   battery: {initial_charge: 0.4, internal_resistance_ohm: 0.06}
+//   battery: {initial_charge: 0.4, resistance_factor: 4}   # a tired pack: 4x the resistance
 //   timeline:
 //     - {at: 5, roll_deg: 20}
 //     - {at: 7, roll_deg: 0, yaw_deg: 90}
@@ -65,7 +65,7 @@ struct Scenario {
   double failure_detection_s = 0.1;
   SensorNoise noise;
   std::optional<double> battery_initial_charge;
-  std::optional<double> battery_resistance_ohm;
+  std::optional<double> battery_resistance_factor;  // times the vehicle's internal resistance
   std::vector<ScenarioEvent> timeline;  // sorted by at_s
 };
 

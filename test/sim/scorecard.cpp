@@ -1,0 +1,242 @@
+// sim_scorecard: every strategy and airmode of motormix, and the PX4-style
+// sequential desaturation of test/reference, flown in closed loop through
+// every scenario (and every single motor failure, reported and undetected),
+// worst case over seeds. Writes one JSON object per cell (vehicle, column,
+// scenario) to standard output; tools/sim_scorecard.py turns them into
+// SIM.md and plots. Run by scripts/sim-scorecard.
+//
+//   sim_scorecard SOURCE_DIR [--seeds N] [--jobs N] [--vehicles a,b]
+
+#include "reference/px4_sequential_desaturation.hpp"
+#include "sim/lockstep.hpp"
+
+#include <motormix/config/build_mixer.hpp>
+#include <motormix/config/load_config.hpp>
+#include <motormix/motor_failure.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace motormix::sim {
+namespace {
+
+// The PX4-style baseline as a motormix Allocator, reporting like every
+// strategy (describe_allocation against the basis' effectiveness).
+class Px4StyleAllocator final : public Allocator {
+ public:
+  Px4StyleAllocator(const MixingBasis& basis, reference::Px4Airmode airmode)
+      : px4_(basis.mixing, airmode),
+        effectiveness_(basis.effectiveness),
+        limits_(CommandRange{0.0, 1.0}, basis.controlled),
+        motors_(static_cast<int>(basis.mixing.rows())) {}
+  std::string_view name() const override { return "px4_sequential_desaturation"; }
+  int motors() const override { return motors_; }
+  AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override {
+    px4_.allocate({demand[0], demand[1], demand[2], demand[3]});
+    commands.resize(motors_);
+    for (int i = 0; i < motors_; ++i) commands[i] = px4_.actuator(i);
+    return describe_allocation(effectiveness_, demand, commands, limits_);
+  }
+
+ private:
+  mutable reference::SequentialDesaturation<double> px4_;
+  EffectivenessMatrix effectiveness_;
+  CycleConstants limits_;
+  int motors_;
+};
+
+struct Column {
+  std::string name;
+  std::vector<std::string> overrides;  // for motormix strategies
+  bool px4 = false;
+  reference::Px4Airmode airmode = reference::Px4Airmode::kDisabled;
+};
+
+std::vector<Column> columns() {
+  const auto prio = [](const char* airmode) {
+    return std::vector<std::string>{"mixer.strategy=prioritized",
+                                    std::string("mixer.prioritized.airmode=") + airmode};
+  };
+  return {
+      {"legacy_budget", {"mixer.strategy=legacy_budget"}},
+      {"budget", {"mixer.strategy=budget"}},
+      {"shift", {"mixer.strategy=shift"}},
+      {"clip", {"mixer.strategy=clip"}},
+      {"prioritized/off", prio("off")},
+      {"prioritized/roll_pitch", prio("roll_pitch")},
+      {"prioritized/roll_pitch_yaw", prio("roll_pitch_yaw")},
+      {"optimal", {"mixer.strategy=optimal"}},
+      {"px4/off", {}, true, reference::Px4Airmode::kDisabled},
+      {"px4/roll_pitch", {}, true, reference::Px4Airmode::kRollPitch},
+      {"px4/roll_pitch_yaw", {}, true, reference::Px4Airmode::kRollPitchYaw},
+  };
+}
+
+Mixer px4_mixer(const config::Config& c, reference::Px4Airmode airmode) {
+  const CommandRange range = config::command_range(c);
+  FailurePlan plan = prepare_failures(
+      c.mixing, range, 0.5, [airmode](const FailureMixing&, const MixingBasis& basis) {
+        return std::unique_ptr<const Allocator>(std::make_unique<Px4StyleAllocator>(basis, airmode));
+      });
+  return Mixer(std::make_unique<Px4StyleAllocator>(MixingBasis(c.mixing), airmode),
+               OutputStage(c.outputs), c.thrust_range(), std::move(plan));
+}
+
+struct Case {
+  std::string vehicle;  // config file stem
+  std::string scenario;
+  int failed_motor = -1;  // motor_out: 0-based
+  bool undetected = false;
+};
+
+struct Cell {
+  const Column* column;
+  Case c;
+};
+
+nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) {
+  nlohmann::json out;
+  out["vehicle"] = cell.c.vehicle;
+  out["column"] = cell.column->name;
+  std::string label = cell.c.scenario;
+  if (cell.c.failed_motor >= 0) {
+    label += " m" + std::to_string(cell.c.failed_motor + 1) + (cell.c.undetected ? " undetected" : " reported");
+  }
+  out["scenario"] = label;
+  config::Config config;
+  try {
+    config = config::load_config_file(source + "/config/" + cell.c.vehicle + ".yaml",
+                                      cell.column->overrides);
+  } catch (const config::ConfigError& e) {
+    out["skipped"] = e.what();
+    return out;
+  }
+  const bool wheeled = config.thrust_range() == ThrustRange::kBipolar;
+  if (cell.column->px4 && wheeled) {
+    out["skipped"] = "the PX4-style mixer is for multirotors";
+    return out;
+  }
+  Scenario scenario = load_scenario(cell.c.scenario);
+  SimOptions options;
+  if (cell.c.failed_motor >= 0) {
+    scenario.timeline.erase(std::remove_if(scenario.timeline.begin(), scenario.timeline.end(),
+                                           [](const ScenarioEvent& e) { return e.fail.has_value(); }),
+                            scenario.timeline.end());
+    options.failures.push_back({cell.c.failed_motor, 6.0});
+    options.undetected = cell.c.undetected;
+  }
+  SimResult worst;
+  double wall = 0, sim_s = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    options.seed = static_cast<std::uint64_t>(seed);
+    Mixer mixer = cell.column->px4 ? px4_mixer(config, cell.column->airmode) : config::build_mixer(config);
+    const SimResult r = run_lockstep(config, std::move(mixer), scenario, options);
+    wall += r.wall_seconds;
+    sim_s += r.sim_seconds;
+    if (r.crashed && !worst.crashed) {
+      worst.crashed = true;
+      worst.crash_reason = r.crash_reason;
+      worst.crash_time_s = r.crash_time_s;
+    }
+    worst.attitude_error_rms_deg = std::max(worst.attitude_error_rms_deg, r.attitude_error_rms_deg);
+    worst.attitude_error_max_deg = std::max(worst.attitude_error_max_deg, r.attitude_error_max_deg);
+    worst.yaw_error_rms_deg = std::max(worst.yaw_error_rms_deg, r.yaw_error_rms_deg);
+    worst.altitude_loss_m = std::max(worst.altitude_loss_m, r.altitude_loss_m);
+    worst.saturated_fraction = std::max(worst.saturated_fraction, r.saturated_fraction);
+    worst.speed_error_rms_mps = std::max(worst.speed_error_rms_mps, r.speed_error_rms_mps);
+    worst.yaw_rate_error_rms_dps = std::max(worst.yaw_rate_error_rms_dps, r.yaw_rate_error_rms_dps);
+  }
+  out["crashed"] = worst.crashed;
+  if (worst.crashed) {
+    out["crash_reason"] = worst.crash_reason;
+    out["crash_time_s"] = worst.crash_time_s;
+  }
+  out["attitude_error_rms_deg"] = worst.attitude_error_rms_deg;
+  out["attitude_error_max_deg"] = worst.attitude_error_max_deg;
+  out["yaw_error_rms_deg"] = worst.yaw_error_rms_deg;
+  out["altitude_loss_m"] = worst.altitude_loss_m;
+  out["saturated_fraction"] = worst.saturated_fraction;
+  if (wheeled) {
+    out["speed_error_rms_mps"] = worst.speed_error_rms_mps;
+    out["yaw_rate_error_rms_dps"] = worst.yaw_rate_error_rms_dps;
+  }
+  out["seeds"] = seeds;
+  out["sim_seconds"] = sim_s;
+  out["wall_seconds"] = wall;
+  return out;
+}
+
+std::vector<Case> cases(const std::string& source, const std::vector<std::string>& vehicles) {
+  std::vector<Case> out;
+  for (const std::string& v : vehicles) {
+    const config::Config c = config::load_config_file(source + "/config/" + v + ".yaml");
+    if (c.thrust_range() == ThrustRange::kBipolar) {
+      out.push_back({v, "drive"});
+      continue;
+    }
+    for (const char* s : {"hover", "steps", "flips", "battery_sag", "gusts"}) out.push_back({v, s});
+    for (int m = 0; m < c.motors(); ++m) {
+      out.push_back({v, "motor_out", m, false});
+      out.push_back({v, "motor_out", m, true});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+}  // namespace motormix::sim
+
+int main(int argc, char** argv) {
+  using namespace motormix::sim;
+  if (argc < 2) {
+    std::cerr << "usage: sim_scorecard SOURCE_DIR [--seeds N] [--jobs N] [--vehicles a,b]\n";
+    return 2;
+  }
+  const std::string source = argv[1];
+  int seeds = 3;
+  unsigned jobs = std::max(1U, std::thread::hardware_concurrency());
+  std::vector<std::string> vehicles = {"quad_x", "hexa_x", "octo_x", "team_quad", "diff_drive"};
+  for (int i = 2; i + 1 < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--seeds") seeds = std::max(1, std::atoi(argv[i + 1]));
+    if (flag == "--jobs") jobs = static_cast<unsigned>(std::max(1, std::atoi(argv[i + 1])));
+    if (flag == "--vehicles") {
+      vehicles.clear();
+      std::string list = argv[i + 1];
+      for (std::size_t p = 0; p <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', p), list.size());
+        vehicles.push_back(list.substr(p, comma - p));
+        p = comma + 1;
+      }
+    }
+  }
+  const std::vector<Column> cols = columns();
+  std::vector<Cell> cells;
+  for (const Case& c : cases(source, vehicles)) {
+    for (const Column& col : cols) cells.push_back({&col, c});
+  }
+  std::atomic<std::size_t> next{0};
+  std::mutex out;
+  std::vector<std::thread> workers;
+  for (unsigned w = 0; w < jobs; ++w) {
+    workers.emplace_back([&] {
+      for (std::size_t i = next++; i < cells.size(); i = next++) {
+        const nlohmann::json j = run_cell(source, cells[i], seeds);
+        const std::lock_guard<std::mutex> lock(out);
+        std::cout << j.dump() << "\n";
+      }
+    });
+  }
+  for (std::thread& t : workers) t.join();
+  std::cerr << "sim_scorecard: " << cells.size() << " cells, " << seeds << " seeds each\n";
+  return 0;
+}
