@@ -5,7 +5,14 @@
 // scenario) to standard output; tools/sim_scorecard.py turns them into
 // SIM.md and plots. Run by scripts/sim-scorecard.
 //
-//   sim_scorecard SOURCE_DIR [--seeds N] [--jobs N] [--vehicles a,b]
+//   sim_scorecard SOURCE_DIR [--seeds N] [--jobs N] [--vehicles a,b] [--check]
+//
+// --check (ctest): prints nothing per cell, checks the targets and
+// exits 1 on a miss: hexa X and octo X with optimal and prioritized survive
+// any one motor stopping at hover, reported after 100 ms (not crashed,
+// altitude loss <= 1 m, roll/pitch error <= 15 degrees), and prioritized with
+// an airmode is never more than 5 % worse than the PX4-style row with the
+// same airmode on attitude RMS (nor crashes where it does not).
 
 #include "reference/px4_sequential_desaturation.hpp"
 #include "sim/lockstep.hpp"
@@ -20,6 +27,7 @@
 #include <atomic>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -192,6 +200,50 @@ std::vector<Case> cases(const std::string& source, const std::vector<std::string
   return out;
 }
 
+constexpr double kTargetAltitudeLossM = 1.0;
+constexpr double kTargetAttitudeMaxDeg = 15.0;
+constexpr double kPx4Margin = 1.05;
+
+// The misses of the targets among `results`, one line each.
+std::vector<std::string> target_misses(const std::vector<nlohmann::json>& results) {
+  std::vector<std::string> misses;
+  std::map<std::string, const nlohmann::json*> by;
+  for (const nlohmann::json& r : results) {
+    by[r["vehicle"].get<std::string>() + "|" + r["column"].get<std::string>() + "|" +
+       r["scenario"].get<std::string>()] = &r;
+  }
+  const auto describe = [](const nlohmann::json& r) {
+    return r["vehicle"].get<std::string>() + " " + r["column"].get<std::string>() + " " +
+           r["scenario"].get<std::string>();
+  };
+  for (const nlohmann::json& r : results) {
+    if (r.contains("skipped")) continue;
+    const std::string v = r["vehicle"], c = r["column"], s = r["scenario"];
+    const bool target_vehicle = v == "hexa_x" || v == "octo_x";
+    const bool target_column = c == "optimal" || c.rfind("prioritized/", 0) == 0;
+    const bool reported = s.rfind("motor_out", 0) == 0 && s.size() > 8 &&
+                          s.compare(s.size() - 8, 8, "reported") == 0;
+    if (target_vehicle && target_column && reported &&
+        (r["crashed"].get<bool>() || r["altitude_loss_m"].get<double>() > kTargetAltitudeLossM ||
+         r["attitude_error_max_deg"].get<double>() > kTargetAttitudeMaxDeg)) {
+      misses.push_back("motor out: " + describe(r) + ": " + r.dump());
+    }
+    for (const char* airmode : {"roll_pitch", "roll_pitch_yaw"}) {
+      if (c != std::string("prioritized/") + airmode) continue;
+      const auto px4 = by.find(v + "|px4/" + airmode + "|" + s);
+      if (px4 == by.end() || px4->second->contains("skipped")) continue;
+      const nlohmann::json& p = *px4->second;
+      const bool worse =
+          (r["crashed"].get<bool>() && !p["crashed"].get<bool>()) ||
+          (!r["crashed"].get<bool>() && !p["crashed"].get<bool>() &&
+           r["attitude_error_rms_deg"].get<double>() >
+               kPx4Margin * p["attitude_error_rms_deg"].get<double>() + 1e-9);
+      if (worse) misses.push_back("against PX4: " + describe(r) + ": " + r.dump() + " vs " + p.dump());
+    }
+  }
+  return misses;
+}
+
 }  // namespace
 }  // namespace motormix::sim
 
@@ -202,16 +254,21 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string source = argv[1];
+  bool check = false;
+  for (int i = 2; i < argc; ++i) {
+    if (std::string(argv[i]) == "--check") check = true;
+  }
   int seeds = 3;
   unsigned jobs = std::max(1U, std::thread::hardware_concurrency());
   std::vector<std::string> vehicles = {"quad_x", "hexa_x", "octo_x", "team_quad", "diff_drive"};
-  for (int i = 2; i + 1 < argc; i += 2) {
+  for (int i = 2; i + 1 < argc; ++i) {
     const std::string flag = argv[i];
-    if (flag == "--seeds") seeds = std::max(1, std::atoi(argv[i + 1]));
-    if (flag == "--jobs") jobs = static_cast<unsigned>(std::max(1, std::atoi(argv[i + 1])));
+    if (flag == "--seeds") seeds = std::max(1, std::atoi(argv[++i]));
+    if (flag == "--jobs") jobs = static_cast<unsigned>(std::max(1, std::atoi(argv[++i])));
     if (flag == "--vehicles") {
+      ++i;
       vehicles.clear();
-      std::string list = argv[i + 1];
+      std::string list = argv[i];
       for (std::size_t p = 0; p <= list.size();) {
         const std::size_t comma = std::min(list.find(',', p), list.size());
         vehicles.push_back(list.substr(p, comma - p));
@@ -226,17 +283,24 @@ int main(int argc, char** argv) {
   }
   std::atomic<std::size_t> next{0};
   std::mutex out;
+  std::vector<nlohmann::json> results;
   std::vector<std::thread> workers;
   for (unsigned w = 0; w < jobs; ++w) {
     workers.emplace_back([&] {
       for (std::size_t i = next++; i < cells.size(); i = next++) {
-        const nlohmann::json j = run_cell(source, cells[i], seeds);
+        nlohmann::json j = run_cell(source, cells[i], seeds);
         const std::lock_guard<std::mutex> lock(out);
-        std::cout << j.dump() << "\n";
+        if (!check) std::cout << j.dump() << "\n";
+        results.push_back(std::move(j));
       }
     });
   }
   for (std::thread& t : workers) t.join();
   std::cerr << "sim_scorecard: " << cells.size() << " cells, " << seeds << " seeds each\n";
-  return 0;
+  if (!check) return 0;
+  const std::vector<std::string> misses = target_misses(results);
+  for (const std::string& m : misses) std::cout << "MISSED " << m << "\n";
+  std::cout << (misses.empty() ? "every target met" : "targets missed") << " in " << results.size()
+            << " cells\n";
+  return misses.empty() ? 0 : 1;
 }
