@@ -29,6 +29,9 @@ install(FILES ${MOTORMIX_LCM_SOURCES} DESTINATION ${CMAKE_INSTALL_DATADIR}/motor
 install(DIRECTORY config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/config
   FILES_MATCHING PATTERN "*.yaml")
 install(DIRECTORY examples/ DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/examples)
+# The shipped scenarios (also compiled into motormix sim), as examples to copy.
+install(DIRECTORY scenarios/ DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/scenarios
+  FILES_MATCHING PATTERN "*.yaml")
 install(FILES README.md CHANGELOG.md BENCHMARKS.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(DIRECTORY docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR})
 if(MOTORMIX_JAVA_BUILT)

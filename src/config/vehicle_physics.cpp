@@ -26,8 +26,10 @@ constexpr double kLinearDragPerKg = 0.25;       // N per m/s per kg: ~40 m/s ter
 constexpr double kRotationalDrag = 0.002;       // N m per rad/s
 constexpr double kCellNominalV = 3.85;
 // One motor at full thrust draws this many amperes per newton of its
-// maximum thrust (a 10-inch propeller on 4S: ~13 A for 6 N).
-constexpr double kAmpsPerNewton = 2.2;
+// maximum thrust. With current growing as thrust^1.5, a default multirotor
+// then hovers on about 185 W per kilogram, the figure of ArduPilot SITL's
+// default multicopter model (1.5 kg hovering on 22.7 A at 12.14 V).
+constexpr double kAmpsPerNewton = 1.55;
 constexpr double kMahPerRotor = 1250.0;
 constexpr double kPackOhmsTimesRotors = 0.08;
 

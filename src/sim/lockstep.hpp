@@ -147,7 +147,7 @@ class ScenarioClock {
   const Reference& reference() const { return ref_; }
   MotorMask stopped() const { return stopped_; }
   Environment environment(double t) const;
-  std::vector<std::pair<double, int>> failures() const { return failures_; }  // (at, motor)
+  const std::vector<std::pair<double, int>>& failures() const { return failures_; }  // (at, motor)
 
  private:
   const Scenario& scenario_;

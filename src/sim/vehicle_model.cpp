@@ -28,7 +28,7 @@ VehicleModel::VehicleModel(const config::Config& config)
   mass_.inertia = p_.inertia_kgm2;
   // Force (body) and torque of each rotor per newton of its thrust: along
   // its axis, about the centre of mass, and its drag against the spin.
-  per_newton_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(p_.rotors.size()));
+  per_newton_.setZero(6, static_cast<Eigen::Index>(p_.rotors.size()));
   for (std::size_t i = 0; i < p_.rotors.size(); ++i) {
     const config::RotorPhysics& r = p_.rotors[i];
     const auto col = static_cast<Eigen::Index>(i);
@@ -82,9 +82,10 @@ Eigen::Matrix<double, 4, Eigen::Dynamic> VehicleModel::command_effect() const {
 }
 
 void VehicleModel::sum_rotors() {
-  Eigen::VectorXd thrust(motors());
+  MotorVector thrust(motors());
   for (int i = 0; i < motors(); ++i) thrust[i] = thrust_n(i);
-  const Eigen::Matrix<double, 6, 1> w = per_newton_ * thrust;
+  Eigen::Matrix<double, 6, 1> w;
+  w.noalias() = per_newton_ * thrust;
   rotor_force_ = w.head<3>();
   rotor_torque_ = w.tail<3>();
 }

@@ -84,7 +84,8 @@ class VehicleModel {
   BatteryModel battery_;
   std::vector<double> speed_;  // rotors: thrust fraction; wheels: rad/s
   double forward_speed_ = 0.0;
-  Eigen::Matrix<double, 6, Eigen::Dynamic> per_newton_;     // rotor i: force and torque per N
+  // Rotor i: force and torque per newton (fixed capacity: no allocation per step).
+  Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxMotors> per_newton_;
   Eigen::Vector3d rotor_force_ = Eigen::Vector3d::Zero();   // body
   Eigen::Vector3d rotor_torque_ = Eigen::Vector3d::Zero();  // body
   double lag_dt_ = 0.0, alpha_up_ = 0.0, alpha_down_ = 0.0;

@@ -123,6 +123,25 @@ TEST(VehicleModel, EqualCommandsAtTheHoverPwmHoldAltitude) {
   }
 }
 
+TEST(VehicleModel, HoverPowerMatchesAFlownReference) {
+  // ArduPilot SITL's default multicopter model: 1.5 kg hovering on 22.7 A at
+  // 12.14 V, 184 W per kg. The defaults here are sized to match it.
+  constexpr double kReferenceWattsPerKg = 22.7 * 12.14 / 1.5;
+  constexpr double kAgreement = 0.10;  // relative
+  for (const char* name : {"quad_x", "hexa_x", "octo_x"}) {
+    const config::Config c = preset(name, {"vehicle.battery.capacity_mah=1e6"});
+    VehicleModel v = airborne(c);
+    for (int settle = 0; settle < 3; ++settle) {
+      const MotorVector out =
+          MotorVector::Constant(c.motors(), hover_pwm(c, v.battery().terminal_v()));
+      for (int k = 0; k < 1000; ++k) v.step(out, DirectionVector{}, 0, Environment{}, 1e-3);
+    }
+    const double watts_per_kg =
+        v.battery().terminal_v() * v.battery().current_a() / c.physics.mass_kg;
+    EXPECT_NEAR(watts_per_kg, kReferenceWattsPerKg, kAgreement * kReferenceWattsPerKg) << name;
+  }
+}
+
 // Hover outputs plus a step on one axis, through the configured mixer and
 // output stage, then 50 ms of flight: the body rate that results.
 Eigen::Vector3d rate_after_step(const config::Config& c, Axis axis, double step) {
