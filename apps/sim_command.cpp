@@ -123,6 +123,7 @@ int sim(const SimCommand& cmd) {
       j["mode"] = "live";
       j["pwm_received"] = result.pwm_received;
       j["pwm_rejected"] = result.pwm_rejected;
+      j["statuses_received"] = result.statuses_received;
     } else {
       std::optional<sim::SimLogWriter> log;
       if (!cmd.log_path.empty()) {

@@ -62,8 +62,7 @@ EXPLAINED = {
     "before thrust (prioritized and PX4-style with roll_pitch_yaw, shift, clip) give up half the "
     "thrust for it at 55 degrees of tilt and sink into the ground (prioritized roll_pitch_yaw, seed 1: "
     "thrust 0.5 undelivered from 9.25 s, altitude 3.9 m to 0 by 11.3 s); those that let yaw give way "
-    "(prioritized off and roll_pitch, optimal with yaw weight 0.2) stay up. "
-    + BUDGET_FLIPS.split(".")[0] + ".",
+    "(prioritized off and roll_pitch, optimal with yaw weight 0.2) stay up.",
     ("*", "flips"): BUDGET_FLIPS,
 }
 

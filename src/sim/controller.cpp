@@ -15,6 +15,9 @@ constexpr double kMaxDescent = 1.5;          // m/s
 constexpr double kRateIntegralLimit = 0.5;   // rad: integral term at most rate_i x this
 constexpr double kClimbIntegralLimit = 2.0;  // m/s
 constexpr double kMinTiltCosine = 0.5;       // thrust is tilt-compensated up to 60 degrees
+// Less than this of an axis undelivered is rounding, not saturation (the
+// mixer's own kDeliveredTolerance is 1e-6; mixer_status_t carries floats).
+constexpr double kUndelivered = 1e-5;
 
 // d command / d demand around `at`, motor by motor (columns: axes).
 Eigen::MatrixXd mixer_slope(const Mixer& mixer, const AxisVector& at, int motors) {
@@ -68,6 +71,15 @@ Controller::Controller(const config::Config& config, const Mixer& mixer,
   gains_.max_yaw_rate = kMaxYawRateDps * kPi / 180.0;
 }
 
+bool Controller::winds_up(Axis axis, double error, const AxisVector& unallocated) const {
+  const int a = index(axis);
+  // A positive error raises the physical command on its axis (torque,
+  // thrust, speed, turn rate); g_inv_ maps that onto the demand, whatever
+  // sign the mixing table gives the axis.
+  const double demand_change = g_inv_(a, a) * error;
+  return std::abs(unallocated[a]) > kUndelivered && unallocated[a] * demand_change > 0.0;
+}
+
 void Controller::reset() {
   rate_integral_.setZero();
   climb_integral_ = 0.0;
@@ -77,8 +89,7 @@ void Controller::reset() {
 
 ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
                                      double forward_speed, bool mixer_armed, bool on_ground,
-                                     std::uint8_t axis_limited, double dt) {
-  const auto free = [axis_limited](Axis a) { return (axis_limited & bit(a)) == 0 ? 1.0 : 0.0; };
+                                     const AxisVector& unallocated, double dt) {
   ControllerCommand c;
   c.armed = ref.armed;
   if (ref.roll != sp_euler_.x() || ref.pitch != sp_euler_.y() || ref.yaw != sp_euler_.z()) {
@@ -95,8 +106,8 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
   if (wheeled_) {
     const double speed_error = ref.speed_mps - forward_speed;
     const double rate_error = ref.yaw_rate - m.rates.z();
-    speed_integral_ += free(Axis::kThrust) * speed_error * dt;
-    yaw_rate_integral_ += free(Axis::kYaw) * rate_error * dt;
+    if (!winds_up(Axis::kThrust, speed_error, unallocated)) speed_integral_ += speed_error * dt;
+    if (!winds_up(Axis::kYaw, rate_error, unallocated)) yaw_rate_integral_ += rate_error * dt;
     want[2] = ref.yaw_rate + gains_.speed_p * rate_error + gains_.speed_i * yaw_rate_integral_;
     want[3] = ref.speed_mps + gains_.speed_p * speed_error + gains_.speed_i * speed_integral_;
   } else {
@@ -112,7 +123,10 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
     if (on_ground) {
       reset();
     } else {
-      const Eigen::Vector3d integrating(free(Axis::kRoll), free(Axis::kPitch), free(Axis::kYaw));
+      Eigen::Vector3d integrating;
+      for (int a = 0; a < 3; ++a) {
+        integrating[a] = winds_up(static_cast<Axis>(a), rate_error[a], unallocated) ? 0.0 : 1.0;
+      }
       rate_integral_ = (rate_integral_ + integrating.cwiseProduct(rate_error) * dt)
                            .cwiseMax(-kRateIntegralLimit)
                            .cwiseMin(kRateIntegralLimit);
@@ -125,8 +139,10 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
         std::clamp(gains_.altitude_p * (ref.altitude_m - altitude), -kMaxDescent, gains_.max_climb);
     const double climb_error = climb_sp - (-m.velocity.z());
     if (!on_ground) {
-      climb_integral_ = std::clamp(climb_integral_ + free(Axis::kThrust) * climb_error * dt,
-                                   -kClimbIntegralLimit, kClimbIntegralLimit);
+      if (!winds_up(Axis::kThrust, climb_error, unallocated)) {
+        climb_integral_ = std::clamp(climb_integral_ + climb_error * dt, -kClimbIntegralLimit,
+                                     kClimbIntegralLimit);
+      }
     }
     const double up_accel = gains_.climb_p * climb_error + gains_.climb_i * climb_integral_;
     const double cos_tilt =

@@ -73,11 +73,14 @@ class Controller {
 
   // One update of dt seconds. mixer_armed: the mixer's outputs are armed
   // (until then the throttle stays at zero so arming is accepted); on_ground:
-  // integrators stay reset. axis_limited: the mixer's report of the last
-  // cycle (bit per axis, as in mixer_status_t): an axis it could not deliver
-  // does not integrate (anti-windup from the allocation report).
+  // integrators stay reset. unallocated: the mixer's report of the last
+  // cycle, per axis demanded minus produced (mixer_status_t.unallocated):
+  // an integrator that would push its axis further the way the mixer could
+  // not go holds still (anti-windup by clamping, from the allocation report);
+  // one that would take it back integrates.
   ControllerCommand update(const Reference& ref, const BodyState& measured, double forward_speed,
-                           bool mixer_armed, bool on_ground, std::uint8_t axis_limited, double dt);
+                           bool mixer_armed, bool on_ground, const AxisVector& unallocated,
+                           double dt);
   void reset();
 
   const ControllerGains& gains() const { return gains_; }
@@ -90,6 +93,9 @@ class Controller {
   Eigen::Matrix4d g_;        // demand -> torque/thrust (aircraft) or rate/speed (wheels)
   Eigen::Matrix4d g_inv_;
   ControllerGains gains_;
+  // Whether integrating `error` on `axis` would push the demand further the
+  // way the mixer could not deliver.
+  bool winds_up(Axis axis, double error, const AxisVector& unallocated) const;
   Eigen::Vector3d rate_integral_ = Eigen::Vector3d::Zero();
   double climb_integral_ = 0.0;
   double speed_integral_ = 0.0;

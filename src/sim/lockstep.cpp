@@ -164,7 +164,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   r.min_battery_v = vehicle.battery().terminal_v();
   Scorer scorer(scenario, config);
   bool mixer_armed = false;
-  std::uint8_t axis_limited = 0;
+  AxisVector unallocated = AxisVector::Zero();
   double next_battery = 0.0;
   double next_motor_status = 0.0;
   MotorMask reported = 0;
@@ -182,7 +182,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     const BodyState measured = sensors.measure(vehicle.body());
     const ControllerCommand cmd =
         controller.update(ref, measured, sensors.speed(vehicle.forward_speed()), mixer_armed,
-                          vehicle.landed() && !wheeled, axis_limited, period);
+                          vehicle.landed() && !wheeled, unallocated, period);
     setpoint = {now, cmd.thrust, cmd.yaw, cmd.armed};
     pid = {now, cmd.roll, cmd.pitch, cmd.yaw};
     loop.on_setpoint(setpoint, now, now);
@@ -212,7 +212,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
 
     const node::CycleResult& cycle = loop.cycle(now);
     mixer_armed = cycle.state == node::LoopState::kArmed;
-    axis_limited = mixer_armed ? cycle.mix.allocation.axis_limited : 0;
+    unallocated = mixer_armed ? cycle.mix.allocation.unallocated : AxisVector::Zero();
     if (observer) {
       SimFrame f;
       f.utime = now;

@@ -41,6 +41,8 @@ struct MixerOutputs {
   std::int64_t accepted = 0;
   std::int64_t rejected = 0;
   std::uint8_t axis_limited = 0;
+  AxisVector unallocated = AxisVector::Zero();
+  std::int64_t statuses = 0;
 
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     motor_pwm_t msg;
@@ -75,7 +77,9 @@ struct MixerOutputs {
     axis_limited = 0;
     for (int a = 0; a < kNumAxes; ++a) {
       if (msg.axis_limited[a]) axis_limited |= static_cast<std::uint8_t>(1U << a);
+      unallocated[a] = std::isfinite(msg.unallocated[a]) ? msg.unallocated[a] : 0.0;
     }
+    ++statuses;
   }
 };
 
@@ -153,7 +157,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario,
     if (options.controller) {
       cmd = controller.update(ref, sensors.measure(vehicle.body()),
                               sensors.speed(vehicle.forward_speed()), mix.any && mix.armed,
-                              vehicle.landed() && !wheeled, mix.axis_limited, period);
+                              vehicle.landed() && !wheeled,
+                              mix.armed ? mix.unallocated : AxisVector::Zero(), period);
       setpoint_t sp;
       sp.utime = now;
       sp.throttle = static_cast<float>(cmd.thrust);
@@ -217,6 +222,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario,
   r.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.pwm_received = mix.accepted;
   result.pwm_rejected = mix.rejected;
+  result.statuses_received = mix.statuses;
   return true;
 }
 

@@ -24,6 +24,7 @@ struct LiveResult {
   SimResult sim;
   std::int64_t pwm_received = 0;   // motor_pwm_t accepted from the mixer
   std::int64_t pwm_rejected = 0;   // undecodable, wrong size or not finite
+  std::int64_t statuses_received = 0;  // mixer_status_t (its unallocated demand feeds anti-windup)
   bool bus_ok = true;
 };
 
