@@ -28,6 +28,8 @@ for f in bin/motormix \
     "$libdir/cmake/motormix/motormixConfig.cmake" "$libdir/cmake/motormix/motormixConfigVersion.cmake" \
     "$libdir/cmake/motormix/motormixTargets.cmake" "$libdir/pkgconfig/motormix.pc" \
     lib/python3/dist-packages/motormix/__init__.py lib/python3/dist-packages/motormix/motor_pwm_t.py \
+    include/motormix/config/vehicle_physics.hpp include/motormix/vehicle_state_t.hpp \
+    share/motormix/scenarios/hover.yaml share/motormix/scenarios/motor_out.yaml \
     share/motormix/lcmtypes/motor_pwm_t.lcm share/motormix/config/quad_x.yaml \
     share/motormix/examples/embedding/embed.cpp share/doc/motormix/README.md \
     share/doc/motormix/CHANGELOG.md; do
@@ -64,6 +66,14 @@ version=$(awk '{print $2}' "$work/version.txt")
 grep -q "^Version: $version\$" "$prefix/$libdir/pkgconfig/motormix.pc" \
   || fail "motormix.pc does not carry version $version"
 "$prefix/bin/motormix" run --check --config "$prefix/share/motormix/config/quad_x.yaml" > /dev/null
+# The simulator from the install tree, on an installed scenario file and on a
+# compiled-in one: the hexa flies on after losing a motor.
+"$prefix/bin/motormix" sim --config "$prefix/share/motormix/config/hexa_x.yaml" \
+  --scenario "$prefix/share/motormix/scenarios/hover.yaml" --fail 2@6 --json > "$work/sim.json" \
+  || fail "motormix sim from the install tree failed: $(cat "$work/sim.json")"
+grep -q '"crashed":false' "$work/sim.json" || fail "installed motormix sim: $(cat "$work/sim.json")"
+"$prefix/bin/motormix" sim --preset octo_x --scenario motor_out --json > /dev/null \
+  || fail "installed motormix sim --preset octo_x --scenario motor_out"
 
 consumer_build() {  # NAME SOURCE_DIR PREFIX [EXTRA CMAKE ARGUMENTS...]
   local name="$1" from="$2" pfx="$3"
