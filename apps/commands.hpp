@@ -91,4 +91,17 @@ struct SimCommand {
 };
 int sim(const SimCommand& cmd);
 
+struct MotorTestCommand {
+  std::string config_path;  // one of config_path and preset
+  std::string preset;
+  std::vector<std::string> overrides;
+  std::string lcm_url;
+  std::string motor;  // number as motormix matrix prints it, or name
+  double throttle = 0.1;
+  double seconds = 2.0;
+  bool sequence = false;  // every motor in turn, in the diagram's numbering
+  double wait_s = 3.0;    // for the mixer's answer
+};
+int motor_test(const MotorTestCommand& cmd);
+
 }  // namespace motormix::app

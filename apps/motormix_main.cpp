@@ -137,8 +137,36 @@ int main(int argc, char** argv) {
   sim_app->add_option("--duration", sim_cmd.duration_s, "seconds to run instead of the scenario's")
       ->check(CLI::Range(0.01, 86400.0));
 
+  MotorTestCommand test_cmd;
+  CLI::App* test_app = app.add_subcommand(
+      "motor-test", "spin one motor alone through a running, disarmed motormix run");
+  auto* test_config = test_app->add_option("--config", test_cmd.config_path, "YAML configuration file")
+                          ->check(CLI::ExistingFile);
+  auto* test_preset = test_app->add_option("--preset", test_cmd.preset, "a preset vehicle");
+  test_config->excludes(test_preset);
+  test_app->add_option("--set", test_cmd.overrides, "override a config value: key.path=value");
+  test_app->add_option("--lcm-url", test_cmd.lcm_url,
+                       "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  auto* test_motor = test_app->add_option(
+      "--motor", test_cmd.motor, "the motor: number as motormix matrix prints it, or name");
+  auto* test_sequence = test_app->add_flag(
+      "--sequence", test_cmd.sequence, "every motor in turn, saying where it is and its spin");
+  test_motor->excludes(test_sequence);
+  test_app->add_option("--throttle", test_cmd.throttle, "command 0..motor_test.max_throttle (default 0.1)")
+      ->check(CLI::Range(0.0, 1.0));
+  test_app->add_option("--seconds", test_cmd.seconds, "how long (default 2)")
+      ->check(CLI::Range(0.0, 60.0));
+  test_app->add_option("--wait", test_cmd.wait_s, "seconds to wait for the mixer's answer (default 3)")
+      ->check(CLI::Range(0.1, 60.0));
+
   try {
     app.parse(argc, argv);
+    if (test_app->parsed() && test_cmd.config_path.empty() == test_cmd.preset.empty()) {
+      throw CLI::RequiredError("exactly one of --config and --preset");
+    }
+    if (test_app->parsed() && test_cmd.motor.empty() && !test_cmd.sequence) {
+      throw CLI::RequiredError("--motor or --sequence");
+    }
     if (sim_app->parsed() && sim_cmd.config_path.empty() == sim_cmd.preset.empty()) {
       throw CLI::RequiredError("exactly one of --config and --preset");
     }
@@ -161,5 +189,6 @@ int main(int argc, char** argv) {
   if (replay_app->parsed()) return replay(replay_cmd);
   if (monitor_app->parsed()) return monitor(monitor_cmd);
   if (sim_app->parsed()) return sim(sim_cmd);
+  if (test_app->parsed()) return motor_test(test_cmd);
   return kExitUsage;
 }

@@ -588,6 +588,13 @@ void read_inputs(MapReader inputs, Config& config) {
   inputs.finish();
 }
 
+void read_motor_test(MapReader test, Config& config) {
+  config.motor_test.enabled = read_bool(test, "enabled", true);
+  config.motor_test.max_throttle = test.number("max_throttle", 0.15, 0.0, 1.0);
+  config.motor_test.max_seconds = test.number("max_seconds", 3.0, 0.0, 60.0);
+  test.finish();
+}
+
 void read_realtime(MapReader rt, Config& config) {
   config.realtime.priority = static_cast<int>(rt.number("priority", 0, 0, 99));
   const YAML::Node cpus = rt.raw("cpus");
@@ -608,6 +615,7 @@ void read_channels(MapReader channels, Config& config) {
   c.status = channels.text("status", c.status);
   c.motor_status = channels.text("motor_status", c.motor_status);
   c.battery = channels.text("battery", c.battery);
+  c.motor_test = channels.text("motor_test", c.motor_test);
   channels.finish();
   // One channel, one message type: a shared input channel would hand each
   // message to two decoders (one of which rejects it, cycle after cycle),
@@ -617,7 +625,8 @@ void read_channels(MapReader channels, Config& config) {
   const std::pair<const char*, const std::string*> named[] = {
       {"setpoint", &c.setpoint},         {"pid", &c.pid},
       {"motor_pwm", &c.motor_pwm},       {"status", &c.status},
-      {"motor_status", &c.motor_status}, {"battery", &c.battery}};
+      {"motor_status", &c.motor_status}, {"battery", &c.battery},
+      {"motor_test", &c.motor_test}};
   for (std::size_t i = 0; i < std::size(named); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       if (*named[i].second == *named[j].second) {
@@ -639,6 +648,7 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
   read_output(root.map("output"), config);
   read_inputs(root.map("inputs"), config);
   read_channels(root.map("channels"), config);
+  read_motor_test(root.map("motor_test"), config);
   read_realtime(root.map("realtime"), config);
   config.publish = root.choice("publish", "timer", {"timer", "on_input"}) == "on_input"
                        ? PublishMode::kOnInput

@@ -48,6 +48,28 @@ const char* to_string(FailsafeReason reason) {
   return "?";
 }
 
+const char* to_string(MotorTestResult result) {
+  switch (result) {
+    case MotorTestResult::kOk:
+      return "ok";
+    case MotorTestResult::kRefusedDisabled:
+      return "motor tests are disabled (motor_test.enabled: false)";
+    case MotorTestResult::kRefusedNotDisarmed:
+      return "the mixer is armed or in failsafe";
+    case MotorTestResult::kRefusedArmedSetpoint:
+      return "an armed setpoint arrived within the input timeout";
+    case MotorTestResult::kRefusedThrottle:
+      return "throttle outside 0..motor_test.max_throttle";
+    case MotorTestResult::kRefusedDuration:
+      return "duration outside 0..motor_test.max_seconds";
+    case MotorTestResult::kRefusedMotor:
+      return "no such motor";
+    case MotorTestResult::kRefusedInvalid:
+      return "not finite, out of order or from the future";
+  }
+  return "?";
+}
+
 ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
     : mixer_(std::move(mixer)),
       thrust_range_(config.thrust_range()),
@@ -58,7 +80,8 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       hold_last_us_(seconds_to_us(config.inputs.hold_last_s)),
       max_future_us_(seconds_to_us(config.inputs.max_future_s)),
       arm_max_throttle_(config.inputs.arm_max_throttle),
-      config_failed_(config.failed_motors) {
+      config_failed_(config.failed_motors),
+      motor_test_settings_(config.motor_test) {
   if (config.battery) battery_.emplace(*config.battery);
   mixer_.disarm(result_.mix);
   record_vehicle_state(0);
@@ -105,7 +128,67 @@ Rejection ControlLoop::on_setpoint(const SetpointSample& sample, std::int64_t no
   last_setpoint_utime_ = sample.utime;
   setpoint_received_us_ = now_us;
   if (!sample.armed) arm_permitted_ = true;
+  if (sample.armed) {
+    last_armed_setpoint_us_ = now_us;
+    end_motor_test();  // the pilot wants to fly: no motor spins on its own any more
+  }
   return rejection;
+}
+
+void ControlLoop::end_motor_test() {
+  if (test_motor_ < 0) return;
+  test_motor_ = -1;
+  test_changed_ = true;
+}
+
+MotorTestResult ControlLoop::on_motor_test(const MotorTestSample& s, std::int64_t now_us,
+                                           std::int64_t wall_us) {
+  MotorTestResult r = MotorTestResult::kOk;
+  if (!motor_test_settings_.enabled) {
+    r = MotorTestResult::kRefusedDisabled;
+  } else if (!std::isfinite(s.throttle) || !std::isfinite(s.duration_s) ||
+             s.utime <= last_motor_test_utime_ || from_future(s.utime, wall_us)) {
+    r = MotorTestResult::kRefusedInvalid;
+  } else if (s.motor == 0) {
+    end_motor_test();  // a request to stop is always obeyed
+  } else if (result_.state != LoopState::kDisarmed) {
+    r = MotorTestResult::kRefusedNotDisarmed;
+  } else if (last_armed_setpoint_us_ != kNever && now_us - last_armed_setpoint_us_ <= setpoint_timeout_us_) {
+    r = MotorTestResult::kRefusedArmedSetpoint;
+  } else if (s.motor < 0 || s.motor > mixer_.motors()) {
+    r = MotorTestResult::kRefusedMotor;
+  } else if (s.throttle < 0.0 || s.throttle > motor_test_settings_.max_throttle) {
+    r = MotorTestResult::kRefusedThrottle;
+  } else if (s.duration_s <= 0.0 || s.duration_s > motor_test_settings_.max_seconds) {
+    r = MotorTestResult::kRefusedDuration;
+  } else {
+    test_motor_ = s.motor - 1;
+    test_throttle_ = s.throttle;
+    test_end_us_ = now_us + seconds_to_us(s.duration_s);
+    test_changed_ = true;
+    ++counters_.motor_tests_started;
+  }
+  if (r != MotorTestResult::kOk) ++counters_.motor_tests_refused;
+  if (r != MotorTestResult::kRefusedInvalid) last_motor_test_utime_ = s.utime;
+  result_.motor_test_request_utime = s.utime;
+  result_.motor_test_result = r;
+  return r;
+}
+
+// The test motor alone through the output stage (its idle, linearization,
+// limits and direction pin), every other output at its disarmed value.
+void ControlLoop::spin_test_motor(std::int64_t now_us) {
+  mixer_.disarm(result_.mix);
+  const int n = mixer_.motors();
+  MotorVector command = MotorVector::Zero(n);
+  command[test_motor_] = test_throttle_;
+  const MotorMask all = (MotorMask{1} << n) - 1;
+  const MotorMask others = all & ~(MotorMask{1} << test_motor_);
+  mixer_.output_stage().armed(command, result_.mix.output, result_.mix.direction, 0.0, false,
+                              others);
+  result_.mix.command = command;
+  result_.mix.armed = false;
+  (void)now_us;
 }
 
 Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us, std::int64_t wall_us) {
@@ -257,6 +340,15 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   } else {
     mixer_.disarm(result_.mix);
   }
+  // A motor test runs only while disarmed, until its end time.
+  if (test_motor_ >= 0 && (result_.state != LoopState::kDisarmed || now_us >= test_end_us_)) {
+    end_motor_test();
+  }
+  if (test_motor_ >= 0) spin_test_motor(now_us);
+  result_.motor_test = test_motor_;
+  result_.motor_test_throttle = test_motor_ >= 0 ? test_throttle_ : 0.0;
+  result_.motor_test_changed = test_changed_;
+  test_changed_ = false;
   result_.state_changed = result_.state != previous;
   last_cycle_us_ = now_us;
   return result_;

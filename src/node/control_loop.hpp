@@ -26,6 +26,13 @@
 //   by the latest accepted motor_status message (until the next one says
 //   otherwise: a silent failure detector does not bring a motor back). A
 //   motor_status whose num_motors differs from the mixer's is rejected.
+// - A motor test (motor_test_t) spins one motor alone through the output
+//   stage while the outputs stay disarmed (armed = false), and is obeyed only
+//   when motor_test.enabled, the loop is disarmed, no armed setpoint arrived
+//   within the setpoint timeout, and throttle and duration are within
+//   motor_test.max_throttle and max_seconds. It ends at its duration, at the
+//   first armed setpoint, when a new test replaces it, or on request
+//   (motor 0); every refusal is counted with its reason.
 // - With battery compensation configured, the thrust demand is multiplied by
 //   the gain of the filtered voltage while it is fresh and plausible; a
 //   stale, missing or implausible voltage means gain 1 (no compensation).
@@ -57,6 +64,19 @@ enum class FailsafeReason : std::int8_t {
 const char* to_string(LoopState state);
 const char* to_string(FailsafeReason reason);
 
+// The answer to a motor test request (mixer_status_t MOTOR_TEST_*).
+enum class MotorTestResult : std::int8_t {
+  kOk = 0,
+  kRefusedDisabled = 1,
+  kRefusedNotDisarmed = 2,
+  kRefusedArmedSetpoint = 3,
+  kRefusedThrottle = 4,
+  kRefusedDuration = 5,
+  kRefusedMotor = 6,
+  kRefusedInvalid = 7,
+};
+const char* to_string(MotorTestResult result);
+
 struct Counters {
   std::int64_t cycles = 0;
   std::int64_t setpoint_received = 0;
@@ -71,6 +91,8 @@ struct Counters {
   std::int64_t motor_status_received = 0;
   std::int64_t battery_received = 0;
   std::int64_t rejected_size = 0;  // wrong array sizes
+  std::int64_t motor_tests_started = 0;
+  std::int64_t motor_tests_refused = 0;
 
   std::int64_t rejected() const {
     return rejected_decode + rejected_nonfinite + rejected_range + rejected_out_of_order +
@@ -98,6 +120,11 @@ struct CycleResult {
   // Milliseconds since the last accepted setpoint, pid, battery and
   // motor_status message; -1 if none yet.
   std::array<double, 4> input_age_ms{-1.0, -1.0, -1.0, -1.0};
+  int motor_test = -1;              // motor spinning alone (0-based), -1 when none
+  double motor_test_throttle = 0.0;
+  bool motor_test_changed = false;  // a test started or ended in this cycle
+  std::int64_t motor_test_request_utime = 0;  // the last request handled
+  MotorTestResult motor_test_result = MotorTestResult::kOk;  // its answer
 };
 
 class ControlLoop {
@@ -112,6 +139,9 @@ class ControlLoop {
   Rejection on_motor_status(const MotorStatusSample& sample, std::int64_t now_us,
                             std::int64_t wall_us);
   Rejection on_battery(const BatterySample& sample, std::int64_t now_us, std::int64_t wall_us);
+  // A motor test request; its answer is also in the next cycle's result.
+  MotorTestResult on_motor_test(const MotorTestSample& sample, std::int64_t now_us,
+                                std::int64_t wall_us);
   void on_undecodable() { ++counters_.rejected_decode; }
 
   // One control cycle at time now_us. The returned reference stays valid
@@ -157,6 +187,15 @@ class ControlLoop {
   std::optional<BatteryCompensation> battery_;
   std::int64_t battery_received_us_ = kNever;
   std::int64_t last_battery_utime_ = kNever;
+  config::MotorTestSettings motor_test_settings_;
+  std::int64_t last_armed_setpoint_us_ = kNever;  // receive time of the last armed setpoint
+  std::int64_t last_motor_test_utime_ = kNever;
+  int test_motor_ = -1;  // running test, 0-based
+  double test_throttle_ = 0.0;
+  std::int64_t test_end_us_ = 0;
+  bool test_changed_ = false;  // since the last cycle
+  void end_motor_test();
+  void spin_test_motor(std::int64_t now_us);
   bool arm_permitted_ = false;
   bool arm_refused_logged_ = false;  // a disarmed setpoint has been seen since boot or failsafe
 

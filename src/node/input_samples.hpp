@@ -31,4 +31,11 @@ struct BatterySample {
   double voltage = 0.0;
 };
 
+struct MotorTestSample {
+  std::int64_t utime = 0;
+  int motor = 0;  // 1-based; 0 stops the test in progress
+  double throttle = 0.0;
+  double duration_s = 0.0;
+};
+
 }  // namespace motormix::node

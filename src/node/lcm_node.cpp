@@ -93,6 +93,9 @@ class Node {
       lcm_.subscribe(config_.channels.battery, &Node::on_battery, this)
           ->setQueueCapacity(kQueueCapacity);
     }
+    // Read even when disabled, so a refused request is answered.
+    lcm_.subscribe(config_.channels.motor_test, &Node::on_motor_test, this)
+        ->setQueueCapacity(kQueueCapacity);
   }
 
   void drain() {
@@ -116,9 +119,23 @@ class Node {
       log_failures(r);
       logged_failed_ = r.failed;
     }
+    if (motor_test_answer_due_ && r.motor_test_result != MotorTestResult::kOk) {
+      log_ << "motormix: motor test refused: " << to_string(r.motor_test_result) << std::endl;
+    }
+    if (r.motor_test_changed) {
+      if (r.motor_test >= 0) {
+        log_ << "motormix: motor test, motor "
+             << config_.motor_names()[static_cast<std::size_t>(r.motor_test)] << " at "
+             << r.motor_test_throttle << std::endl;
+      } else {
+        log_ << "motormix: motor test ended" << std::endl;
+      }
+    }
     publish_pwm(r);
     compute_stats_.add(static_cast<double>(monotonic_us() - woke_us));
-    if (status_every_cycle_ || now_us >= next_status_us_) {
+    const bool answer = motor_test_answer_due_ || r.motor_test_changed;
+    motor_test_answer_due_ = false;
+    if (status_every_cycle_ || now_us >= next_status_us_ || answer) {
       publish_status(r);
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
       warn_about_rejections(now_us);
@@ -208,6 +225,10 @@ class Node {
   void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
     receive(InputKind::kBattery, rbuf);
   }
+  void on_motor_test(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    receive(InputKind::kMotorTest, rbuf);
+    motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
+  }
 
   void publish_pwm(const CycleResult& r) {
     fill_pwm_message(pwm_msg_, r, wall_us());
@@ -251,6 +272,7 @@ class Node {
   std::int64_t last_warning_us_ = 0;
   std::int64_t drained_us_ = monotonic_us();  // end of the previous drain, monotonic
   bool new_pid_ = false;
+  bool motor_test_answer_due_ = false;
   MotorMask logged_failed_ = 0;
   WindowStats period_stats_;
   WindowStats compute_stats_;

@@ -209,6 +209,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     if (channel == config.channels.pid) return InputKind::kPid;
     if (channel == config.channels.motor_status) return InputKind::kMotorStatus;
     if (config.battery && channel == config.channels.battery) return InputKind::kBattery;
+    if (channel == config.channels.motor_test) return InputKind::kMotorTest;
     return std::nullopt;
   };
 

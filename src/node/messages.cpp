@@ -70,6 +70,14 @@ void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters
   }
   s.overruns = timing.overruns;
   s.config_hash = static_cast<int64_t>(config_hash);
+  s.motor_test_state = r.motor_test >= 0 ? mixer_status_t::MOTOR_TEST_RUNNING
+                                         : mixer_status_t::MOTOR_TEST_NONE;
+  s.motor_test_motor = static_cast<int8_t>(r.motor_test + 1);
+  s.motor_test_throttle = static_cast<float>(r.motor_test_throttle);
+  s.motor_test_request_utime = r.motor_test_request_utime;
+  s.motor_test_result = static_cast<int8_t>(r.motor_test_result);
+  s.motor_tests_started = c.motor_tests_started;
+  s.motor_tests_refused = c.motor_tests_refused;
 }
 
 namespace {
@@ -123,6 +131,13 @@ bool decode_pid(const void* data, int size, PidSample& out) {
   return true;
 }
 
+bool decode_motor_test(const void* data, int size, MotorTestSample& out) {
+  motor_test_t msg{};
+  if (!decode_whole(data, size, msg)) return false;
+  out = MotorTestSample{msg.utime, msg.motor, msg.throttle, msg.duration_s};
+  return true;
+}
+
 bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size,
                    std::int64_t now_us, std::int64_t wall_us) {
   // Decodes into `sample` and hands it over with `on`; undecodable bytes are counted.
@@ -142,6 +157,14 @@ bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size
       return hand_over(MotorStatusSample{}, decode_motor_status, &ControlLoop::on_motor_status);
     case InputKind::kBattery:
       return hand_over(BatterySample{}, decode_battery, &ControlLoop::on_battery);
+    case InputKind::kMotorTest: {
+      MotorTestSample sample;
+      if (!decode_motor_test(data, size, sample)) {
+        loop.on_undecodable();
+        return false;
+      }
+      return loop.on_motor_test(sample, now_us, wall_us) == MotorTestResult::kOk;
+    }
   }
   return false;
 }

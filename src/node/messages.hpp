@@ -10,6 +10,7 @@
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/motor_status_t.hpp>
+#include <motormix/motor_test_t.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
 
@@ -41,9 +42,10 @@ bool decode_pid(const void* data, int size, PidSample& out);
 // Lengths other than 0..kMaxMotors decode as nothing.
 bool decode_motor_status(const void* data, int size, MotorStatusSample& out);
 bool decode_battery(const void* data, int size, BatterySample& out);
+bool decode_motor_test(const void* data, int size, MotorTestSample& out);
 
 // The input channels a mixer reads.
-enum class InputKind : std::uint8_t { kSetpoint, kPid, kMotorStatus, kBattery };
+enum class InputKind : std::uint8_t { kSetpoint, kPid, kMotorStatus, kBattery, kMotorTest };
 
 // Decodes one input message of `kind` and hands it to the loop, which counts
 // it if it does not decode or is rejected. True when the loop accepted it.

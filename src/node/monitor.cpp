@@ -106,6 +106,10 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   s << "state     " << state_name(st.state);
   if (st.state == mixer_status_t::STATE_FAILSAFE)
     s << " (" << reason_name(st.failsafe_reason) << ")";
+  if (st.motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING) {
+    s << ", motor test, motor " << motor_name(o, st.motor_test_motor - 1) << " at "
+      << fixed(st.motor_test_throttle, 2);
+  }
   s << "    config " << hash << "    status " << fixed(snap.status_age_s * 1e3, 0) << " ms ago\n";
   s << "inputs    setpoint " << age(st.input_age_ms[0]) << (st.setpoint_stale ? " STALE" : "")
     << "   pid " << age(st.input_age_ms[1]) << (st.pid_stale ? " STALE" : "") << "   motor_status "
@@ -176,7 +180,8 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
     << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "
     << st.rejected_future << "   size " << st.rejected_size << "\n";
   s << "events    failsafe " << st.failsafe_events << "   arming refused " << st.arming_refused
-    << "\n";
+    << "   motor tests " << st.motor_tests_started << " (refused " << st.motor_tests_refused
+    << ")\n";
   return s.str();
 }
 

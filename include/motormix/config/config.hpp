@@ -39,6 +39,14 @@ struct Channels {
   std::string status = "MIXER_STATUS";
   std::string motor_status = "MOTOR_STATUS";
   std::string battery = "BATTERY";
+  std::string motor_test = "MOTOR_TEST";
+};
+
+// `motormix motor-test`: a disarmed mixer spins one motor alone on request.
+struct MotorTestSettings {
+  bool enabled = true;
+  double max_throttle = 0.15;  // largest normalized command a test may ask for
+  double max_seconds = 3.0;    // longest test
 };
 
 // What the outputs do when an input goes stale, is lost or turns invalid
@@ -94,6 +102,7 @@ struct Config {
 
   Inputs inputs;
   Channels channels;
+  MotorTestSettings motor_test;
   double loop_rate_hz = 400.0;
   double status_rate_hz = 10.0;
   PublishMode publish = PublishMode::kTimer;

@@ -1,0 +1,174 @@
+// Bring-up clients: `motormix motor-test` (one motor alone, through a running
+// disarmed `motormix run`) and `motormix esc-calibrate` (the ESC range
+// sequence, with no mixer on the bus). Wiring and terminal dialogue only;
+// the rules a test must satisfy live in the control loop.
+
+#include "commands.hpp"
+
+#include <motormix/config/load_config.hpp>
+#include "node/control_loop.hpp"
+
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+#include <motormix/motor_test_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <iostream>
+#include <optional>
+#include <thread>
+
+namespace motormix::app {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_interrupt(int) { g_interrupted = true; }
+
+std::int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::optional<config::Config> load_vehicle(const std::string& config_path,
+                                           const std::string& preset,
+                                           const std::vector<std::string>& overrides,
+                                           const char* command) {
+  try {
+    return preset.empty() ? config::load_config_file(config_path, overrides)
+                          : config::load_config_text("geometry: {preset: " + preset + "}\n",
+                                                     "preset " + preset, overrides);
+  } catch (const config::ConfigError& e) {
+    std::cerr << "motormix " << command << ": " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
+// Motor number as `motormix matrix` prints it, or name; -1 if neither.
+int motor_index(const std::string& text, const config::Config& config) {
+  const auto& names = config.motor_names();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == text) return static_cast<int>(i);
+  }
+  char* end = nullptr;
+  const long n = std::strtol(text.c_str(), &end, 10);
+  if (end == text.c_str() || *end != '\0' || n < 1 || n > config.motors()) return -1;
+  return static_cast<int>(n - 1);
+}
+
+std::string where(const config::Config& config, int motor) {
+  const auto& details = config.vehicle.motor_details;
+  const std::string name = config.motor_names()[static_cast<std::size_t>(motor)];
+  const std::string detail =
+      static_cast<std::size_t>(motor) < details.size() ? details[static_cast<std::size_t>(motor)] : "";
+  return "motor " + std::to_string(motor + 1) + (name != "m" + std::to_string(motor + 1) ? " (" + name + ")" : "") +
+         (detail.empty() ? "" : ", " + detail);
+}
+
+// The latest status seen, decoded inside the callback (nothing thrown out).
+struct StatusWatch {
+  std::optional<mixer_status_t> latest;
+  int pwm_seen = 0;
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    mixer_status_t msg;
+    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
+        static_cast<int>(rbuf->data_size)) {
+      latest = msg;
+    }
+  }
+  void on_pwm(const lcm::ReceiveBuffer*, const std::string&) { ++pwm_seen; }
+};
+
+// Serves the bus for `seconds` or until `done` holds.
+template <typename Done>
+bool serve(lcm::LCM& lcm, double seconds, Done done) {
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(seconds));
+  while (Clock::now() < until && !g_interrupted) {
+    lcm.handleTimeout(20);
+    if (done()) return true;
+  }
+  return done();
+}
+
+void send_test(lcm::LCM& lcm, const std::string& channel, int motor_1based, double throttle,
+               double seconds, std::int64_t utime) {
+  motor_test_t msg;
+  msg.utime = utime;
+  msg.motor = motor_1based;
+  msg.throttle = static_cast<float>(throttle);
+  msg.duration_s = static_cast<float>(seconds);
+  lcm.publish(channel, &msg);
+}
+
+}  // namespace
+
+int motor_test(const MotorTestCommand& cmd) {
+  const auto config = load_vehicle(cmd.config_path, cmd.preset, cmd.overrides, "motor-test");
+  if (!config) return kExitUsage;
+  std::vector<int> motors;
+  if (cmd.sequence) {
+    for (int i = 0; i < config->motors(); ++i) motors.push_back(i);
+  } else {
+    const int m = motor_index(cmd.motor, *config);
+    if (m < 0) {
+      std::cerr << "motormix motor-test: --motor " << cmd.motor << ": expected 1.."
+                << config->motors() << " or a motor name\n";
+      return kExitUsage;
+    }
+    motors.push_back(m);
+  }
+  lcm::LCM lcm(cmd.lcm_url);
+  if (!lcm.good()) {
+    std::cerr << "motormix motor-test: cannot open the LCM bus\n";
+    return kExitRuntime;
+  }
+  StatusWatch watch;
+  lcm.subscribe(config->channels.status, &StatusWatch::on_status, &watch);
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  for (std::size_t k = 0; k < motors.size() && !g_interrupted; ++k) {
+    const int m = motors[k];
+    const std::int64_t utime = wall_us();
+    send_test(lcm, config->channels.motor_test, m + 1, cmd.throttle, cmd.seconds, utime);
+    const bool answered = serve(lcm, cmd.wait_s, [&] {
+      return watch.latest && watch.latest->motor_test_request_utime == utime;
+    });
+    if (g_interrupted) break;
+    if (!answered) {
+      std::cerr << "motormix motor-test: no answer on " << config->channels.status << " within "
+                << cmd.wait_s << " s: is motormix run running with this configuration?\n";
+      return kExitRuntime;
+    }
+    const auto result = static_cast<node::MotorTestResult>(watch.latest->motor_test_result);
+    if (result != node::MotorTestResult::kOk) {
+      std::cerr << "motormix motor-test: refused: " << node::to_string(result) << "\n";
+      return kExitRuntime;
+    }
+    std::cout << where(*config, m) << ": spinning at " << cmd.throttle << " for " << cmd.seconds
+              << " s" << std::endl;
+    // Until the mixer says the test is over (bounded by its duration).
+    serve(lcm, cmd.seconds + 1.0, [&] {
+      return watch.latest && watch.latest->motor_test_state == mixer_status_t::MOTOR_TEST_NONE;
+    });
+    if (cmd.sequence && k + 1 < motors.size()) serve(lcm, 1.0, [] { return false; });
+  }
+  if (g_interrupted) {
+    send_test(lcm, config->channels.motor_test, 0, 0.0, 0.0, wall_us());
+    std::cerr << "motormix motor-test: interrupted, test stopped\n";
+    return kExitRuntime;
+  }
+  return kExitOk;
+}
+
+}  // namespace motormix::app

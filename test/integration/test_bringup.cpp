@@ -1,0 +1,157 @@
+// Bring-up tools on a private bus (run under scripts/private-bus): the motor
+// test through a live `motormix run` and its client, and the ESC calibration
+// sequence.
+
+#include "integration/bus_recorder.hpp"
+#include "integration/process.hpp"
+#include "test_support.hpp"
+
+#include <motormix/motor_test_t.hpp>
+#include <motormix/pid_t.hpp>
+#include <motormix/setpoint_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <thread>
+
+namespace motormix::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr float kDisarmedUs = 900.0f;  // config/quad_x.yaml
+constexpr float kMinUs = 1000.0f;
+
+std::int64_t now_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string quad() { return source_path("config/quad_x.yaml"); }
+
+std::optional<int> run_client(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {motormix_binary()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  ChildProcess client(argv);
+  return client.wait_for(15s);
+}
+
+class MixerOnTheBus : public ::testing::Test {
+ protected:
+  ChildProcess mixer_{{motormix_binary(), "run", "--config", quad(), "--max-cycles", "8000"}};
+  BusRecorder bus_{"MOTOR_PWM", "MIXER_STATUS"};
+  void SetUp() override {
+    ASSERT_TRUE(bus_.good());
+    ASSERT_TRUE(bus_.wait_until([](const auto& pwm, const auto&) { return pwm.size() > 10; }, 10s))
+        << "no output from motormix run";
+  }
+  void TearDown() override {
+    mixer_.signal(SIGTERM);
+    mixer_.wait_for(5s);
+  }
+};
+
+TEST_F(MixerOnTheBus, MotorTestSpinsTheRightMotorAloneAndEndsDisarmed) {
+  EXPECT_EQ(run_client({"motor-test", "--config", quad(), "--motor", "3", "--throttle", "0.1",
+                        "--seconds", "0.5"}),
+            0);
+  ASSERT_TRUE(bus_.wait_until(
+      [](const auto&, const auto& status) {
+        return !status.empty() && status.back().motor_test_state == mixer_status_t::MOTOR_TEST_NONE &&
+               status.back().motor_tests_started == 1;
+      },
+      5s));
+  int spinning = 0;
+  bool after_test_disarmed = false;
+  for (const motor_pwm_t& m : bus_.pwm()) {
+    EXPECT_FALSE(m.armed);
+    if (m.pwm[2] > kMinUs) {
+      ++spinning;
+      after_test_disarmed = false;
+      for (int i : {0, 1, 3}) EXPECT_EQ(m.pwm[static_cast<std::size_t>(i)], kDisarmedUs);
+    } else if (spinning > 0) {
+      after_test_disarmed = m.pwm[0] == kDisarmedUs && m.pwm[1] == kDisarmedUs &&
+                            m.pwm[2] == kDisarmedUs && m.pwm[3] == kDisarmedUs;
+    }
+  }
+  EXPECT_GT(spinning, 100);  // 0.5 s at 400 Hz: about 200 cycles
+  EXPECT_TRUE(after_test_disarmed) << "the test must end on disarmed outputs";
+  bool reported = false;
+  for (const mixer_status_t& s : bus_.status()) {
+    if (s.motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING) {
+      EXPECT_EQ(s.motor_test_motor, 3);
+      reported = true;
+    }
+  }
+  EXPECT_TRUE(reported);
+}
+
+TEST_F(MixerOnTheBus, TooMuchThrottleIsRefusedAndNothingSpins) {
+  EXPECT_EQ(run_client({"motor-test", "--config", quad(), "--motor", "1", "--throttle", "0.5",
+                        "--seconds", "1"}),
+            1);
+  std::this_thread::sleep_for(200ms);
+  for (const motor_pwm_t& m : bus_.pwm()) {
+    for (float v : m.pwm) EXPECT_EQ(v, kDisarmedUs);
+  }
+  const auto status = bus_.status();
+  ASSERT_FALSE(status.empty());
+  EXPECT_EQ(status.back().motor_tests_refused, 1);
+  EXPECT_EQ(status.back().motor_test_result, mixer_status_t::MOTOR_TEST_REFUSED_THROTTLE);
+}
+
+TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
+  lcm::LCM lcm;
+  std::atomic<bool> armed{false};
+  std::atomic<bool> stop{false};
+  // The pilot: disarmed, then armed at zero throttle, 200 Hz.
+  std::thread pilot([&] {
+    while (!stop) {
+      setpoint_t sp;
+      sp.utime = now_us();
+      sp.throttle = 0.0f;
+      sp.yaw = 0.0f;
+      sp.armed = armed;
+      pid_t pid;
+      pid.utime = sp.utime;
+      pid.roll = pid.pitch = pid.yaw = 0.0f;
+      lcm.publish("SETPOINT", &sp);
+      lcm.publish("PID", &pid);
+      std::this_thread::sleep_for(5ms);
+    }
+  });
+  std::this_thread::sleep_for(300ms);
+  motor_test_t test;
+  test.utime = now_us();
+  test.motor = 2;
+  test.throttle = 0.1f;
+  test.duration_s = 3.0f;
+  lcm.publish("MOTOR_TEST", &test);
+  EXPECT_TRUE(bus_.wait_until(
+      [](const auto&, const auto& status) {
+        return !status.empty() && status.back().motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING;
+      },
+      3s));
+  armed = true;
+  EXPECT_TRUE(bus_.wait_until(
+      [](const auto&, const auto& status) {
+        return !status.empty() && status.back().state == mixer_status_t::STATE_ARMED &&
+               status.back().motor_test_state == mixer_status_t::MOTOR_TEST_NONE;
+      },
+      3s))
+      << "the armed setpoint should end the test and arm";
+  EXPECT_EQ(run_client({"motor-test", "--config", quad(), "--motor", "1", "--throttle", "0.1",
+                        "--seconds", "1"}),
+            1);
+  const auto status = bus_.status();
+  EXPECT_EQ(status.back().motor_test_result, mixer_status_t::MOTOR_TEST_REFUSED_NOT_DISARMED);
+  stop = true;
+  pilot.join();
+}
+
+}  // namespace
+}  // namespace motormix::test
