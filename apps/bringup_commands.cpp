@@ -21,6 +21,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
+#include <algorithm>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -168,6 +169,126 @@ int motor_test(const MotorTestCommand& cmd) {
     std::cerr << "motormix motor-test: interrupted, test stopped\n";
     return kExitRuntime;
   }
+  return kExitOk;
+}
+
+namespace {
+
+// Publishes every output at one value per channel, at the loop rate, until
+// `until` returns true or `seconds` pass; false if interrupted.
+template <typename Until>
+bool hold_outputs(lcm::LCM& lcm, const config::Config& config, const std::vector<double>& pwm,
+                  double command, bool armed, double seconds, Until until) {
+  motor_pwm_t msg;
+  msg.num_motors = config.motors();
+  msg.command.assign(static_cast<std::size_t>(msg.num_motors), static_cast<float>(command));
+  msg.direction.assign(static_cast<std::size_t>(msg.num_motors), 0);
+  msg.pwm.resize(static_cast<std::size_t>(msg.num_motors));
+  for (std::size_t i = 0; i < pwm.size(); ++i) msg.pwm[i] = static_cast<float>(pwm[i]);
+  msg.armed = armed;
+  msg.setpoint_utime = 0;
+  msg.pid_utime = 0;
+  msg.failed_motors = 0;
+  const auto period = std::chrono::duration<double>(1.0 / config.loop_rate_hz);
+  const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(seconds));
+  auto next = Clock::now();
+  while (Clock::now() < end) {
+    if (g_interrupted) return false;
+    msg.utime = wall_us();
+    lcm.publish(config.channels.motor_pwm, &msg);
+    if (until()) return true;
+    next += std::chrono::duration_cast<Clock::duration>(period);
+    std::this_thread::sleep_until(next);
+  }
+  return !g_interrupted;
+}
+
+// A line on standard input (Enter), polled without blocking; -1 at end of input.
+int line_ready() {
+  pollfd p{STDIN_FILENO, POLLIN, 0};
+  if (poll(&p, 1, 0) <= 0) return 0;
+  char c = 0;
+  while (true) {
+    const ssize_t got = read(STDIN_FILENO, &c, 1);
+    if (got <= 0) return -1;
+    if (c == '\n') return 1;
+  }
+}
+
+}  // namespace
+
+int esc_calibrate(const EscCalibrateCommand& cmd) {
+  const auto config = load_vehicle(cmd.config_path, cmd.preset, cmd.overrides, "esc-calibrate");
+  if (!config) return kExitUsage;
+  if (!cmd.props_off) {
+    std::cerr << "motormix esc-calibrate: refused: every motor will run at full command. Take the "
+                 "propellers off, then pass --props-off\n";
+    return kExitUsage;
+  }
+  for (const OutputChannel& ch : config->outputs) {
+    if (ch.mode != OutputMode::kUnipolar) {
+      std::cerr << "motormix esc-calibrate: refused: the outputs are "
+                << (ch.mode == OutputMode::kCentered ? "centered (reversible drives)"
+                                                     : "duty plus direction pin (H-bridges)")
+                << "; calibration is for PWM ESCs that learn their throttle range (output.mode "
+                   "unipolar)\n";
+      return kExitUsage;
+    }
+  }
+  lcm::LCM lcm(cmd.lcm_url);
+  if (!lcm.good()) {
+    std::cerr << "motormix esc-calibrate: cannot open the LCM bus\n";
+    return kExitRuntime;
+  }
+  // Nothing else may drive the outputs: listen for a mixer first.
+  StatusWatch watch;
+  lcm.subscribe(config->channels.status, &StatusWatch::on_status, &watch);
+  lcm.subscribe(config->channels.motor_pwm, &StatusWatch::on_pwm, &watch);
+  const double listen = std::max(cmd.listen_s, 2.0 / config->status_rate_hz);
+  serve(lcm, listen, [] { return false; });
+  if (watch.latest || watch.pwm_seen > 0) {
+    std::cerr << "motormix esc-calibrate: refused: a mixer is running on the bus ("
+              << config->channels.motor_pwm << " or " << config->channels.status
+              << " heard within " << listen << " s): stop it first\n";
+    return kExitRuntime;
+  }
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  std::vector<double> high, low, disarmed;
+  for (const OutputChannel& ch : config->outputs) {
+    high.push_back(ch.reversed ? ch.min : ch.max);
+    low.push_back(ch.reversed ? ch.max : ch.min);
+    disarmed.push_back(ch.disarmed);
+  }
+  const auto finish = [&](int code, const char* why) {
+    hold_outputs(lcm, *config, disarmed, 0.0, false, 0.5, [] { return false; });
+    if (why != nullptr) std::cerr << "motormix esc-calibrate: " << why << "; outputs disarmed\n";
+    return code;
+  };
+  std::cout << "Every output is at its maximum (" << high.front() << " " << config->output_unit
+            << "). Power the ESCs now; when they have beeped, press Enter (Ctrl-C aborts). "
+            << "Waiting at most " << cmd.timeout_s << " s." << std::endl;
+  int confirmed = 0;
+  if (!hold_outputs(lcm, *config, high, 1.0, true, cmd.timeout_s, [&] {
+        confirmed = line_ready();
+        return confirmed != 0;
+      })) {
+    g_interrupted = false;  // publish the disarmed values all the same
+    return finish(kExitRuntime, "interrupted");
+  }
+  if (confirmed != 1) {
+    return finish(kExitRuntime, confirmed < 0 ? "no confirmation (end of input)"
+                                              : "no confirmation within the timeout");
+  }
+  std::cout << "Minimum (" << low.front() << " " << config->output_unit << ") for "
+            << cmd.min_seconds << " s: the ESCs confirm the range." << std::endl;
+  if (!hold_outputs(lcm, *config, low, 0.0, true, cmd.min_seconds, [] { return false; })) {
+    g_interrupted = false;
+    return finish(kExitRuntime, "interrupted");
+  }
+  finish(kExitOk, nullptr);
+  std::cout << "Done: outputs disarmed." << std::endl;
   return kExitOk;
 }
 

@@ -104,4 +104,16 @@ struct MotorTestCommand {
 };
 int motor_test(const MotorTestCommand& cmd);
 
+struct EscCalibrateCommand {
+  std::string config_path;  // one of config_path and preset
+  std::string preset;
+  std::vector<std::string> overrides;
+  std::string lcm_url;
+  bool props_off = false;    // required: the user says the propellers are off
+  double timeout_s = 30.0;   // at the maximum, waiting for the user's Enter
+  double min_seconds = 4.0;  // at the minimum before disarming
+  double listen_s = 1.0;     // listening for a running mixer first
+};
+int esc_calibrate(const EscCalibrateCommand& cmd);
+
 }  // namespace motormix::app

@@ -159,8 +159,30 @@ int main(int argc, char** argv) {
   test_app->add_option("--wait", test_cmd.wait_s, "seconds to wait for the mixer's answer (default 3)")
       ->check(CLI::Range(0.1, 60.0));
 
+  EscCalibrateCommand esc_cmd;
+  CLI::App* esc_app = app.add_subcommand(
+      "esc-calibrate", "teach PWM ESCs their range: maximum, your Enter, minimum, disarmed");
+  auto* esc_config = esc_app->add_option("--config", esc_cmd.config_path, "YAML configuration file")
+                         ->check(CLI::ExistingFile);
+  auto* esc_preset = esc_app->add_option("--preset", esc_cmd.preset, "a preset vehicle");
+  esc_config->excludes(esc_preset);
+  esc_app->add_option("--set", esc_cmd.overrides, "override a config value: key.path=value");
+  esc_app->add_option("--lcm-url", esc_cmd.lcm_url,
+                      "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  esc_app->add_flag("--props-off", esc_cmd.props_off,
+                    "required: the propellers are off (every motor runs at full command)");
+  esc_app->add_option("--timeout", esc_cmd.timeout_s,
+                      "seconds at the maximum waiting for Enter before aborting (default 30)")
+      ->check(CLI::Range(0.1, 600.0));
+  esc_app->add_option("--min-seconds", esc_cmd.min_seconds,
+                      "seconds at the minimum before disarming (default 4)")
+      ->check(CLI::Range(0.1, 60.0));
+
   try {
     app.parse(argc, argv);
+    if (esc_app->parsed() && esc_cmd.config_path.empty() == esc_cmd.preset.empty()) {
+      throw CLI::RequiredError("exactly one of --config and --preset");
+    }
     if (test_app->parsed() && test_cmd.config_path.empty() == test_cmd.preset.empty()) {
       throw CLI::RequiredError("exactly one of --config and --preset");
     }
@@ -190,5 +212,6 @@ int main(int argc, char** argv) {
   if (monitor_app->parsed()) return monitor(monitor_cmd);
   if (sim_app->parsed()) return sim(sim_cmd);
   if (test_app->parsed()) return motor_test(test_cmd);
+  if (esc_app->parsed()) return esc_calibrate(esc_cmd);
   return kExitUsage;
 }

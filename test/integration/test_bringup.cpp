@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -151,6 +152,80 @@ TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
   EXPECT_EQ(status.back().motor_test_result, mixer_status_t::MOTOR_TEST_REFUSED_NOT_DISARMED);
   stop = true;
   pilot.join();
+}
+
+TEST_F(MixerOnTheBus, EscCalibrationRefusesWhileAMixerRuns) {
+  EXPECT_EQ(run_client({"esc-calibrate", "--config", quad(), "--props-off", "--timeout", "1"}), 1);
+}
+
+std::optional<int> run_shell(const std::string& line) {
+  ChildProcess sh({"/bin/sh", "-c", line});
+  return sh.wait_for(20s);
+}
+
+TEST(EscCalibration, RefusesWithoutPropsOffAndOnHBridges) {
+  BusRecorder bus("MOTOR_PWM", "MIXER_STATUS");
+  EXPECT_EQ(run_client({"esc-calibrate", "--config", quad(), "--timeout", "1"}), 2);
+  EXPECT_EQ(run_client({"esc-calibrate", "--config", source_path("config/diff_drive.yaml"),
+                        "--props-off", "--timeout", "1"}),
+            2);
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(bus.pwm_count(), 0U) << "a refused calibration sends nothing";
+}
+
+// Maximum until the user's Enter, then minimum, then disarmed.
+TEST(EscCalibration, MaximumThenMinimumThenDisarmed) {
+  BusRecorder bus("MOTOR_PWM", "MIXER_STATUS");
+  const std::string cmd = "(sleep 2; echo) | '" + std::string(motormix_binary()) +
+                          "' esc-calibrate --config '" + quad() +
+                          "' --props-off --timeout 10 --min-seconds 0.5";
+  EXPECT_EQ(run_shell(cmd), 0);
+  std::this_thread::sleep_for(100ms);
+  // Phases in order: 2000 (armed), 1000 (armed), 900 (not armed).
+  int phase = 0;
+  std::array<int, 3> count{};
+  const float value[3] = {2000.0f, kMinUs, kDisarmedUs};
+  for (const motor_pwm_t& m : bus.pwm()) {
+    while (phase < 3 && m.pwm[0] != value[phase]) ++phase;
+    ASSERT_LT(phase, 3) << "an output outside the sequence: " << m.pwm[0];
+    for (float v : m.pwm) EXPECT_EQ(v, value[phase]);
+    EXPECT_EQ(m.armed, phase < 2);
+    ++count[static_cast<std::size_t>(phase)];
+  }
+  EXPECT_GT(count[0], 100);  // about 0.8 s at 400 Hz after the listening second
+  EXPECT_GT(count[1], 100);  // 0.5 s
+  EXPECT_GT(count[2], 10);
+}
+
+TEST(EscCalibration, NoConfirmationAbortsToDisarmed) {
+  BusRecorder bus("MOTOR_PWM", "MIXER_STATUS");
+  const std::string cmd = "sleep 2 | '" + std::string(motormix_binary()) + "' esc-calibrate --config '" +
+                          quad() + "' --props-off --timeout 0.5";
+  EXPECT_EQ(run_shell(cmd), 1);
+  std::this_thread::sleep_for(100ms);
+  const auto pwm = bus.pwm();
+  ASSERT_FALSE(pwm.empty());
+  EXPECT_EQ(pwm.back().pwm[0], kDisarmedUs);
+  EXPECT_FALSE(pwm.back().armed);
+  for (const motor_pwm_t& m : pwm) EXPECT_NE(m.pwm[0], kMinUs) << "no minimum without confirmation";
+}
+
+TEST(EscCalibration, CtrlCAbortsToDisarmed) {
+  BusRecorder bus("MOTOR_PWM", "MIXER_STATUS");
+  // Standard input held open (a FIFO with a writer that says nothing), and
+  // the shell replaced by motormix, so the signal reaches it.
+  ChildProcess calibration(
+      {"/bin/sh", "-c",
+       "f=$(mktemp -u); mkfifo \"$f\"; (sleep 10 > \"$f\" &); exec 0<\"$f\"; rm -f \"$f\"; "
+       "exec \"$0\" esc-calibrate --config \"$1\" --props-off --timeout 20",
+       motormix_binary(), quad()});
+  ASSERT_TRUE(bus.wait_until(
+      [](const auto& pwm, const auto&) { return !pwm.empty() && pwm.back().pwm[0] == 2000.0f; }, 5s));
+  calibration.signal(SIGINT);
+  EXPECT_EQ(calibration.wait_for(5s), 1);
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(bus.last_pwm().pwm[0], kDisarmedUs);
+  EXPECT_FALSE(bus.last_pwm().armed);
 }
 
 }  // namespace
