@@ -551,6 +551,8 @@ void read_output(MapReader output, Config& config) {
     }
   }
   ch.slew_per_s = output.number("slew_per_s", 0.0, 0.0, 1e9);
+  // Aircraft spool up over half a second by default; wheels start at once.
+  config.spool_up_s = output.number("spool_up_s", wheels ? 0.0 : 0.5, 0.0, 10.0);
   config.outputs.assign(static_cast<std::size_t>(config.motors()), ch);
 
   const YAML::Node per_motor = output.raw("per_motor");

@@ -81,6 +81,7 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       max_future_us_(seconds_to_us(config.inputs.max_future_s)),
       arm_max_throttle_(config.inputs.arm_max_throttle),
       config_failed_(config.failed_motors),
+      spool_up_us_(seconds_to_us(config.spool_up_s)),
       motor_test_settings_(config.motor_test) {
   if (config.battery) battery_.emplace(*config.battery);
   mixer_.disarm(result_.mix);
@@ -267,10 +268,10 @@ void ControlLoop::enter_failsafe(FailsafeReason reason, std::int64_t now_us) {
   ++counters_.failsafe_events;
 }
 
-void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us) {
+void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us, double ramp) {
   const double dt_s =
       last_cycle_us_ == kNever ? 0.0 : static_cast<double>(now_us - last_cycle_us_) / 1e6;
-  AxisVector compensated = demand;
+  AxisVector compensated = demand * ramp;
   compensated[index(Axis::kThrust)] *= result_.thrust_gain;
   if (mixer_.mix(compensated, result_.mix, dt_s, result_.failed) == MixStatus::kNonFiniteDemand) {
     // Unreachable while message checks hold; kept so the promise does not
@@ -279,6 +280,15 @@ void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us) {
     mixer_.disarm(result_.mix);
   } else {
     result_.last_armed_allocation = result_.mix.allocation;
+    if (ramp < 1.0) {
+      // From each disarmed value toward the mixed output (failed motors sit
+      // at their disarmed value already).
+      const OutputStage& stage = mixer_.output_stage();
+      for (int i = 0; i < stage.outputs(); ++i) {
+        const double off = stage.channel(i).disarmed;
+        result_.mix.output[i] = off + ramp * (result_.mix.output[i] - off);
+      }
+    }
   }
 }
 
@@ -316,6 +326,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
       if (setpoint_fresh && pid_fresh && setpoint_.armed && arm_permitted_) {
         if (std::abs(setpoint_.throttle) <= arm_max_throttle_) {
           result_.state = LoopState::kArmed;
+          armed_since_us_ = now_us;
         } else if (!arm_refused_logged_) {
           ++counters_.arming_refused;
           arm_refused_logged_ = true;  // once per request, not once per cycle
@@ -328,8 +339,16 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   record_vehicle_state(now_us);
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
   const AxisVector demand(pid_.roll, pid_.pitch, yaw, setpoint_.throttle);
+  result_.spooling_up = false;
+  result_.spool_up = 0.0;
   if (result_.state == LoopState::kArmed) {
-    mix_inputs(demand, now_us);
+    const std::int64_t armed_for = now_us - armed_since_us_;
+    const double ramp = armed_for >= spool_up_us_
+                            ? 1.0
+                            : static_cast<double>(armed_for) / static_cast<double>(spool_up_us_);
+    result_.spooling_up = ramp < 1.0;
+    result_.spool_up = ramp;
+    mix_inputs(demand, now_us, ramp);
   } else if (result_.state == LoopState::kFailsafe &&
              failsafe_action_ == config::FailsafeAction::kHoldLast &&
              now_us - failsafe_since_us_ <= hold_last_us_) {

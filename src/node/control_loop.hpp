@@ -26,6 +26,11 @@
 //   by the latest accepted motor_status message (until the next one says
 //   otherwise: a silent failure detector does not bring a motor back). A
 //   motor_status whose num_motors differs from the mixer's is rejected.
+// - After each disarmed -> armed transition (so after any disarm or
+//   failsafe too), the outputs spool up over output.spool_up_s: the demand
+//   is scaled by the ramp r = time armed / spool_up_s, and each output is
+//   its disarmed value plus r times the way to its mixed value, so it rises
+//   from stopped through idle and never overshoots what it is mixed to.
 // - A motor test (motor_test_t) spins one motor alone through the output
 //   stage while the outputs stay disarmed (armed = false), and is obeyed only
 //   when motor_test.enabled, the loop is disarmed, no armed setpoint arrived
@@ -120,6 +125,8 @@ struct CycleResult {
   // Milliseconds since the last accepted setpoint, pid, battery and
   // motor_status message; -1 if none yet.
   std::array<double, 4> input_age_ms{-1.0, -1.0, -1.0, -1.0};
+  bool spooling_up = false;  // armed, outputs ramping up since arming
+  double spool_up = 0.0;     // ramp progress 0..1 (1 once done, 0 while not armed)
   int motor_test = -1;              // motor spinning alone (0-based), -1 when none
   double motor_test_throttle = 0.0;
   bool motor_test_changed = false;  // a test started or ended in this cycle
@@ -156,7 +163,8 @@ class ControlLoop {
   void count(Rejection rejection);
   bool from_future(std::int64_t utime, std::int64_t wall_us);
   void enter_failsafe(FailsafeReason reason, std::int64_t now_us);
-  void mix_inputs(const AxisVector& demand, std::int64_t now_us);
+  // ramp: spool-up progress, 1 when none.
+  void mix_inputs(const AxisVector& demand, std::int64_t now_us, double ramp = 1.0);
   // The cycle result's view of the vehicle: failed motors and how they
   // are handled, battery state and thrust gain, and each input's age.
   void record_vehicle_state(std::int64_t now_us);
@@ -187,6 +195,8 @@ class ControlLoop {
   std::optional<BatteryCompensation> battery_;
   std::int64_t battery_received_us_ = kNever;
   std::int64_t last_battery_utime_ = kNever;
+  std::int64_t spool_up_us_ = 0;
+  std::int64_t armed_since_us_ = 0;
   config::MotorTestSettings motor_test_settings_;
   std::int64_t last_armed_setpoint_us_ = kNever;  // receive time of the last armed setpoint
   std::int64_t last_motor_test_utime_ = kNever;

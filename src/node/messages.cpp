@@ -78,6 +78,8 @@ void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters
   s.motor_test_result = static_cast<int8_t>(r.motor_test_result);
   s.motor_tests_started = c.motor_tests_started;
   s.motor_tests_refused = c.motor_tests_refused;
+  s.spooling_up = r.spooling_up;
+  s.spool_up = static_cast<float>(r.spool_up);
 }
 
 namespace {

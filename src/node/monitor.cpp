@@ -106,6 +106,7 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   s << "state     " << state_name(st.state);
   if (st.state == mixer_status_t::STATE_FAILSAFE)
     s << " (" << reason_name(st.failsafe_reason) << ")";
+  if (st.spooling_up) s << ", spooling up " << fixed(100.0 * st.spool_up, 0) << " %";
   if (st.motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING) {
     s << ", motor test, motor " << motor_name(o, st.motor_test_motor - 1) << " at "
       << fixed(st.motor_test_throttle, 2);

@@ -111,9 +111,13 @@ class MixerProcessTest : public ::testing::Test {
   void SetUp() override { ASSERT_TRUE(in_private_bus()) << "run through scripts/private-bus"; }
 
   // `run_options`: further options of `motormix run` (e.g. --lcm-url).
-  void start(const std::vector<std::string>& overrides = {},
+  void start(const std::vector<std::string>& test_overrides = {},
              const std::string& config_file = "config/team_quad.yaml",
              const std::vector<std::string>& run_options = {}) {
+    // These tests check the outputs from the first armed cycle on: no
+    // spool-up ramp unless a test asks for one (it has tests of its own).
+    std::vector<std::string> overrides = {"output.spool_up_s=0"};
+    overrides.insert(overrides.end(), test_overrides.begin(), test_overrides.end());
     config_ = config::load_config_file(source_path(config_file), overrides);
     bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
     pilot_ = std::make_unique<Pilot>(config_);

@@ -154,6 +154,61 @@ TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
   pilot.join();
 }
 
+TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
+  lcm::LCM lcm;
+  std::atomic<bool> armed{false};
+  std::atomic<bool> stop{false};
+  std::thread pilot([&] {
+    while (!stop) {
+      setpoint_t sp;
+      sp.utime = now_us();
+      sp.throttle = 0.08f;  // within the arming limit (0.1), held while spooling up
+      sp.yaw = 0.0f;
+      sp.armed = armed;
+      pid_t pid;
+      pid.utime = sp.utime;
+      pid.roll = 0.05f;
+      pid.pitch = pid.yaw = 0.0f;
+      lcm.publish("SETPOINT", &sp);
+      lcm.publish("PID", &pid);
+      std::this_thread::sleep_for(5ms);
+    }
+  });
+  std::this_thread::sleep_for(300ms);
+  armed = true;
+  // 0.5 s of spool-up (quad_x's default), then steady.
+  EXPECT_TRUE(bus_.wait_until(
+      [](const auto& pwm, const auto&) {
+        int armed_count = 0;
+        for (const auto& m : pwm) armed_count += m.armed ? 1 : 0;
+        return armed_count > 320;  // 0.8 s at 400 Hz
+      },
+      5s));
+  stop = true;
+  pilot.join();
+  std::vector<motor_pwm_t> ramp;
+  for (const motor_pwm_t& m : bus_.pwm()) {
+    if (m.armed) ramp.push_back(m);
+  }
+  ASSERT_GT(ramp.size(), 320U);
+  ramp.resize(320);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_LT(ramp.front().pwm[i], 1000.0f) << "the first armed output starts near disarmed";
+    for (std::size_t k = 1; k < ramp.size(); ++k) {
+      EXPECT_GE(ramp[k].pwm[i], ramp[k - 1].pwm[i]) << "motor " << i + 1 << ", output " << k;
+    }
+    EXPECT_EQ(ramp[319].pwm[i], ramp[260].pwm[i]) << "steady once spooled up";
+  }
+  bool spooling = false, spooled = false;
+  for (const mixer_status_t& st : bus_.status()) {
+    if (st.state != mixer_status_t::STATE_ARMED) continue;
+    if (st.spooling_up) spooling = true;
+    if (spooling && !st.spooling_up && st.spool_up == 1.0f) spooled = true;
+  }
+  EXPECT_TRUE(spooling);
+  EXPECT_TRUE(spooled);
+}
+
 TEST_F(MixerOnTheBus, EscCalibrationRefusesWhileAMixerRuns) {
   EXPECT_EQ(run_client({"esc-calibrate", "--config", quad(), "--props-off", "--timeout", "1"}), 1);
 }

@@ -154,7 +154,8 @@ TEST(BatteryReplay, SaggingPackIsCompensatedAndFailuresOfTheMonitorAreNot) {
   const std::string out = ::testing::TempDir() + "battery_sag_replay.lcmlog";
   const std::string cmd = std::string(motormix_binary()) + " replay --config " +
                           source_path("config/quad_x.yaml") +
-                          " --set battery.nominal_v=16.8 --set status_rate_hz=400 --set "
+                          " --set output.spool_up_s=0 --set battery.nominal_v=16.8 "
+                          "--set status_rate_hz=400 --set "
                           "mixer.strategy=clip " +
                           in + " " + out + " > /dev/null 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;

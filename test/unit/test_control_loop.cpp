@@ -20,9 +20,10 @@ using node::SetpointSample;
 
 class ControlLoopTest : public ::testing::Test {
  protected:
-  // These tests arm at half throttle; the arming check has a test of its own.
-  config::Config config_ =
-      config::load_config_file(source_path("config/team_quad.yaml"), {"inputs.arm_max_throttle=1"});
+  // These tests arm at half throttle and check the outputs from the first
+  // armed cycle; the arming check and the spool-up ramp have tests of their own.
+  config::Config config_ = config::load_config_file(
+      source_path("config/team_quad.yaml"), {"inputs.arm_max_throttle=1", "output.spool_up_s=0"});
   ControlLoop loop_{config_, config::build_mixer(config_)};
   std::int64_t utime_ = 1'700'000'000'000'000;
 
@@ -228,7 +229,8 @@ class FailsafeActionTest : public ::testing::Test {
   ControlLoop make(const std::string& action) {
     config::Config c =
         config::load_config_file(source_path("config/team_quad.yaml"),
-                                 {"inputs.failsafe=" + action, "inputs.hold_last_ms=200"});
+                                 {"inputs.failsafe=" + action, "inputs.hold_last_ms=200",
+                                  "output.spool_up_s=0"});
     return ControlLoop(c, config::build_mixer(c));
   }
   static void arm(ControlLoop& loop) {

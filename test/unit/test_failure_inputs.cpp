@@ -28,7 +28,7 @@ constexpr double kCompensatedGain = 1e-9;
 class FailureInputsTest : public ::testing::Test {
  protected:
   void make(const std::vector<std::string>& overrides) {
-    std::vector<std::string> all = {"inputs.arm_max_throttle=1"};
+    std::vector<std::string> all = {"inputs.arm_max_throttle=1", "output.spool_up_s=0"};
     all.insert(all.end(), overrides.begin(), overrides.end());
     config_ = config::load_config_file(source_path("config/hexa_x.yaml"), all);
     loop_.emplace(config_, config::build_mixer(config_));

@@ -143,3 +143,85 @@ TEST(MotorTestSettings, DisabledRefusesEveryRequestAndBoundsAreValidated) {
 
 }  // namespace
 }  // namespace motormix::test
+
+namespace motormix::test {
+namespace {
+
+// Spool-up: the ramp after arming, with injected time.
+class SpoolUp : public ::testing::Test {
+ protected:
+  // quad_x.yaml: disarmed 900 us, min 1000, idle 0.05, spool_up_s 0.5 by default.
+  config::Config config_ = config::load_config_file(source_path("config/quad_x.yaml"),
+                                                    {"inputs.arm_max_throttle=1"});
+  ControlLoop loop_{config_, config::build_mixer(config_)};
+  std::int64_t utime_ = 1'700'000'000'000'000;
+  void inputs(std::int64_t now, bool armed, double throttle, double roll = 0.0) {
+    loop_.on_setpoint(SetpointSample{utime_ += 1000, throttle, 0.0, armed}, now, kWall);
+    loop_.on_pid(PidSample{utime_ += 1000, roll, 0.0, 0.0}, now, kWall);
+  }
+  // Arms at `t0` with constant inputs; returns each motor's output every 5 ms.
+  std::vector<MotorVector> fly(std::int64_t t0, double throttle, double roll, std::int64_t until) {
+    inputs(t0 - kMs, false, throttle, roll);
+    loop_.cycle(t0 - kMs);
+    std::vector<MotorVector> outputs;
+    for (std::int64_t t = t0; t <= until; t += 5 * kMs) {
+      inputs(t, true, throttle, roll);
+      outputs.push_back(loop_.cycle(t).mix.output);
+    }
+    return outputs;
+  }
+};
+
+TEST_F(SpoolUp, DefaultsToHalfASecondForAircraftAndNoneForWheels) {
+  EXPECT_DOUBLE_EQ(config_.spool_up_s, 0.5);
+  EXPECT_DOUBLE_EQ(config::load_config_file(source_path("config/diff_drive.yaml")).spool_up_s, 0.0);
+}
+
+TEST_F(SpoolUp, OutputsRiseMonotonicallyFromDisarmedToTheMixedValue) {
+  const std::vector<MotorVector> out = fly(0, 0.5, 0.1, 800 * kMs);
+  const config::Config flat =
+      config::load_config_file(source_path("config/quad_x.yaml"), {"output.spool_up_s=0"});
+  MixerOutput mixed;
+  config::build_mixer(flat).mix(AxisVector(0.1, 0.0, 0.0, 0.5), mixed);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(out.front()[i], 900.0, kExact) << "the first armed cycle starts from disarmed";
+    for (std::size_t k = 1; k < out.size(); ++k) {
+      EXPECT_GE(out[k][i], out[k - 1][i] - kExact) << "motor " << i + 1 << " at " << 5 * k << " ms";
+      EXPECT_LE(out[k][i], mixed.output[i] + kExact) << "never above its mixed value";
+    }
+    EXPECT_NEAR(out.back()[i], mixed.output[i], kExact) << "spooled up: exactly the mix";
+  }
+  // Halfway, every output is below its mixed value and above idle.
+  const MotorVector& half = out[50];  // 250 ms
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_LT(half[i], mixed.output[i]);
+    EXPECT_GT(half[i], 900.0);
+  }
+}
+
+TEST_F(SpoolUp, ReportedAndRestartedAfterADisarm) {
+  // A cycle every 5 ms (a longer gap is a stalled loop), armed from 5 ms.
+  const auto at = [&](std::int64_t t, bool armed) -> const node::CycleResult& {
+    inputs(t, armed, 0.0);
+    return loop_.cycle(t);
+  };
+  at(0, false);
+  const node::CycleResult& r = at(5 * kMs, true);
+  EXPECT_EQ(r.state, LoopState::kArmed);
+  EXPECT_TRUE(r.spooling_up);
+  EXPECT_DOUBLE_EQ(r.spool_up, 0.0);
+  std::int64_t t = 5 * kMs;
+  while (t < 255 * kMs) at(t += 5 * kMs, true);
+  EXPECT_NEAR(loop_.last().spool_up, 0.5, 1e-12);
+  while (t < 600 * kMs) at(t += 5 * kMs, true);
+  EXPECT_FALSE(loop_.last().spooling_up);
+  EXPECT_DOUBLE_EQ(loop_.last().spool_up, 1.0);
+  EXPECT_EQ(at(t += 5 * kMs, false).spool_up, 0.0);  // disarmed
+  const node::CycleResult& again = at(t += 5 * kMs, true);  // and armed again: from the start
+  EXPECT_EQ(again.state, LoopState::kArmed);
+  EXPECT_TRUE(again.spooling_up);
+  EXPECT_DOUBLE_EQ(again.spool_up, 0.0);
+}
+
+}  // namespace
+}  // namespace motormix::test

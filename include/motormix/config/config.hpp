@@ -99,6 +99,10 @@ struct Config {
 
   std::vector<OutputChannel> outputs;  // one per motor
   std::string output_unit = "us";      // for logs and tools
+  // After each disarmed -> armed transition, outputs ramp from their disarmed
+  // values to the mixed command over this time, the demand scaled with the
+  // ramp (output.spool_up_s; 0: none).
+  double spool_up_s = 0.0;
 
   Inputs inputs;
   Channels channels;
