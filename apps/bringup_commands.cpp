@@ -72,8 +72,16 @@ std::string where(const config::Config& config, int motor) {
   const std::string name = config.motor_names()[static_cast<std::size_t>(motor)];
   const std::string detail =
       static_cast<std::size_t>(motor) < details.size() ? details[static_cast<std::size_t>(motor)] : "";
-  return "motor " + std::to_string(motor + 1) + (name != "m" + std::to_string(motor + 1) ? " (" + name + ")" : "") +
-         (detail.empty() ? "" : ", " + detail);
+  std::string spin;
+  // A sign table (the team quad) names no spin; the vehicle model's rotors do.
+  const auto& rotors = config.physics.rotors;
+  if (detail.find("CW") == std::string::npos && static_cast<std::size_t>(motor) < rotors.size()) {
+    spin = rotors[static_cast<std::size_t>(motor)].spin == Spin::kCw ? ", CW" : ", CCW";
+    spin += " (as the vehicle model has it)";
+  }
+  return "motor " + std::to_string(motor + 1) +
+         (name != "m" + std::to_string(motor + 1) ? " (" + name + ")" : "") +
+         (detail.empty() ? "" : ", " + detail) + spin;
 }
 
 // The latest status seen, decoded inside the callback (nothing thrown out).
