@@ -17,11 +17,11 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
-#include <algorithm>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -70,8 +70,9 @@ int motor_index(const std::string& text, const config::Config& config) {
 std::string where(const config::Config& config, int motor) {
   const auto& details = config.vehicle.motor_details;
   const std::string name = config.motor_names()[static_cast<std::size_t>(motor)];
-  const std::string detail =
-      static_cast<std::size_t>(motor) < details.size() ? details[static_cast<std::size_t>(motor)] : "";
+  const std::string detail = static_cast<std::size_t>(motor) < details.size()
+                                 ? details[static_cast<std::size_t>(motor)]
+                                 : "";
   std::string spin;
   // A sign table (the team quad) names no spin; the vehicle model's rotors do.
   const auto& rotors = config.physics.rotors;
@@ -257,8 +258,8 @@ int esc_calibrate(const EscCalibrateCommand& cmd) {
   serve(lcm, listen, [] { return false; });
   if (watch.latest || watch.pwm_seen > 0) {
     std::cerr << "motormix esc-calibrate: refused: a mixer is running on the bus ("
-              << config->channels.motor_pwm << " or " << config->channels.status
-              << " heard within " << listen << " s): stop it first\n";
+              << config->channels.motor_pwm << " or " << config->channels.status << " heard within "
+              << listen << " s): stop it first\n";
     return kExitRuntime;
   }
   std::signal(SIGINT, on_interrupt);

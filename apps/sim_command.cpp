@@ -18,7 +18,9 @@ namespace motormix::app {
 namespace {
 
 const char* airmode_name(Airmode a) {
-  return a == Airmode::kRollPitch ? "roll_pitch" : a == Airmode::kRollPitchYaw ? "roll_pitch_yaw" : "off";
+  return a == Airmode::kRollPitch      ? "roll_pitch"
+         : a == Airmode::kRollPitchYaw ? "roll_pitch_yaw"
+                                       : "off";
 }
 
 // "3@6.5" or "FL@6.5": motor number as `motormix matrix` prints it, or name.
@@ -147,7 +149,8 @@ int sim(const SimCommand& cmd) {
   j["scenario"] = scenario->name;
   j["vehicle"] = config->name;
   j["strategy"] = config::to_string(config->strategy);
-  if (config->strategy == config::Strategy::kPrioritized) j["airmode"] = airmode_name(config->airmode);
+  if (config->strategy == config::Strategy::kPrioritized)
+    j["airmode"] = airmode_name(config->airmode);
   j["seed"] = cmd.seed;
   nlohmann::json failures = nlohmann::json::array();
   sim::ScenarioClock clock(*scenario, *config, options.failures);
@@ -161,8 +164,9 @@ int sim(const SimCommand& cmd) {
     std::cerr << "motormix sim: " << config->name << " (" << config::to_string(config->strategy)
               << "), scenario " << scenario->name << ", " << j["sim_seconds"].get<double>()
               << " s simulated in " << j["wall_seconds"].get<double>() << " s: "
-              << (j["crashed"].get<bool>() ? "CRASHED (" + j["crash_reason"].get<std::string>() + ")"
-                                            : std::string("not crashed"))
+              << (j["crashed"].get<bool>()
+                      ? "CRASHED (" + j["crash_reason"].get<std::string>() + ")"
+                      : std::string("not crashed"))
               << "\n";
   }
   std::cout << j.dump() << "\n";

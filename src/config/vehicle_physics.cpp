@@ -7,6 +7,7 @@
 #include "config/yaml_reader.hpp"
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 namespace motormix::config {
@@ -59,16 +60,27 @@ std::vector<Rotor> team_quad_rotors() {
   return rotors;
 }
 
-std::vector<Rotor> explicit_rotors(const YAML::Node& list, const std::string& path, int motors) {
+// One entry of vehicle.rotors: where the rotor is, and optionally its own
+// thrust and torque ratio (otherwise the vehicle-wide values).
+struct RotorEntry {
+  Rotor rotor;
+  std::optional<double> max_thrust_n;
+  std::optional<double> torque_ratio_m;
+};
+
+std::vector<RotorEntry> explicit_rotors(const YAML::Node& list, const std::string& path,
+                                        int motors) {
   if (!list.IsSequence() || static_cast<int>(list.size()) != motors) {
     fail(path, describe(list),
          "a list of " + std::to_string(motors) + " rotors, one per motor in output order");
   }
-  std::vector<Rotor> rotors;
+  std::vector<RotorEntry> rotors;
   for (std::size_t i = 0; i < list.size(); ++i) {
     MapReader r(list[i], path + "[" + std::to_string(i) + "]");
-    Rotor rotor;
-    if (!r.has("position")) fail(r.path_of("position"), "nothing", "[x, y, z] in metres (required)");
+    RotorEntry entry;
+    Rotor& rotor = entry.rotor;
+    if (!r.has("position"))
+      fail(r.path_of("position"), "nothing", "[x, y, z] in metres (required)");
     const auto p = numbers(r.raw("position"), r.path_of("position"), 3, -10.0, 10.0);
     rotor.position = {p[0], p[1], p[2]};
     rotor.spin = r.choice("spin", "", {"cw", "ccw"}) == "cw" ? Spin::kCw : Spin::kCcw;
@@ -79,8 +91,12 @@ std::vector<Rotor> explicit_rotors(const YAML::Node& list, const std::string& pa
     } else {
       r.raw("axis");
     }
+    if (r.has("max_thrust_n")) entry.max_thrust_n = r.number("max_thrust_n", 1.0, 1e-3, 1e5);
+    r.raw("max_thrust_n");
+    if (r.has("torque_ratio_m")) entry.torque_ratio_m = r.number("torque_ratio_m", 0.0, 0.0, 1.0);
+    r.raw("torque_ratio_m");
     r.finish();
-    rotors.push_back(rotor);
+    rotors.push_back(entry);
   }
   return rotors;
 }
@@ -94,8 +110,9 @@ Eigen::Vector3d default_inertia(const std::vector<RotorPhysics>& rotors, double 
   }
   const double body = 0.5 * mass;
   const double a = kCentralBoxM[0], b = kCentralBoxM[1], c = kCentralBoxM[2];
-  inertia.diagonal() += Eigen::Vector3d(body * (b * b + c * c), body * (a * a + c * c),
-                                        body * (a * a + b * b)) / 12.0;
+  inertia.diagonal() +=
+      Eigen::Vector3d(body * (b * b + c * c), body * (a * a + c * c), body * (a * a + b * b)) /
+      12.0;
   return inertia.diagonal();
 }
 
@@ -172,13 +189,17 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
     v.time_constant_down_s = 0.1;
   } else {
     for (const char* key : {"wheel_radius_m", "track_m", "max_wheel_speed_rad_s"}) {
-      if (vehicle.has(key)) fail(vehicle.path_of(key), "a wheel setting on an aircraft", "rotor settings");
+      if (vehicle.has(key))
+        fail(vehicle.path_of(key), "a wheel setting on an aircraft", "rotor settings");
       vehicle.raw(key);
     }
     const double scale = vehicle.number("length_scale", 1.0, 1e-6, 1e6);
     std::vector<Rotor> rotors = config.vehicle.rotors;
+    std::vector<RotorEntry> entries;
     if (vehicle.has("rotors")) {
-      rotors = explicit_rotors(vehicle.raw("rotors"), vehicle.path_of("rotors"), motors);
+      entries = explicit_rotors(vehicle.raw("rotors"), vehicle.path_of("rotors"), motors);
+      rotors.clear();
+      for (const RotorEntry& e : entries) rotors.push_back(e.rotor);
     } else {
       vehicle.raw("rotors");
       if (rotors.empty() && config.vehicle.name == "team_quad") rotors = team_quad_rotors();
@@ -187,16 +208,20 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
     const int n = static_cast<int>(rotors.size());
     v.mass_kg = vehicle.number("mass_kg", kMassPerRotorKg * std::max(n, 2), 0.01, 1e4);
     const double weight = v.mass_kg * kGravity;
-    const double thrust = vehicle.number("max_thrust_n", n > 0 ? kThrustToWeight * weight / n : 1.0,
-                                         1e-3, 1e5);
+    const double thrust =
+        vehicle.number("max_thrust_n", n > 0 ? kThrustToWeight * weight / n : 1.0, 1e-3, 1e5);
     const double torque_ratio = vehicle.number("torque_ratio_m", kDefaultTorqueRatioM, 0.0, 1.0);
-    for (const Rotor& r : rotors) {
+    for (std::size_t i = 0; i < rotors.size(); ++i) {
+      const Rotor& r = rotors[i];
       RotorPhysics p;
       p.position_m = scale * r.position;
       p.axis = r.axis.normalized();
       p.spin = r.spin;
       p.max_thrust_n = thrust * r.thrust_coefficient;
       p.torque_ratio_m = torque_ratio;
+      if (i < entries.size() && entries[i].max_thrust_n) p.max_thrust_n = *entries[i].max_thrust_n;
+      if (i < entries.size() && entries[i].torque_ratio_m)
+        p.torque_ratio_m = *entries[i].torque_ratio_m;
       v.rotors.push_back(p);
     }
     if (rotors.empty()) {
@@ -205,8 +230,8 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
                      "' (position [x, y, z] in metres and spin, one per motor) to simulate it";
     }
     if (vehicle.has("inertia_kgm2")) {
-      const auto i = numbers(vehicle.raw("inertia_kgm2"), vehicle.path_of("inertia_kgm2"), 3,
-                             1e-7, 1e4);
+      const auto i =
+          numbers(vehicle.raw("inertia_kgm2"), vehicle.path_of("inertia_kgm2"), 3, 1e-7, 1e4);
       v.inertia_kgm2 = {i[0], i[1], i[2]};
     } else {
       vehicle.raw("inertia_kgm2");

@@ -148,13 +148,17 @@ MotorTestResult ControlLoop::on_motor_test(const MotorTestSample& s, std::int64_
   if (!motor_test_settings_.enabled) {
     r = MotorTestResult::kRefusedDisabled;
   } else if (!std::isfinite(s.throttle) || !std::isfinite(s.duration_s) ||
-             s.utime <= last_motor_test_utime_ || from_future(s.utime, wall_us)) {
+             from_future(s.utime, wall_us) ||
+             (last_motor_test_utime_ != kNever && s.utime <= last_motor_test_utime_ &&
+              last_motor_test_utime_ - s.utime < kPublisherRestartUs)) {
+    // Out of order, unless far enough back to be a client with a new clock.
     r = MotorTestResult::kRefusedInvalid;
   } else if (s.motor == 0) {
     end_motor_test();  // a request to stop is always obeyed
   } else if (result_.state != LoopState::kDisarmed) {
     r = MotorTestResult::kRefusedNotDisarmed;
-  } else if (last_armed_setpoint_us_ != kNever && now_us - last_armed_setpoint_us_ <= setpoint_timeout_us_) {
+  } else if (last_armed_setpoint_us_ != kNever &&
+             now_us - last_armed_setpoint_us_ <= setpoint_timeout_us_) {
     r = MotorTestResult::kRefusedArmedSetpoint;
   } else if (s.motor < 0 || s.motor > mixer_.motors()) {
     r = MotorTestResult::kRefusedMotor;
@@ -178,7 +182,7 @@ MotorTestResult ControlLoop::on_motor_test(const MotorTestSample& s, std::int64_
 
 // The test motor alone through the output stage (its idle, linearization,
 // limits and direction pin), every other output at its disarmed value.
-void ControlLoop::spin_test_motor(std::int64_t now_us) {
+void ControlLoop::spin_test_motor() {
   mixer_.disarm(result_.mix);
   const int n = mixer_.motors();
   MotorVector command = MotorVector::Zero(n);
@@ -189,7 +193,6 @@ void ControlLoop::spin_test_motor(std::int64_t now_us) {
                               others);
   result_.mix.command = command;
   result_.mix.armed = false;
-  (void)now_us;
 }
 
 Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us, std::int64_t wall_us) {
@@ -339,23 +342,23 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   record_vehicle_state(now_us);
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid_.yaw : setpoint_.yaw;
   const AxisVector demand(pid_.roll, pid_.pitch, yaw, setpoint_.throttle);
-  result_.spooling_up = false;
-  result_.spool_up = 0.0;
+  // The spool-up ramp runs from arming; a failsafe that keeps mixing (hold
+  // the last inputs, idle) keeps it, so no output jumps up on the way down.
+  const std::int64_t armed_for = now_us - armed_since_us_;
+  const double ramp = armed_for >= spool_up_us_
+                          ? 1.0
+                          : static_cast<double>(armed_for) / static_cast<double>(spool_up_us_);
+  result_.spooling_up = result_.state == LoopState::kArmed && ramp < 1.0;
+  result_.spool_up = result_.state == LoopState::kArmed ? ramp : 0.0;
   if (result_.state == LoopState::kArmed) {
-    const std::int64_t armed_for = now_us - armed_since_us_;
-    const double ramp = armed_for >= spool_up_us_
-                            ? 1.0
-                            : static_cast<double>(armed_for) / static_cast<double>(spool_up_us_);
-    result_.spooling_up = ramp < 1.0;
-    result_.spool_up = ramp;
     mix_inputs(demand, now_us, ramp);
   } else if (result_.state == LoopState::kFailsafe &&
              failsafe_action_ == config::FailsafeAction::kHoldLast &&
              now_us - failsafe_since_us_ <= hold_last_us_) {
-    mix_inputs(demand, now_us);
+    mix_inputs(demand, now_us, ramp);
   } else if (result_.state == LoopState::kFailsafe &&
              failsafe_action_ == config::FailsafeAction::kIdle) {
-    mix_inputs(AxisVector::Zero(), now_us);
+    mix_inputs(AxisVector::Zero(), now_us, ramp);
   } else {
     mixer_.disarm(result_.mix);
   }
@@ -363,7 +366,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   if (test_motor_ >= 0 && (result_.state != LoopState::kDisarmed || now_us >= test_end_us_)) {
     end_motor_test();
   }
-  if (test_motor_ >= 0) spin_test_motor(now_us);
+  if (test_motor_ >= 0) spin_test_motor();
   result_.motor_test = test_motor_;
   result_.motor_test_throttle = test_motor_ >= 0 ? test_throttle_ : 0.0;
   result_.motor_test_changed = test_changed_;

@@ -127,9 +127,9 @@ struct CycleResult {
   std::array<double, 4> input_age_ms{-1.0, -1.0, -1.0, -1.0};
   bool spooling_up = false;  // armed, outputs ramping up since arming
   double spool_up = 0.0;     // ramp progress 0..1 (1 once done, 0 while not armed)
-  int motor_test = -1;              // motor spinning alone (0-based), -1 when none
+  int motor_test = -1;       // motor spinning alone (0-based), -1 when none
   double motor_test_throttle = 0.0;
-  bool motor_test_changed = false;  // a test started or ended in this cycle
+  bool motor_test_changed = false;            // a test started or ended in this cycle
   std::int64_t motor_test_request_utime = 0;  // the last request handled
   MotorTestResult motor_test_result = MotorTestResult::kOk;  // its answer
 };
@@ -205,7 +205,7 @@ class ControlLoop {
   std::int64_t test_end_us_ = 0;
   bool test_changed_ = false;  // since the last cycle
   void end_motor_test();
-  void spin_test_motor(std::int64_t now_us);
+  void spin_test_motor();
   bool arm_permitted_ = false;
   bool arm_refused_logged_ = false;  // a disarmed setpoint has been seen since boot or failsafe
 

@@ -87,8 +87,8 @@ void Controller::reset() {
   yaw_rate_integral_ = 0.0;
 }
 
-ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
-                                     double forward_speed, bool mixer_armed, bool on_ground,
+ControllerCommand Controller::update(const Reference& ref, const BodyState& m, double forward_speed,
+                                     bool mixer_armed, bool on_ground,
                                      const AxisVector& unallocated, double dt) {
   ControllerCommand c;
   c.armed = ref.armed;
@@ -145,8 +145,7 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m,
       }
     }
     const double up_accel = gains_.climb_p * climb_error + gains_.climb_i * climb_integral_;
-    const double cos_tilt =
-        std::max((m.attitude * Eigen::Vector3d::UnitZ()).z(), kMinTiltCosine);
+    const double cos_tilt = std::max((m.attitude * Eigen::Vector3d::UnitZ()).z(), kMinTiltCosine);
     want[3] = std::max(0.0, mass_kg_ * (kGravity + up_accel) / cos_tilt);
   }
   const Eigen::Vector4d d = g_inv_ * want;

@@ -42,8 +42,8 @@ struct Reference {
 };
 
 struct ControllerGains {
-  double rate_p = 0.0;     // 1/s: angular acceleration per rad/s of rate error
-  double rate_i = 0.0;     // 1/s^2
+  double rate_p = 0.0;      // 1/s: angular acceleration per rad/s of rate error
+  double rate_i = 0.0;      // 1/s^2
   double attitude_p = 0.0;  // 1/s: rate per rad of attitude error, roll and pitch
   double yaw_p = 0.0;
   double max_rate = 0.0;      // rad/s, roll and pitch
@@ -90,7 +90,7 @@ class Controller {
   bool wheeled_;
   double mass_kg_;
   Eigen::Vector3d inertia_;
-  Eigen::Matrix4d g_;        // demand -> torque/thrust (aircraft) or rate/speed (wheels)
+  Eigen::Matrix4d g_;  // demand -> torque/thrust (aircraft) or rate/speed (wheels)
   Eigen::Matrix4d g_inv_;
   ControllerGains gains_;
   // Whether integrating `error` on `axis` would push the demand further the

@@ -11,9 +11,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 constexpr double kMaxPhysicsStepS = 1e-3;
-constexpr double kBatteryPeriodS = 0.02;       // battery_t at 50 Hz
-constexpr double kMotorStatusPeriodS = 0.1;    // motor_status_t at 10 Hz once a failure is seen
-constexpr double kReachedM = 0.1;  // within this of the commanded altitude: arrived
+constexpr double kBatteryPeriodS = 0.02;     // battery_t at 50 Hz
+constexpr double kMotorStatusPeriodS = 0.1;  // motor_status_t at 10 Hz once a failure is seen
+constexpr double kReachedM = 0.1;            // within this of the commanded altitude: arrived
 
 double wrap(double angle) { return std::remainder(angle, 2 * kPi); }
 

@@ -51,9 +51,9 @@ struct SimResult {
   double attitude_error_rms_deg = 0.0;  // tilt between the attitude asked and flown
   double attitude_error_max_deg = 0.0;
   double yaw_error_rms_deg = 0.0;
-  double altitude_loss_m = 0.0;  // largest drop below the commanded altitude, once reached
-  double saturated_fraction = 0.0;  // cycles with some axis not fully delivered
-  double speed_error_rms_mps = 0.0;   // ground vehicles
+  double altitude_loss_m = 0.0;         // largest drop below the commanded altitude, once reached
+  double saturated_fraction = 0.0;      // cycles with some axis not fully delivered
+  double speed_error_rms_mps = 0.0;     // ground vehicles
   double yaw_rate_error_rms_dps = 0.0;  // ground vehicles
   double min_battery_v = 0.0;
   double final_charge = 0.0;
@@ -70,8 +70,8 @@ struct SimFrame {
   const node::PidSample* pid = nullptr;
   const node::CycleResult* cycle = nullptr;
   const VehicleModel* vehicle = nullptr;
-  const node::BatterySample* battery = nullptr;            // when one was sent this period
-  const node::MotorStatusSample* motor_status = nullptr;   // when one was sent this period
+  const node::BatterySample* battery = nullptr;           // when one was sent this period
+  const node::MotorStatusSample* motor_status = nullptr;  // when one was sent this period
   const Reference* reference = nullptr;
   const ControllerCommand* command = nullptr;  // what the controller sent
   const node::Counters* counters = nullptr;
@@ -99,8 +99,8 @@ class Sensors {
                                      gauss(noise_.attitude_deg * kRadPerDeg));
     if (tilt_noise.squaredNorm() > 0) {
       // A small rotation: (1, v/2) normalized is exp(v) to second order.
-      m.attitude = (truth.attitude * Eigen::Quaterniond(1.0, tilt_noise.x() / 2,
-                                                        tilt_noise.y() / 2, tilt_noise.z() / 2))
+      m.attitude = (truth.attitude * Eigen::Quaterniond(1.0, tilt_noise.x() / 2, tilt_noise.y() / 2,
+                                                        tilt_noise.z() / 2))
                        .normalized();
     }
     m.rates += Eigen::Vector3d(gauss(noise_.gyro_rad_s), gauss(noise_.gyro_rad_s),
@@ -122,8 +122,8 @@ class Scorer {
   Scorer(const Scenario& scenario, const config::Config& config);
   // One cycle at time t: what was asked, what the vehicle did, whether the
   // mixer was armed and which axes it could not deliver.
-  void add(double t, const Reference& ref, const ControllerCommand& cmd, const VehicleModel& vehicle,
-           bool armed, std::uint8_t axis_limited);
+  void add(double t, const Reference& ref, const ControllerCommand& cmd,
+           const VehicleModel& vehicle, bool armed, std::uint8_t axis_limited);
   void finish(SimResult& r) const;
 
  private:

@@ -12,14 +12,13 @@
 
 #include <Eigen/Geometry>
 
-
 namespace motormix::sim {
 
 struct BodyState {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m, NED
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s, NED
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();            // m, NED
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();            // m/s, NED
   Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  // body FRD -> NED
-  Eigen::Vector3d rates = Eigen::Vector3d::Zero();     // rad/s, body FRD
+  Eigen::Vector3d rates = Eigen::Vector3d::Zero();               // rad/s, body FRD
 };
 
 struct MassProperties {

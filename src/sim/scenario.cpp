@@ -107,12 +107,13 @@ Scenario parse_scenario(const std::string& yaml_text, const std::string& source)
         fail("timeline", config::describe(timeline), "a list of events {at: seconds, ...}");
       }
       for (std::size_t i = 0; i < timeline.size(); ++i) {
-        s.timeline.push_back(
-            read_event(MapReader(timeline[i], "timeline[" + std::to_string(i) + "]"), s.duration_s));
+        s.timeline.push_back(read_event(
+            MapReader(timeline[i], "timeline[" + std::to_string(i) + "]"), s.duration_s));
       }
     }
-    std::stable_sort(s.timeline.begin(), s.timeline.end(),
-                     [](const ScenarioEvent& a, const ScenarioEvent& b) { return a.at_s < b.at_s; });
+    std::stable_sort(
+        s.timeline.begin(), s.timeline.end(),
+        [](const ScenarioEvent& a, const ScenarioEvent& b) { return a.at_s < b.at_s; });
     root.finish();
     return s;
   } catch (const config::ConfigError& e) {
@@ -130,8 +131,8 @@ Scenario load_scenario(const std::string& name_or_path) {
   if (!file) {
     std::string names;
     for (const std::string& n : shipped_scenarios()) names += (names.empty() ? "" : ", ") + n;
-    throw config::ConfigError("scenario '" + name_or_path +
-                              "': neither a shipped scenario (" + names + ") nor a readable file");
+    throw config::ConfigError("scenario '" + name_or_path + "': neither a shipped scenario (" +
+                              names + ") nor a readable file");
   }
   std::stringstream text;
   text << file.rdbuf();

@@ -66,7 +66,7 @@ struct Scenario {
   SensorNoise noise;
   std::optional<double> battery_initial_charge;
   std::optional<double> battery_resistance_factor;  // times the vehicle's internal resistance
-  std::vector<ScenarioEvent> timeline;  // sorted by at_s
+  std::vector<ScenarioEvent> timeline;              // sorted by at_s
 };
 
 // Throws config::ConfigError naming the key path, the value and what is allowed.

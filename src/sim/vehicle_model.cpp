@@ -62,7 +62,8 @@ double VehicleModel::driver_fraction(int i, double output, int direction) const 
 }
 
 Eigen::Matrix<double, 4, Eigen::Dynamic> VehicleModel::command_effect() const {
-  Eigen::Matrix<double, 4, Eigen::Dynamic> e = Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, motors());
+  Eigen::Matrix<double, 4, Eigen::Dynamic> e =
+      Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, motors());
   for (int i = 0; i < motors(); ++i) {
     if (p_.wheeled) {
       const double side = i % 2 == 0 ? 1.0 : -1.0;  // even: left; left faster turns right (+yaw)
@@ -124,7 +125,8 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
     // Electrical power grows with thrust^1.5 (momentum theory); a wheel
     // motor's current with its speed.
     const double s = std::max(speed_[k], 0.0);
-    const double load = p_.wheeled ? std::abs(speed_[k]) / p_.wheels.max_speed_rad_s : s * std::sqrt(s);
+    const double load =
+        p_.wheeled ? std::abs(speed_[k]) / p_.wheels.max_speed_rad_s : s * std::sqrt(s);
     current += battery_.physics().full_throttle_current_a * load;
   }
   battery_.step(current, dt);
@@ -142,7 +144,8 @@ void VehicleModel::step_aircraft(const Environment& env, double dt) {
     if (wrench(body_, env).force_world.z() >= 0.0) return;
     landed_ = false;
   }
-  body_ = rk4_step(body_, mass_, [&](const BodyState& s) { return wrench(s, env); }, dt);
+  body_ = rk4_step(
+      body_, mass_, [&](const BodyState& s) { return wrench(s, env); }, dt);
   if (!taken_off_ && body_.position.z() < -kTakenOffAltitudeM) taken_off_ = true;
   if (body_.position.z() >= 0.0) {
     const double impact = body_.velocity.z();
@@ -169,7 +172,8 @@ void VehicleModel::step_aircraft(const Environment& env, double dt) {
 
 void VehicleModel::step_wheels(double dt) {
   double left = 0.0, right = 0.0;
-  for (int i = 0; i < motors(); ++i) (i % 2 == 0 ? left : right) += speed_[static_cast<std::size_t>(i)];
+  for (int i = 0; i < motors(); ++i)
+    (i % 2 == 0 ? left : right) += speed_[static_cast<std::size_t>(i)];
   left /= p_.wheels.per_side;
   right /= p_.wheels.per_side;
   forward_speed_ = p_.wheels.radius_m * (left + right) / 2.0;

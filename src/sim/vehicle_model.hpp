@@ -31,7 +31,8 @@ inline constexpr double kGravity = 9.80665;
 inline constexpr double kCrashSpeedMps = 2.0;  // hitting the ground faster than this is a crash
 
 struct Environment {
-  Eigen::Vector3d wind_ned = Eigen::Vector3d::Zero();     // m/s: drag acts on the air-relative velocity
+  Eigen::Vector3d wind_ned =
+      Eigen::Vector3d::Zero();  // m/s: drag acts on the air-relative velocity
   Eigen::Vector3d force_world = Eigen::Vector3d::Zero();  // N, e.g. a gust's push
   Eigen::Vector3d torque_body = Eigen::Vector3d::Zero();  // N m, e.g. a gust on one side
 };

@@ -62,7 +62,8 @@ TEST_F(MixerOnTheBus, MotorTestSpinsTheRightMotorAloneAndEndsDisarmed) {
             0);
   ASSERT_TRUE(bus_.wait_until(
       [](const auto&, const auto& status) {
-        return !status.empty() && status.back().motor_test_state == mixer_status_t::MOTOR_TEST_NONE &&
+        return !status.empty() &&
+               status.back().motor_test_state == mixer_status_t::MOTOR_TEST_NONE &&
                status.back().motor_tests_started == 1;
       },
       5s));
@@ -134,7 +135,8 @@ TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
   lcm.publish("MOTOR_TEST", &test);
   EXPECT_TRUE(bus_.wait_until(
       [](const auto&, const auto& status) {
-        return !status.empty() && status.back().motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING;
+        return !status.empty() &&
+               status.back().motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING;
       },
       3s));
   armed = true;
@@ -254,8 +256,8 @@ TEST(EscCalibration, MaximumThenMinimumThenDisarmed) {
 
 TEST(EscCalibration, NoConfirmationAbortsToDisarmed) {
   BusRecorder bus("MOTOR_PWM", "MIXER_STATUS");
-  const std::string cmd = "sleep 2 | '" + std::string(motormix_binary()) + "' esc-calibrate --config '" +
-                          quad() + "' --props-off --timeout 0.5";
+  const std::string cmd = "sleep 2 | '" + std::string(motormix_binary()) +
+                          "' esc-calibrate --config '" + quad() + "' --props-off --timeout 0.5";
   EXPECT_EQ(run_shell(cmd), 1);
   std::this_thread::sleep_for(100ms);
   const auto pwm = bus.pwm();
@@ -275,7 +277,8 @@ TEST(EscCalibration, CtrlCAbortsToDisarmed) {
        "exec \"$0\" esc-calibrate --config \"$1\" --props-off --timeout 20",
        motormix_binary(), quad()});
   ASSERT_TRUE(bus.wait_until(
-      [](const auto& pwm, const auto&) { return !pwm.empty() && pwm.back().pwm[0] == 2000.0f; }, 5s));
+      [](const auto& pwm, const auto&) { return !pwm.empty() && pwm.back().pwm[0] == 2000.0f; },
+      5s));
   calibration.signal(SIGINT);
   EXPECT_EQ(calibration.wait_for(5s), 1);
   std::this_thread::sleep_for(100ms);

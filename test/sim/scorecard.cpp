@@ -91,10 +91,11 @@ std::vector<Column> columns() {
 
 Mixer px4_mixer(const config::Config& c, reference::Px4Airmode airmode) {
   const CommandRange range = config::command_range(c);
-  FailurePlan plan = prepare_failures(
-      c.mixing, range, 0.5, [airmode](const FailureMixing&, const MixingBasis& basis) {
-        return std::unique_ptr<const Allocator>(std::make_unique<Px4StyleAllocator>(basis, airmode));
-      });
+  FailurePlan plan = prepare_failures(c.mixing, range, 0.5,
+                                      [airmode](const FailureMixing&, const MixingBasis& basis) {
+                                        return std::unique_ptr<const Allocator>(
+                                            std::make_unique<Px4StyleAllocator>(basis, airmode));
+                                      });
   return Mixer(std::make_unique<Px4StyleAllocator>(MixingBasis(c.mixing), airmode),
                OutputStage(c.outputs), c.thrust_range(), std::move(plan));
 }
@@ -117,7 +118,8 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
   out["column"] = cell.column->name;
   std::string label = cell.c.scenario;
   if (cell.c.failed_motor >= 0) {
-    label += " m" + std::to_string(cell.c.failed_motor + 1) + (cell.c.undetected ? " undetected" : " reported");
+    label += " m" + std::to_string(cell.c.failed_motor + 1) +
+             (cell.c.undetected ? " undetected" : " reported");
   }
   out["scenario"] = label;
   config::Config config;
@@ -136,9 +138,10 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
   Scenario scenario = load_scenario(cell.c.scenario);
   SimOptions options;
   if (cell.c.failed_motor >= 0) {
-    scenario.timeline.erase(std::remove_if(scenario.timeline.begin(), scenario.timeline.end(),
-                                           [](const ScenarioEvent& e) { return e.fail.has_value(); }),
-                            scenario.timeline.end());
+    scenario.timeline.erase(
+        std::remove_if(scenario.timeline.begin(), scenario.timeline.end(),
+                       [](const ScenarioEvent& e) { return e.fail.has_value(); }),
+        scenario.timeline.end());
     options.failures.push_back({cell.c.failed_motor, 6.0});
     options.undetected = cell.c.undetected;
   }
@@ -146,7 +149,8 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
   double wall = 0, sim_s = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
     options.seed = static_cast<std::uint64_t>(seed);
-    Mixer mixer = cell.column->px4 ? px4_mixer(config, cell.column->airmode) : config::build_mixer(config);
+    Mixer mixer =
+        cell.column->px4 ? px4_mixer(config, cell.column->airmode) : config::build_mixer(config);
     const SimResult r = run_lockstep(config, std::move(mixer), scenario, options);
     wall += r.wall_seconds;
     sim_s += r.sim_seconds;
@@ -221,8 +225,8 @@ std::vector<std::string> target_misses(const std::vector<nlohmann::json>& result
     const std::string v = r["vehicle"], c = r["column"], s = r["scenario"];
     const bool target_vehicle = v == "hexa_x" || v == "octo_x";
     const bool target_column = c == "optimal" || c.rfind("prioritized/", 0) == 0;
-    const bool reported = s.rfind("motor_out", 0) == 0 && s.size() > 8 &&
-                          s.compare(s.size() - 8, 8, "reported") == 0;
+    const bool reported =
+        s.rfind("motor_out", 0) == 0 && s.size() > 8 && s.compare(s.size() - 8, 8, "reported") == 0;
     if (target_vehicle && target_column && reported &&
         (r["crashed"].get<bool>() || r["altitude_loss_m"].get<double>() > kTargetAltitudeLossM ||
          r["attitude_error_max_deg"].get<double>() > kTargetAttitudeMaxDeg)) {
@@ -233,12 +237,12 @@ std::vector<std::string> target_misses(const std::vector<nlohmann::json>& result
       const auto px4 = by.find(v + "|px4/" + airmode + "|" + s);
       if (px4 == by.end() || px4->second->contains("skipped")) continue;
       const nlohmann::json& p = *px4->second;
-      const bool worse =
-          (r["crashed"].get<bool>() && !p["crashed"].get<bool>()) ||
-          (!r["crashed"].get<bool>() && !p["crashed"].get<bool>() &&
-           r["attitude_error_rms_deg"].get<double>() >
-               kPx4Margin * p["attitude_error_rms_deg"].get<double>() + 1e-9);
-      if (worse) misses.push_back("against PX4: " + describe(r) + ": " + r.dump() + " vs " + p.dump());
+      const bool worse = (r["crashed"].get<bool>() && !p["crashed"].get<bool>()) ||
+                         (!r["crashed"].get<bool>() && !p["crashed"].get<bool>() &&
+                          r["attitude_error_rms_deg"].get<double>() >
+                              kPx4Margin * p["attitude_error_rms_deg"].get<double>() + 1e-9);
+      if (worse)
+        misses.push_back("against PX4: " + describe(r) + ": " + r.dump() + " vs " + p.dump());
     }
   }
   return misses;

@@ -75,7 +75,9 @@ TEST(RigidBody, FreeRotationConservesMomentumAndEnergy) {
   const auto momentum = [&](const BodyState& b) {
     return Eigen::Vector3d(b.attitude * m.inertia.cwiseProduct(b.rates));
   };
-  const auto energy = [&](const BodyState& b) { return 0.5 * b.rates.dot(m.inertia.cwiseProduct(b.rates)); };
+  const auto energy = [&](const BodyState& b) {
+    return 0.5 * b.rates.dot(m.inertia.cwiseProduct(b.rates));
+  };
   const Eigen::Vector3d l0 = momentum(s);
   const double e0 = energy(s);
   double max_tilt = 0;
@@ -93,7 +95,8 @@ TEST(RigidBody, FreeRotationConservesMomentumAndEnergy) {
 // physical ESC curve inverted by hand (not by the output stage).
 double hover_pwm(const config::Config& c, double voltage) {
   const config::VehiclePhysics& p = c.physics;
-  const double share = p.mass_kg * kGravity / static_cast<double>(p.rotors.size()) / p.rotors.front().max_thrust_n;
+  const double share =
+      p.mass_kg * kGravity / static_cast<double>(p.rotors.size()) / p.rotors.front().max_thrust_n;
   const double v = voltage / p.battery.reference_v;
   const double e = p.thrust_expo;
   const double f = share / ((1 - e) * v + e * v * v);
@@ -191,7 +194,8 @@ TEST(VehicleModel, ACounterClockwiseRotorYawsTheBodyClockwise) {
     MotorVector out = MotorVector::Constant(4, 1500.0);
     out[motor] = 1700.0;
     for (int k = 0; k < 50; ++k) v.step(out, DirectionVector{}, 0, Environment{}, 1e-3);
-    const double expected = c.physics.rotors[static_cast<std::size_t>(motor)].spin == Spin::kCcw ? 1 : -1;
+    const double expected =
+        c.physics.rotors[static_cast<std::size_t>(motor)].spin == Spin::kCcw ? 1 : -1;
     EXPECT_GT(expected * v.body().rates.z(), kSignRateRadS) << "motor " << motor + 1;
   }
 }
@@ -241,9 +245,12 @@ TEST(VehicleConfig, RejectsBadValuesNamingTheKey) {
   };
   EXPECT_NE(message({"vehicle.mass_kg=-1"}).find("vehicle.mass_kg"), std::string::npos);
   EXPECT_NE(message({"vehicle.battery.cells=0"}).find("vehicle.battery.cells"), std::string::npos);
-  EXPECT_NE(message({"vehicle.wheel_radius_m=0.1"}).find("vehicle.wheel_radius_m"), std::string::npos);
-  EXPECT_NE(message({"vehicle.inertia_kgm2=[1, 2]"}).find("vehicle.inertia_kgm2"), std::string::npos);
-  EXPECT_NE(message({"vehicle.esc.thrust_expo=2"}).find("vehicle.esc.thrust_expo"), std::string::npos);
+  EXPECT_NE(message({"vehicle.wheel_radius_m=0.1"}).find("vehicle.wheel_radius_m"),
+            std::string::npos);
+  EXPECT_NE(message({"vehicle.inertia_kgm2=[1, 2]"}).find("vehicle.inertia_kgm2"),
+            std::string::npos);
+  EXPECT_NE(message({"vehicle.esc.thrust_expo=2"}).find("vehicle.esc.thrust_expo"),
+            std::string::npos);
   EXPECT_NE(message({"vehicle.bogus=1"}).find("vehicle.bogus"), std::string::npos);
   // A table alone says nothing of where the rotors are.
   const config::Config table = config::load_config_text(
@@ -252,6 +259,20 @@ TEST(VehicleConfig, RejectsBadValuesNamingTheKey) {
       "table");
   EXPECT_NE(table.physics.incomplete.find("vehicle.rotors"), std::string::npos);
   EXPECT_THROW(VehicleModel{table}, std::invalid_argument);
+  // Rotors given one by one, each with its own thrust and torque ratio.
+  const config::Config given = config::load_config_text(
+      "geometry:\n  mixing:\n    - [1, 1, 1, 1]\n    - [-1, -1, 1, 1]\n    - [1, -1, -1, 1]\n"
+      "    - [-1, 1, -1, 1]\n"
+      "vehicle:\n  rotors:\n"
+      "    - {position: [-0.2, -0.2, 0], spin: ccw, max_thrust_n: 7}\n"
+      "    - {position: [-0.2, 0.2, 0], spin: cw}\n"
+      "    - {position: [0.2, -0.2, 0], spin: cw, torque_ratio_m: 0.02}\n"
+      "    - {position: [0.2, 0.2, 0], spin: ccw}\n",
+      "table with rotors");
+  ASSERT_TRUE(given.physics.incomplete.empty());
+  EXPECT_DOUBLE_EQ(given.physics.rotors[0].max_thrust_n, 7.0);
+  EXPECT_DOUBLE_EQ(given.physics.rotors[2].torque_ratio_m, 0.02);
+  EXPECT_DOUBLE_EQ(given.physics.rotors[1].torque_ratio_m, 0.016);
 }
 
 TEST(Scenario, ShippedOnesLoadAndBadOnesNameTheirKey) {
@@ -265,8 +286,10 @@ TEST(Scenario, ShippedOnesLoadAndBadOnesNameTheirKey) {
     }
     return std::string("accepted");
   };
-  EXPECT_NE(message("timeline: [{at: 1, rol_deg: 3}]").find("timeline[0].rol_deg"), std::string::npos);
-  EXPECT_NE(message("duration_s: 5\ntimeline: [{at: 9}]").find("timeline[0].at"), std::string::npos);
+  EXPECT_NE(message("timeline: [{at: 1, rol_deg: 3}]").find("timeline[0].rol_deg"),
+            std::string::npos);
+  EXPECT_NE(message("duration_s: 5\ntimeline: [{at: 9}]").find("timeline[0].at"),
+            std::string::npos);
   EXPECT_NE(message("timeline: [{at: 1, fail: 17}]").find("timeline[0].fail"), std::string::npos);
   EXPECT_NE(message("[1, 2").find("not valid YAML"), std::string::npos);
   EXPECT_THROW(load_scenario("/nonexistent/scenario.yaml"), config::ConfigError);
@@ -324,7 +347,7 @@ TEST(Lockstep, TheDriveFollowsSpeedAndTurnRate) {
   const config::Config c = load("diff_drive.yaml");
   Scenario s = load_scenario("drive");
   s.score_from_s = 2.0;  // the straight part, after the start
-  s.score_to_s = 3.99;  // the spin starts at 4 s
+  s.score_to_s = 3.99;   // the spin starts at 4 s
   const SimResult r = run_lockstep(c, config::build_mixer(c), s, {});
   EXPECT_FALSE(r.crashed);
   EXPECT_LT(r.speed_error_rms_mps, 0.05);
@@ -347,8 +370,10 @@ TEST_P(MotorOut, EveryMotorStopsAndTheVehicleStaysUp) {
     o.failures.push_back({m, 6.0});
     const SimResult r = run_lockstep(c, config::build_mixer(c), s, o);
     EXPECT_FALSE(r.crashed) << file << " " << strategy << " m" << m + 1 << ": " << r.crash_reason;
-    EXPECT_LE(r.altitude_loss_m, kMotorOutAltitudeLossM) << file << " " << strategy << " m" << m + 1;
-    EXPECT_LE(r.attitude_error_max_deg, kMotorOutAttitudeMaxDeg) << file << " " << strategy << " m" << m + 1;
+    EXPECT_LE(r.altitude_loss_m, kMotorOutAltitudeLossM)
+        << file << " " << strategy << " m" << m + 1;
+    EXPECT_LE(r.attitude_error_max_deg, kMotorOutAttitudeMaxDeg)
+        << file << " " << strategy << " m" << m + 1;
   }
 }
 

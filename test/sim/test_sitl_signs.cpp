@@ -17,9 +17,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <csignal>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <string>
 #include <thread>
 
@@ -32,7 +32,8 @@ constexpr double kClimbThrottle = 0.62;  // above the quad's hover demand (about
 constexpr double kTakenOffM = 1.0;       // altitude before the axis step
 constexpr double kStep = 0.15;           // demand on the axis under test
 constexpr double kStepS = 0.15;          // how long
-constexpr double kClearRateRadS = 0.1;   // a body rate that clearly has a sign (yaw, the weakest: 0.16)
+constexpr double kClearRateRadS =
+    0.1;  // a body rate that clearly has a sign (yaw, the weakest: 0.16)
 constexpr auto kBound = std::chrono::seconds(8);
 
 struct Bus {
@@ -40,7 +41,9 @@ struct Bus {
   bool armed = false;
   bool have_state = false;
   vehicle_state_t state;
-  void on_pwm(const lcm::ReceiveBuffer*, const std::string&, const motor_pwm_t* m) { armed = m->armed; }
+  void on_pwm(const lcm::ReceiveBuffer*, const std::string&, const motor_pwm_t* m) {
+    armed = m->armed;
+  }
   void on_state(const lcm::ReceiveBuffer*, const std::string&, const vehicle_state_t* s) {
     state = *s;
     have_state = true;

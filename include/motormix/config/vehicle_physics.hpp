@@ -24,7 +24,7 @@ struct RotorPhysics {
 };
 
 struct BatteryPhysics {
-  int cells = 4;                          // lithium-polymer cells in series
+  int cells = 4;  // lithium-polymer cells in series
   double capacity_mah = 5000.0;
   double internal_resistance_ohm = 0.02;  // whole pack
   double initial_charge = 1.0;            // state of charge at the start, 0..1
@@ -35,8 +35,8 @@ struct BatteryPhysics {
 
 struct WheelPhysics {
   double radius_m = 0.05;
-  double track_m = 0.30;                // between the left and right wheels
-  double max_speed_rad_s = 20.0;        // wheel speed at full command and reference voltage
+  double track_m = 0.30;          // between the left and right wheels
+  double max_speed_rad_s = 20.0;  // wheel speed at full command and reference voltage
   int per_side = 1;
 };
 
@@ -58,7 +58,7 @@ struct VehiclePhysics {
   // Thrust fraction = e x^2 + (1 - e) x of the ESC input fraction x: the
   // curve output.thrust_model_factor inverts when it is set to the same e.
   double thrust_expo = 0.3;
-  double drag_linear_n_per_mps = 0.0;       // force against the air-relative velocity
+  double drag_linear_n_per_mps = 0.0;         // force against the air-relative velocity
   double drag_rotational_nm_per_radps = 0.0;  // torque against the body rates
   BatteryPhysics battery;
   // Empty when the physics is complete; otherwise why the vehicle cannot be

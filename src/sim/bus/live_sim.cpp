@@ -2,8 +2,8 @@
 
 #include "sim/bus/sim_log.hpp"
 
-#include <motormix/config/build_mixer.hpp>
 #include <motormix/battery_t.hpp>
+#include <motormix/config/build_mixer.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/motor_status_t.hpp>
@@ -90,8 +90,8 @@ void publish(lcm::LCM& lcm, const std::string& channel, const Message& msg) {
 
 }  // namespace
 
-bool run_live(const config::Config& config_in, const Scenario& scenario,
-              const LiveOptions& options, LiveResult& result, std::ostream& err) {
+bool run_live(const config::Config& config_in, const Scenario& scenario, const LiveOptions& options,
+              LiveResult& result, std::ostream& err) {
   const config::Config config = scenario_config(config_in, scenario);
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) {
@@ -201,9 +201,9 @@ bool run_live(const config::Config& config_in, const Scenario& scenario,
     const bool armed = fresh && mix.armed;
     scorer.add(t, ref, cmd, vehicle, armed, mix.axis_limited);
     for (int s = 0; s < substeps; ++s) {
-      vehicle.step(mix.outputs.size() == config.motors() ? mix.outputs
-                                                         : MotorVector::Zero(config.motors()),
-                   mix.direction, fresh ? clock.stopped() : all, clock.environment(t + s * dt), dt);
+      vehicle.step(
+          mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
+          mix.direction, fresh ? clock.stopped() : all, clock.environment(t + s * dt), dt);
     }
     r.min_battery_v = std::min(r.min_battery_v, vehicle.battery().terminal_v());
     r.cycles = k + 1;

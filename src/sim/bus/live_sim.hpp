@@ -16,14 +16,14 @@ namespace motormix::sim {
 
 struct LiveOptions {
   SimOptions sim;
-  std::string lcm_url;      // empty: LCM's default ($LCM_DEFAULT_URL)
-  bool controller = true;   // false: a controller of the user's flies from VEHICLE_STATE
+  std::string lcm_url;     // empty: LCM's default ($LCM_DEFAULT_URL)
+  bool controller = true;  // false: a controller of the user's flies from VEHICLE_STATE
 };
 
 struct LiveResult {
   SimResult sim;
-  std::int64_t pwm_received = 0;   // motor_pwm_t accepted from the mixer
-  std::int64_t pwm_rejected = 0;   // undecodable, wrong size or not finite
+  std::int64_t pwm_received = 0;       // motor_pwm_t accepted from the mixer
+  std::int64_t pwm_rejected = 0;       // undecodable, wrong size or not finite
   std::int64_t statuses_received = 0;  // mixer_status_t (its unallocated demand feeds anti-windup)
   bool bus_ok = true;
 };

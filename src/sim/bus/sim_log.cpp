@@ -79,7 +79,8 @@ void SimLogWriter::write(const SimFrame& f, const node::Counters& counters) {
     node::fill_status_message(status_, *f.cycle, counters, node::LoopTiming{}, config_.hash,
                               config_.motors(), f.utime);
     event(ch.status, f.utime, status_);
-    next_status_us_ = f.utime + static_cast<std::int64_t>(std::llround(1e6 / config_.status_rate_hz));
+    next_status_us_ =
+        f.utime + static_cast<std::int64_t>(std::llround(1e6 / config_.status_rate_hz));
   }
   fill_vehicle_state(state_, *f.vehicle, f.utime);
   event(kVehicleStateChannel, f.utime, state_);
