@@ -22,6 +22,16 @@ int main(int argc, char** argv) {
     sub->add_option("--set", common.overrides, "override a config value: key.path=value");
   };
 
+  // A vehicle by configuration file or by preset (exactly one: checked
+  // after parsing), and --set overrides.
+  const auto add_vehicle = [](CLI::App* sub, std::string& config_path, std::string& preset,
+                              std::vector<std::string>& overrides) {
+    auto* config = sub->add_option("--config", config_path, "YAML configuration file")
+                       ->check(CLI::ExistingFile);
+    config->excludes(sub->add_option("--preset", preset, "a preset vehicle"));
+    sub->add_option("--set", overrides, "override a config value: key.path=value");
+  };
+
   RunCommand run_cmd;
   CLI::App* run_app = app.add_subcommand("run", "run the mixer process on the LCM bus");
   add_common(run_app, run_cmd.common);
@@ -110,12 +120,9 @@ int main(int argc, char** argv) {
 
   SimCommand sim_cmd;
   CLI::App* sim_app = app.add_subcommand(
-      "sim", "fly the configuration in closed loop: lockstep (default) or live beside motormix run");
-  auto* sim_config = sim_app->add_option("--config", sim_cmd.config_path, "YAML configuration file")
-                         ->check(CLI::ExistingFile);
-  auto* sim_preset = sim_app->add_option("--preset", sim_cmd.preset, "a preset vehicle");
-  sim_config->excludes(sim_preset);
-  sim_app->add_option("--set", sim_cmd.overrides, "override a config value: key.path=value");
+      "sim",
+      "fly the configuration in closed loop: lockstep (default) or live beside motormix run");
+  add_vehicle(sim_app, sim_cmd.config_path, sim_cmd.preset, sim_cmd.overrides);
   sim_app->add_option("--scenario", sim_cmd.scenario,
                       "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
                       "drive) or a YAML file (default hover)");
@@ -140,42 +147,39 @@ int main(int argc, char** argv) {
   MotorTestCommand test_cmd;
   CLI::App* test_app = app.add_subcommand(
       "motor-test", "spin one motor alone through a running, disarmed motormix run");
-  auto* test_config = test_app->add_option("--config", test_cmd.config_path, "YAML configuration file")
-                          ->check(CLI::ExistingFile);
-  auto* test_preset = test_app->add_option("--preset", test_cmd.preset, "a preset vehicle");
-  test_config->excludes(test_preset);
-  test_app->add_option("--set", test_cmd.overrides, "override a config value: key.path=value");
+  add_vehicle(test_app, test_cmd.config_path, test_cmd.preset, test_cmd.overrides);
   test_app->add_option("--lcm-url", test_cmd.lcm_url,
                        "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   auto* test_motor = test_app->add_option(
       "--motor", test_cmd.motor, "the motor: number as motormix matrix prints it, or name");
-  auto* test_sequence = test_app->add_flag(
-      "--sequence", test_cmd.sequence, "every motor in turn, saying where it is and its spin");
+  auto* test_sequence = test_app->add_flag("--sequence", test_cmd.sequence,
+                                           "every motor in turn, saying where it is and its spin");
   test_motor->excludes(test_sequence);
-  test_app->add_option("--throttle", test_cmd.throttle, "command 0..motor_test.max_throttle (default 0.1)")
+  test_app
+      ->add_option("--throttle", test_cmd.throttle,
+                   "command 0..motor_test.max_throttle (default 0.1)")
       ->check(CLI::Range(0.0, 1.0));
   test_app->add_option("--seconds", test_cmd.seconds, "how long (default 2)")
       ->check(CLI::Range(0.0, 60.0));
-  test_app->add_option("--wait", test_cmd.wait_s, "seconds to wait for the mixer's answer (default 3)")
+  test_app
+      ->add_option("--wait", test_cmd.wait_s, "seconds to wait for the mixer's answer (default 3)")
       ->check(CLI::Range(0.1, 60.0));
 
   EscCalibrateCommand esc_cmd;
   CLI::App* esc_app = app.add_subcommand(
       "esc-calibrate", "teach PWM ESCs their range: maximum, your Enter, minimum, disarmed");
-  auto* esc_config = esc_app->add_option("--config", esc_cmd.config_path, "YAML configuration file")
-                         ->check(CLI::ExistingFile);
-  auto* esc_preset = esc_app->add_option("--preset", esc_cmd.preset, "a preset vehicle");
-  esc_config->excludes(esc_preset);
-  esc_app->add_option("--set", esc_cmd.overrides, "override a config value: key.path=value");
+  add_vehicle(esc_app, esc_cmd.config_path, esc_cmd.preset, esc_cmd.overrides);
   esc_app->add_option("--lcm-url", esc_cmd.lcm_url,
                       "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   esc_app->add_flag("--props-off", esc_cmd.props_off,
                     "required: the propellers are off (every motor runs at full command)");
-  esc_app->add_option("--timeout", esc_cmd.timeout_s,
-                      "seconds at the maximum waiting for Enter before aborting (default 30)")
+  esc_app
+      ->add_option("--timeout", esc_cmd.timeout_s,
+                   "seconds at the maximum waiting for Enter before aborting (default 30)")
       ->check(CLI::Range(0.1, 600.0));
-  esc_app->add_option("--min-seconds", esc_cmd.min_seconds,
-                      "seconds at the minimum before disarming (default 4)")
+  esc_app
+      ->add_option("--min-seconds", esc_cmd.min_seconds,
+                   "seconds at the minimum before disarming (default 4)")
       ->check(CLI::Range(0.1, 60.0));
 
   try {

@@ -61,6 +61,24 @@ MotorMask ScenarioClock::advance(double t) {
   return now;
 }
 
+MotorMask ScenarioClock::detected(double t, double detection_s) const {
+  MotorMask mask = 0;
+  for (const auto& [at, motor] : failures_) {
+    if (t + 1e-9 >= at + detection_s) mask |= MotorMask{1} << motor;
+  }
+  return mask;
+}
+
+bool end_of_period(SimResult& r, const VehicleModel& vehicle, std::int64_t k, double t_end) {
+  r.min_battery_v = std::min(r.min_battery_v, vehicle.battery().terminal_v());
+  r.cycles = k + 1;
+  if (!vehicle.crashed()) return false;
+  r.crashed = true;
+  r.crash_reason = vehicle.crash_reason();
+  r.crash_time_s = t_end;
+  return true;
+}
+
 Environment ScenarioClock::environment(double t) const {
   Environment env;
   env.wind_ned = wind_;
@@ -197,10 +215,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     }
     bool status_sent = false;
     if (!options.undetected) {
-      MotorMask detected = 0;
-      for (const auto& [at, motor] : clock.failures()) {
-        if (t + 1e-9 >= at + scenario.failure_detection_s) detected |= MotorMask{1} << motor;
-      }
+      const MotorMask detected = clock.detected(t, scenario.failure_detection_s);
       if (detected != 0 && (detected != reported || t + 1e-9 >= next_motor_status)) {
         motor_status = {now, config.motors(), detected};
         loop.on_motor_status(motor_status, now, now);
@@ -234,14 +249,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
       vehicle.step(cycle.mix.output, cycle.mix.direction, clock.stopped(),
                    clock.environment(t + s * dt), dt);
     }
-    r.min_battery_v = std::min(r.min_battery_v, vehicle.battery().terminal_v());
-    r.cycles = k + 1;
-    if (vehicle.crashed()) {
-      r.crashed = true;
-      r.crash_reason = vehicle.crash_reason();
-      r.crash_time_s = t + period;
-      break;
-    }
+    if (end_of_period(r, vehicle, k, t + period)) break;
   }
   scorer.finish(r);
   r.failsafe_events = loop.counters().failsafe_events;

@@ -78,6 +78,10 @@ struct SimFrame {
 };
 using FrameObserver = std::function<void(const SimFrame&)>;
 
+// After period k's physics (ending at t_end): the battery's low point, the
+// cycle count, and a crash, which ends the run (returns true).
+bool end_of_period(SimResult& r, const VehicleModel& vehicle, std::int64_t k, double t_end);
+
 // The configuration as the scenario flies it (its battery settings applied).
 // Throws config::ConfigError when the scenario is for the other kind of
 // vehicle.
@@ -147,6 +151,9 @@ class ScenarioClock {
   const Reference& reference() const { return ref_; }
   MotorMask stopped() const { return stopped_; }
   Environment environment(double t) const;
+  // Stopped motors a failure detector would have reported by t, detection_s
+  // after each stopped.
+  MotorMask detected(double t, double detection_s) const;
   const std::vector<std::pair<double, int>>& failures() const { return failures_; }  // (at, motor)
 
  private:

@@ -41,6 +41,52 @@ std::optional<int> run_client(const std::vector<std::string>& args) {
   return client.wait_for(15s);
 }
 
+// A pilot on the bus: setpoint and pid at 200 Hz, armed on request, until
+// it goes out of scope.
+class BusPilot {
+ public:
+  BusPilot(float throttle, float roll) : throttle_(throttle), roll_(roll) {
+    thread_ = std::thread([this] {
+      while (!stop_) {
+        setpoint_t sp;
+        sp.utime = now_us();
+        sp.throttle = throttle_;
+        sp.yaw = 0.0f;
+        sp.armed = armed;
+        pid_t pid;
+        pid.utime = sp.utime;
+        pid.roll = roll_;
+        pid.pitch = pid.yaw = 0.0f;
+        lcm_.publish("SETPOINT", &sp);
+        lcm_.publish("PID", &pid);
+        std::this_thread::sleep_for(5ms);
+      }
+    });
+  }
+  ~BusPilot() {
+    stop_ = true;
+    thread_.join();
+  }
+  BusPilot(const BusPilot&) = delete;
+  BusPilot& operator=(const BusPilot&) = delete;
+  void publish_test(int motor, float throttle, float seconds) {
+    motor_test_t test;
+    test.utime = now_us();
+    test.motor = motor;
+    test.throttle = throttle;
+    test.duration_s = seconds;
+    lcm_.publish("MOTOR_TEST", &test);
+  }
+  std::atomic<bool> armed{false};
+
+ private:
+  lcm::LCM lcm_;
+  const float throttle_;
+  const float roll_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 class MixerOnTheBus : public ::testing::Test {
  protected:
   ChildProcess mixer_{{motormix_binary(), "run", "--config", quad(), "--max-cycles", "8000"}};
@@ -107,39 +153,16 @@ TEST_F(MixerOnTheBus, TooMuchThrottleIsRefusedAndNothingSpins) {
 }
 
 TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
-  lcm::LCM lcm;
-  std::atomic<bool> armed{false};
-  std::atomic<bool> stop{false};
-  // The pilot: disarmed, then armed at zero throttle, 200 Hz.
-  std::thread pilot([&] {
-    while (!stop) {
-      setpoint_t sp;
-      sp.utime = now_us();
-      sp.throttle = 0.0f;
-      sp.yaw = 0.0f;
-      sp.armed = armed;
-      pid_t pid;
-      pid.utime = sp.utime;
-      pid.roll = pid.pitch = pid.yaw = 0.0f;
-      lcm.publish("SETPOINT", &sp);
-      lcm.publish("PID", &pid);
-      std::this_thread::sleep_for(5ms);
-    }
-  });
+  BusPilot pilot(0.0f, 0.0f);  // disarmed, then armed at zero throttle
   std::this_thread::sleep_for(300ms);
-  motor_test_t test;
-  test.utime = now_us();
-  test.motor = 2;
-  test.throttle = 0.1f;
-  test.duration_s = 3.0f;
-  lcm.publish("MOTOR_TEST", &test);
+  pilot.publish_test(2, 0.1f, 3.0f);
   EXPECT_TRUE(bus_.wait_until(
       [](const auto&, const auto& status) {
         return !status.empty() &&
                status.back().motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING;
       },
       3s));
-  armed = true;
+  pilot.armed = true;
   EXPECT_TRUE(bus_.wait_until(
       [](const auto&, const auto& status) {
         return !status.empty() && status.back().state == mixer_status_t::STATE_ARMED &&
@@ -152,32 +175,12 @@ TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
             1);
   const auto status = bus_.status();
   EXPECT_EQ(status.back().motor_test_result, mixer_status_t::MOTOR_TEST_REFUSED_NOT_DISARMED);
-  stop = true;
-  pilot.join();
 }
 
 TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
-  lcm::LCM lcm;
-  std::atomic<bool> armed{false};
-  std::atomic<bool> stop{false};
-  std::thread pilot([&] {
-    while (!stop) {
-      setpoint_t sp;
-      sp.utime = now_us();
-      sp.throttle = 0.08f;  // within the arming limit (0.1), held while spooling up
-      sp.yaw = 0.0f;
-      sp.armed = armed;
-      pid_t pid;
-      pid.utime = sp.utime;
-      pid.roll = 0.05f;
-      pid.pitch = pid.yaw = 0.0f;
-      lcm.publish("SETPOINT", &sp);
-      lcm.publish("PID", &pid);
-      std::this_thread::sleep_for(5ms);
-    }
-  });
+  BusPilot pilot(0.08f, 0.05f);  // within the arming limit (0.1), held while spooling up
   std::this_thread::sleep_for(300ms);
-  armed = true;
+  pilot.armed = true;
   // 0.5 s of spool-up (quad_x's default), then steady.
   EXPECT_TRUE(bus_.wait_until(
       [](const auto& pwm, const auto&) {
@@ -186,8 +189,6 @@ TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
         return armed_count > 320;  // 0.8 s at 400 Hz
       },
       5s));
-  stop = true;
-  pilot.join();
   std::vector<motor_pwm_t> ramp;
   for (const motor_pwm_t& m : bus_.pwm()) {
     if (m.armed) ramp.push_back(m);

@@ -180,10 +180,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       next_battery += 0.02;
     }
     if (!options.sim.undetected) {
-      MotorMask detected = 0;
-      for (const auto& [at, motor] : clock.failures()) {
-        if (t + 1e-9 >= at + scenario.failure_detection_s) detected |= MotorMask{1} << motor;
-      }
+      const MotorMask detected = clock.detected(t, scenario.failure_detection_s);
       if (detected != 0 && (detected != reported || t + 1e-9 >= next_status)) {
         motor_status_t m;
         m.utime = now;
@@ -205,13 +202,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
           mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
           mix.direction, fresh ? clock.stopped() : all, clock.environment(t + s * dt), dt);
     }
-    r.min_battery_v = std::min(r.min_battery_v, vehicle.battery().terminal_v());
-    r.cycles = k + 1;
-    if (vehicle.crashed()) {
-      r.crashed = true;
-      r.crash_reason = vehicle.crash_reason();
-      r.crash_time_s = t + period;
-      fill_vehicle_state(state, vehicle, wall_us());
+    if (end_of_period(r, vehicle, k, t + period)) {
+      fill_vehicle_state(state, vehicle, wall_us());  // the crash, for whoever listens
       publish(lcm, kVehicleStateChannel, state);
       break;
     }
