@@ -284,11 +284,16 @@ void ControlLoop::mix_inputs(const AxisVector& demand, std::int64_t now_us, doub
   } else {
     result_.last_armed_allocation = result_.mix.allocation;
     if (ramp < 1.0) {
-      // From each disarmed value toward the mixed output (failed motors sit
-      // at their disarmed value already).
+      // From each disarmed value, taken into the output range (an ESC's
+      // zero, output.min, when disarmed sits below it: armed outputs never
+      // leave [min, max]), toward the mixed output. Failed motors keep their
+      // stop value.
       const OutputStage& stage = mixer_.output_stage();
       for (int i = 0; i < stage.outputs(); ++i) {
-        const double off = stage.channel(i).disarmed;
+        if ((result_.mix.failed >> i) & 1U) continue;
+        const OutputChannel& ch = stage.channel(i);
+        const double off =
+            std::clamp(ch.disarmed, std::min(ch.min, ch.max), std::max(ch.min, ch.max));
         result_.mix.output[i] = off + ramp * (result_.mix.output[i] - off);
       }
     }

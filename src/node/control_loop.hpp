@@ -29,8 +29,10 @@
 // - After each disarmed -> armed transition (so after any disarm or
 //   failsafe too), the outputs spool up over output.spool_up_s: the demand
 //   is scaled by the ramp r = time armed / spool_up_s, and each output is
-//   its disarmed value plus r times the way to its mixed value, so it rises
-//   from stopped through idle and never overshoots what it is mixed to.
+//   its disarmed value (taken into [min, max]: output.min for an ESC whose
+//   disarmed value is below it) plus r times the way to its mixed value, so
+//   it rises from stopped through idle, never overshoots what it is mixed
+//   to and never leaves the output range.
 // - A motor test (motor_test_t) spins one motor alone through the output
 //   stage while the outputs stay disarmed (armed = false), and is obeyed only
 //   when motor_test.enabled, the loop is disarmed, no armed setpoint arrived
