@@ -7,6 +7,7 @@
 
 #include <motormix/config/load_config.hpp>
 #include "node/control_loop.hpp"
+#include "node/wall_clock.hpp"
 
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
@@ -31,15 +32,10 @@ namespace motormix::app {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using node::wall_us;
 
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_interrupt(int) { g_interrupted = true; }
-
-std::int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 std::optional<config::Config> load_vehicle(const std::string& config_path,
                                            const std::string& preset,

@@ -1,4 +1,5 @@
 #include "node/lcm_node.hpp"
+#include "node/wall_clock.hpp"
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/matrix_export.hpp>
@@ -43,12 +44,6 @@ constexpr int kMaxMessagesPerDrain = 1000;
 std::int64_t monotonic_us() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
-}
-
-std::int64_t wall_us() {
-  timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
 }
 

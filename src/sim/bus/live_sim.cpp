@@ -1,5 +1,6 @@
 #include "sim/bus/live_sim.hpp"
 
+#include "node/wall_clock.hpp"
 #include "sim/bus/sim_log.hpp"
 
 #include <motormix/battery_t.hpp>
@@ -22,12 +23,7 @@ namespace motormix::sim {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
+using node::wall_us;
 
 // What the simulated ESCs last heard from the mixer. Decoding happens here,
 // inside the callback, and never throws out of it.
