@@ -98,13 +98,16 @@ void BM_Allocate(benchmark::State& state, const char* preset, const char* mixer)
   MOTORMIX_ALLOCATE_BENCH(preset, clip, "{strategy: clip}");                                  \
   MOTORMIX_ALLOCATE_BENCH(preset, shift, "{strategy: shift}");                                \
   MOTORMIX_ALLOCATE_BENCH(preset, optimal, "{strategy: optimal}")
-// The PX4-style baseline (test/reference, float as PX4 runs it, clip and
-// allocated-control report included) on the same matrix and demands.
+// The PX4-style baselines (test/reference, float as PX4 runs it, clip and
+// allocated-control report included) on the same matrix and demands: PX4's
+// current rule (desaturation ignores entries below 0.2) and its older one
+// (below float epsilon).
+template <typename Px4>
 void px4_loop(benchmark::State& state, const char* preset, motormix::reference::Px4Airmode mode,
               const std::vector<motormix::AxisVector>& demand_set) {
   const auto config = motormix::config::load_config_text(
       std::string("geometry: {preset: ") + preset + ", normalization: px4}\n", "bench");
-  motormix::reference::Px4SequentialDesaturation px4(config.mixing, mode);
+  Px4 px4(config.mixing, mode);
   std::vector<std::array<float, 4>> inputs;
   for (const auto& d : demand_set) {
     inputs.push_back({static_cast<float>(d[0]), static_cast<float>(d[1]), static_cast<float>(d[2]),
@@ -118,15 +121,22 @@ void px4_loop(benchmark::State& state, const char* preset, motormix::reference::
 }
 void BM_Px4Baseline(benchmark::State& state, const char* preset,
                     motormix::reference::Px4Airmode mode) {
-  px4_loop(state, preset, mode, demands());
+  px4_loop<motormix::reference::Px4SequentialDesaturation>(state, preset, mode, demands());
 }
-#define MOTORMIX_PX4_PRESET(preset)                               \
-  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_off, #preset,        \
-                    motormix::reference::Px4Airmode::kDisabled);  \
-  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rp, #preset,         \
-                    motormix::reference::Px4Airmode::kRollPitch); \
-  BENCHMARK_CAPTURE(BM_Px4Baseline, preset##_rpy, #preset,        \
+void BM_Px4EpsilonBaseline(benchmark::State& state, const char* preset,
+                           motormix::reference::Px4Airmode mode) {
+  px4_loop<motormix::reference::Px4EpsilonSequentialDesaturation>(state, preset, mode, demands());
+}
+#define MOTORMIX_PX4_CAPTURE(bench, preset)                                   \
+  BENCHMARK_CAPTURE(bench, preset##_off, #preset,                             \
+                    motormix::reference::Px4Airmode::kDisabled);              \
+  BENCHMARK_CAPTURE(bench, preset##_rp, #preset,                              \
+                    motormix::reference::Px4Airmode::kRollPitch);             \
+  BENCHMARK_CAPTURE(bench, preset##_rpy, #preset,                             \
                     motormix::reference::Px4Airmode::kRollPitchYaw)
+#define MOTORMIX_PX4_PRESET(preset)                 \
+  MOTORMIX_PX4_CAPTURE(BM_Px4Baseline, preset);     \
+  MOTORMIX_PX4_CAPTURE(BM_Px4EpsilonBaseline, preset)
 // The floor: a bare fixed-size matrix-vector product of the same size
 // (motors x 4 times 4), what a mixer without limits or report would cost.
 template <int N>
@@ -164,7 +174,8 @@ void BM_Unsaturated(benchmark::State& state, const char* preset, const char* air
 }
 void BM_Px4Unsaturated(benchmark::State& state, const char* preset,
                        motormix::reference::Px4Airmode mode) {
-  px4_loop(state, preset, mode, unsaturated_demands());
+  px4_loop<motormix::reference::Px4SequentialDesaturation>(state, preset, mode,
+                                                           unsaturated_demands());
 }
 #define MOTORMIX_UNSATURATED_PRESET(preset)                                               \
   BENCHMARK_CAPTURE(BM_Unsaturated, preset##_prioritized_off, #preset, "off");            \

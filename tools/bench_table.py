@@ -2,8 +2,10 @@
 """Turns motormix_bench's JSON (--benchmark_format=json, repetitions with
 aggregates) into the Markdown comparison table of BENCHMARKS.md: per vehicle
 and strategy, motormix's allocation next to the bare matrix-vector product of
-the same size and, for `prioritized`, the PX4-style sequential desaturation,
-with ratios. Uses the median CPU time of the repetitions."""
+the same size and, for `prioritized`, the PX4-style sequential desaturation
+under PX4's current rule (weak entries below 0.2 ignored) and its older one
+(below float epsilon), with ratios. Uses the median CPU time of the
+repetitions."""
 import json
 import sys
 
@@ -58,8 +60,9 @@ def main():
     for b in data["benchmarks"]:
         if b.get("aggregate_name") == "median":
             median[b["run_name"]] = b["cpu_time"]
-    print("| vehicle | strategy | motormix ns | bare product ns | ratio | PX4-style ns | ratio |")
-    print("|---|---|---|---|---|---|---|")
+    print("| vehicle | strategy | motormix ns | bare product ns | ratio "
+          "| PX4-style (0.2) ns | ratio | PX4-style (epsilon) ns | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for preset, n in MOTORS.items():
         bare = median.get(f"BM_BareProduct<{n}>")
         for name, t in sorted(median.items()):
@@ -67,10 +70,11 @@ def main():
             if not name.startswith(prefix):
                 continue
             strategy = name[len(prefix):]
-            px4 = median.get(f"BM_Px4Baseline/{preset}_{PX4_MODE[strategy]}") if strategy in PX4_MODE else None
             cells = [preset, strategy, f"{t:.1f}",
-                     f"{bare:.1f}" if bare else "-", f"{t / bare:.1f}x" if bare else "-",
-                     f"{px4:.1f}" if px4 else "-", f"{t / px4:.2f}x" if px4 else "-"]
+                     f"{bare:.1f}" if bare else "-", f"{t / bare:.1f}x" if bare else "-"]
+            for baseline in ("BM_Px4Baseline", "BM_Px4EpsilonBaseline"):
+                px4 = median.get(f"{baseline}/{preset}_{PX4_MODE[strategy]}") if strategy in PX4_MODE else None
+                cells += [f"{px4:.1f}" if px4 else "-", f"{t / px4:.2f}x" if px4 else "-"]
             print("| " + " | ".join(cells) + " |")
     unsaturated(median)
     scaling(median)

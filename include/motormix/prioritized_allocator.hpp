@@ -20,9 +20,20 @@
 // airmode), then yaw is scaled down, and roll and pitch only when yaw alone
 // cannot make room. Nothing is clipped that a lower priority could have paid
 // for. The plain clip of the sequence's result (what PX4 does) is kept
-// instead when it delivers the demand better in that same priority order
-// (it can: scaling keeps the torque's direction, clipping need not), so the
-// result is never worse than sequential desaturation with a clip.
+// unless the repair delivers the demand better in that same priority order
+// (it need not: scaling keeps the torque's direction, clipping does not), so
+// the result is never worse than sequential desaturation with a clip.
+//
+// "Better" has a tie tolerance (`tie_tolerance`, normalized demand units,
+// the same on each key of the order: roll/pitch, thrust, yaw). The repair
+// replaces the clip only when it loses no key by more than the tolerance
+// before a key it wins: a roll/pitch gain smaller than the tolerance never
+// buys itself with thrust or yaw. 1e-3 (a thousandth of full roll) is below
+// what a pilot or a rate loop can feel, and far below the thrust and yaw
+// such a gain could cost. Where every key ties, the repair still needs to
+// win one by more than kGainThatCounts (or the tolerance, if smaller): below
+// that the two differ by rounding, not by priorities. A tolerance of 0 is
+// the strict lexicographic order.
 
 #include <motormix/allocation.hpp>
 
@@ -34,8 +45,12 @@ enum class Airmode : std::uint8_t { kOff, kRollPitch, kRollPitchYaw };
 
 class PrioritizedAllocator final : public MatrixAllocator {
  public:
+  // The default tie tolerance, and the least gain that counts (see above).
+  static constexpr double kDefaultTieTolerance = 1e-3;
+  static constexpr double kGainThatCounts = 1e-5;
+
   PrioritizedAllocator(const MixingBasis& basis, CommandRange range, Airmode airmode,
-                       double yaw_headroom);
+                       double yaw_headroom, double tie_tolerance = kDefaultTieTolerance);
   std::string_view name() const override { return "prioritized"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
@@ -64,6 +79,8 @@ class PrioritizedAllocator final : public MatrixAllocator {
 
   Airmode airmode_;
   double yaw_headroom_;
+  double tie_tolerance_;
+  double gain_that_counts_;  // min(tie_tolerance_, kGainThatCounts)
   std::array<InRangeGains, kNumAxes> gains_;  // per column, for the command range
   InRangeGains yaw_gains_with_headroom_;      // yaw, with yaw_headroom above the top
   MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)

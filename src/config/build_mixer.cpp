@@ -34,7 +34,7 @@ std::unique_ptr<const Allocator> make_allocator(const Config& config, const Mixi
       return std::make_unique<ClipAllocator>(basis, range);
     case Strategy::kPrioritized:
       return std::make_unique<PrioritizedAllocator>(basis, range, config.airmode,
-                                                    config.yaw_headroom);
+                                                    config.yaw_headroom, config.tie_tolerance);
     case Strategy::kOptimal:
       return std::make_unique<OptimalAllocator>(basis, range, config.optimal);
   }
@@ -60,7 +60,8 @@ FailurePlan failure_plan(const Config& config) {
     make = [&config](const FailureMixing& f, const MixingBasis& basis) {
       if (config.strategy == Strategy::kPrioritized && f.yaw_free) {
         return std::unique_ptr<const Allocator>(std::make_unique<YawYieldingAllocator>(
-            basis, *f.yaw_free, command_range(config), config.airmode, config.yaw_headroom));
+            basis, *f.yaw_free, command_range(config), config.airmode, config.yaw_headroom,
+            config.tie_tolerance));
       }
       return make_allocator(config, basis);
     };

@@ -484,6 +484,7 @@ void read_mixer(MapReader mixer, Config& config) {
                    : airmode == "roll_pitch_yaw" ? Airmode::kRollPitchYaw
                                                  : Airmode::kOff;
   config.yaw_headroom = prioritized.number("yaw_headroom", 0.15, 0.0, 1.0);
+  config.tie_tolerance = prioritized.number("tie_tolerance", config.tie_tolerance, 0.0, 0.1);
   prioritized.finish();
 
   MapReader optimal = mixer.map("optimal");

@@ -27,17 +27,20 @@ double roll_pitch_square(const AxisVector& e) {
 // enough and much cheaper than hypot's overflow guards.
 double roll_pitch_norm(const AxisVector& e) { return std::sqrt(roll_pitch_square(e)); }
 
-// Which of the clip and the repair delivers roll and pitch better, from
-// the clip's squared error and the repair's error as its scales predict
-// it: decided only by more than twice the delivered tolerance, so that
-// the prediction's rounding (E M = I within 1e-9) cannot turn it. Squares
-// compare as their roots do, so no root waits on the way.
+// Which of the clip and the repair wins on roll and pitch, from the clip's
+// squared error and the repair's error as its scales predict it, where the
+// prediction alone decides it (prefer_repair below): the clip when it is
+// closer by more than the gain that counts, the repair when it is closer by
+// more than the tie tolerance. Both margins carry twice the delivered
+// tolerance, so that the prediction's rounding (E M = I within 1e-9) cannot
+// turn them. Squares compare as their roots do, so no root waits on the way.
 enum class RollPitchVerdict { kUndecided, kClipCloser, kRepairCloser };
-RollPitchVerdict roll_pitch_verdict(double clip_square, double repair_error) {
+RollPitchVerdict roll_pitch_verdict(double clip_square, double repair_error, double counts,
+                                    double tie) {
   constexpr double kMargin = 2.0 * kDeliveredTolerance;
-  const double below = repair_error - kMargin;
+  const double below = repair_error - counts - kMargin;
   if (below > 0.0 && clip_square < below * below) return RollPitchVerdict::kClipCloser;
-  const double above = repair_error + kMargin;
+  const double above = repair_error + tie + kMargin;
   if (clip_square > above * above) return RollPitchVerdict::kRepairCloser;
   return RollPitchVerdict::kUndecided;
 }
@@ -56,6 +59,17 @@ MOTORMIX_ALWAYS_INLINE bool closer_in_order(const AxisVector& a, const AxisVecto
   if (thrust_a < thrust_b - tolerance) return true;
   if (thrust_a > thrust_b + tolerance) return false;
   return std::abs(a[index(Axis::kYaw)]) < std::abs(b[index(Axis::kYaw)]) - tolerance;
+}
+
+
+// Whether the repair replaces the clip (the sequence's result clipped, what
+// PX4 delivers): only when it is no worse in priority order with ties within
+// `tie`, and better with ties within `counts` only. A higher priority
+// within `tie` of the clip's does not buy itself a hair more at the cost of
+// a lower one; where every key ties, a gain larger than `counts` still wins.
+MOTORMIX_ALWAYS_INLINE bool prefer_repair(const AxisVector& repair, const AxisVector& clip,
+                                          double counts, double tie) {
+  return !closer_in_order(clip, repair, tie) && closer_in_order(repair, clip, counts);
 }
 
 }  // namespace
@@ -82,8 +96,15 @@ PrioritizedAllocator::InRangeGains PrioritizedAllocator::in_range_gains(const Mo
 }
 
 PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRange range,
-                                           Airmode airmode, double yaw_headroom)
-    : MatrixAllocator(basis, range), airmode_(airmode), yaw_headroom_(yaw_headroom) {
+                                           Airmode airmode, double yaw_headroom,
+                                           double tie_tolerance)
+    : MatrixAllocator(basis, range),
+      airmode_(airmode),
+      yaw_headroom_(yaw_headroom),
+      // NaN or negative would make every comparison a loss for the repair
+      // or none a tie: neither is a tolerance.
+      tie_tolerance_(tie_tolerance >= 0.0 ? tie_tolerance : 0.0),
+      gain_that_counts_(std::min(tie_tolerance_, kGainThatCounts)) {
   for (int a = 0; a < kNumAxes; ++a) {
     gains_[static_cast<std::size_t>(a)] = in_range_gains(mixing_.col(a), range_);
   }
@@ -181,9 +202,10 @@ class PrioritizedAllocator::Kernel {
     // yaw, then roll and pitch, along their demanded directions, with the
     // best thrust shift), or clipping each motor as sequential desaturation
     // does elsewhere. Clipping can change the direction of the delivered
-    // torque yet land closer to the demand. Keep whichever delivers the
-    // demand better in priority order: roll and pitch, then thrust, then yaw.
-    // Needed only by the shortcut below with airmode, and from the demand
+    // torque yet land closer to the demand. The clip stays unless the
+    // repair delivers the demand better in priority order (roll and pitch,
+    // then thrust, then yaw) without losing more than the tie tolerance on
+    // any key (prefer_repair). The demand's roll/pitch error is needed only by the shortcut below with airmode, and from the demand
     // alone: taken before the clip and the scales, its root is ready when
     // they are.
     const double demanded = a_.effectiveness_inverts_mixing_ && a_.airmode_ != Airmode::kOff
@@ -204,7 +226,8 @@ class PrioritizedAllocator::Kernel {
     RollPitchVerdict verdict = RollPitchVerdict::kUndecided;
     if (a_.effectiveness_inverts_mixing_) {
       verdict = roll_pitch_verdict(roll_pitch_square(clip_left),
-                                   repair_roll_pitch_error(demand, effective, r, demanded));
+                                   repair_roll_pitch_error(demand, effective, r, demanded),
+                                   a_.gain_that_counts_, a_.tie_tolerance_);
       if (verdict == RollPitchVerdict::kClipCloser) {
         store(clipped, commands);
         return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
@@ -215,7 +238,7 @@ class PrioritizedAllocator::Kernel {
     const AxisVector repair_left = undelivered(demand, u);
     // The shortcut holds only for repaired commands in range.
     const bool repair_closer = verdict == RollPitchVerdict::kRepairCloser && repair_fits;
-    if (!repair_closer && closer_in_order(clip_left, repair_left, kDeliveredTolerance)) {
+    if (!repair_closer && !prefer_repair(repair_left, clip_left, a_.gain_that_counts_, a_.tie_tolerance_)) {
       store(clipped, commands);
       return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
     }

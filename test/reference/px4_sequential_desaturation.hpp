@@ -12,6 +12,13 @@
 //
 // The scalar type is a parameter: float for benchmarks (what PX4 runs), double
 // for comparing delivered demands with motormix without float noise.
+//
+// Two rules for which motors a desaturation step may use, both kept because
+// both have flown: PX4's current computeDesaturationGain skips every motor
+// whose entry in the desaturation vector is below 0.2 in magnitude ("do not
+// try to desaturate using an actuator with weak effectiveness to avoid large
+// desaturation gains"); the older multirotor mixer skipped only entries
+// below FLT_EPSILON.
 
 #include <motormix/mixing_matrix.hpp>
 
@@ -24,14 +31,19 @@ namespace motormix::reference {
 
 enum class Px4Airmode { kDisabled = 0, kRollPitch = 1, kRollPitchYaw = 2 };
 
-template <typename Scalar>
+// Which desaturation-vector entries a step ignores (see above).
+enum class Px4WeakEntryRule { kCurrent, kEpsilon };
+
+template <typename Scalar, Px4WeakEntryRule kRule = Px4WeakEntryRule::kCurrent>
 class SequentialDesaturation {
  public:
   using Airmode = Px4Airmode;
   using Vec = Scalar[kMaxMotors];
   static constexpr int kMax = kMaxMotors;
   static constexpr Scalar kMinimumYawMargin = Scalar(0.15);  // PX4's MINIMUM_YAW_MARGIN
-  static constexpr Scalar kEpsilon = Scalar(FLT_EPSILON);
+  // A compile-time constant, as in PX4's source.
+  static constexpr Scalar kWeak =
+      kRule == Px4WeakEntryRule::kCurrent ? Scalar(0.2) : Scalar(FLT_EPSILON);
 
   SequentialDesaturation(const MixingMatrix& mixing, Airmode airmode)
       : n_(static_cast<int>(mixing.rows())), airmode_(airmode) {
@@ -79,7 +91,7 @@ class SequentialDesaturation {
     Scalar k_min = 0;
     Scalar k_max = 0;
     for (int i = 0; i < n_; ++i) {
-      if (std::abs(v[i]) < kEpsilon) continue;
+      if (std::abs(v[i]) < kWeak) continue;
       if (u[i] < act_min_) {
         const Scalar k = (act_min_ - u[i]) / v[i];
         if (k < k_min) k_min = k;
@@ -151,7 +163,8 @@ class SequentialDesaturation {
   std::array<Scalar, 4> allocated_{};
 };
 
-// As PX4 runs it.
+// As PX4 runs it today, and as its older mixer did.
 using Px4SequentialDesaturation = SequentialDesaturation<float>;
+using Px4EpsilonSequentialDesaturation = SequentialDesaturation<float, Px4WeakEntryRule::kEpsilon>;
 
 }  // namespace motormix::reference

@@ -92,6 +92,7 @@ struct Config {
   LegacyBudgets legacy_budgets;     // legacy_budget and budget
   Airmode airmode = Airmode::kOff;  // prioritized
   double yaw_headroom = 0.15;       // prioritized
+  double tie_tolerance = PrioritizedAllocator::kDefaultTieTolerance;  // prioritized
   OptimalSettings optimal;          // optimal
   MotorMask failed_motors = 0;      // mixer.failed_motors: stopped from the start, bit i = motor i
 
