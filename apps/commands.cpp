@@ -63,6 +63,7 @@ int run(const RunCommand& cmd) {
     if (const char* env = std::getenv("LCM_DEFAULT_URL")) options.lcm_url = env;
   }
   options.max_cycles = cmd.max_cycles;
+  options.timing_report_path = cmd.timing_report;
   return node::run_node(*config, options, std::cerr);
 }
 

@@ -29,6 +29,7 @@ struct RunCommand {
   std::string lcm_url;
   bool check_only = false;
   long long max_cycles = 0;
+  std::string timing_report;
 };
 int run(const RunCommand& cmd);
 

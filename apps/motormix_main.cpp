@@ -43,6 +43,10 @@ int main(int argc, char** argv) {
       ->add_option("--max-cycles", run_cmd.max_cycles,
                    "stop by itself after this many loop cycles (0: until a signal)")
       ->check(CLI::NonNegativeNumber);
+  run_app->add_option("--timing-report", run_cmd.timing_report,
+                      "at the end of the run, write its loop timing to this file as JSON "
+                      "(wake-up lateness and period percentiles, the largest and when, "
+                      "overruns, kernel drops, the scheduling granted)");
 
   MixCommand mix_cmd;
   CLI::App* mix_app = app.add_subcommand(

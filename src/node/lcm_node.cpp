@@ -5,6 +5,9 @@
 #include <motormix/config/matrix_export.hpp>
 #include "node/control_loop.hpp"
 #include "node/messages.hpp"
+#include "node/latency_histogram.hpp"
+#include "node/realtime.hpp"
+#include "node/socket_drops.hpp"
 #include "node/window_stats.hpp"
 
 #include <motormix/mixer_status_t.hpp>
@@ -27,6 +30,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <ostream>
 #include <vector>
 
@@ -41,11 +45,12 @@ constexpr int kQueueCapacity = 1000;
 // flood on the inputs cannot starve the output.
 constexpr int kMaxMessagesPerDrain = 1000;
 
-std::int64_t monotonic_us() {
+std::int64_t monotonic_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
+std::int64_t monotonic_us() { return monotonic_ns() / 1000; }
 
 // Owns a file descriptor.
 class Fd {
@@ -70,7 +75,8 @@ class Node {
         log_(log),
         loop_(config, config::build_mixer(config)),
         period_stats_(window_capacity(config)),
-        compute_stats_(window_capacity(config)) {
+        compute_stats_(window_capacity(config)),
+        wake_stats_(window_capacity(config)) {
     const int n = config.motors();
     size_pwm_message(pwm_msg_, n);
     pwm_buffer_.resize(static_cast<std::size_t>(pwm_msg_.getEncodedSize()));
@@ -102,7 +108,11 @@ class Node {
 
   // One control cycle; `woke_us` is when the loop woke up for it.
   void cycle(std::int64_t now_us, std::int64_t woke_us) {
-    if (last_cycle_us_ > 0) period_stats_.add(static_cast<double>(now_us - last_cycle_us_));
+    if (last_cycle_us_ > 0) {
+      const auto period = static_cast<double>(now_us - last_cycle_us_);
+      period_stats_.add(period);
+      period_run_.add(period, now_us);
+    }
     last_cycle_us_ = now_us;
     const CycleResult& r = loop_.cycle(now_us);
     if (r.state_changed) {
@@ -170,6 +180,32 @@ class Node {
   }
 
   void add_overruns(std::uint64_t missed) { overruns_ += static_cast<std::int64_t>(missed); }
+  // How late the loop woke for a timer tick: actual minus scheduled.
+  void add_wake_latency(double late_us, std::int64_t at_us) {
+    wake_stats_.add(late_us);
+    wake_run_.add(late_us, at_us);
+  }
+
+  // The whole run's loop timing as JSON (`motormix run --timing-report`).
+  void write_timing_report(std::ostream& out, const RealtimeGranted& granted,
+                           std::int64_t ticks) const {
+    const auto section = [&out](const char* name, const LatencyHistogram& h) {
+      out << "  \"" << name << "\": {\"count\": " << h.count() << ", \"min\": " << h.min()
+          << ", \"mean\": " << h.mean() << ", \"p50\": " << h.percentile(0.5)
+          << ", \"p99\": " << h.percentile(0.99) << ", \"p999\": " << h.percentile(0.999)
+          << ", \"max\": " << h.max() << ", \"max_at_monotonic_us\": " << h.max_at_us() << "},\n";
+    };
+    out << "{\n  \"loop_rate_hz\": " << config_.loop_rate_hz << ",\n  \"timer_ticks\": " << ticks
+        << ",\n  \"overruns\": " << overruns_ << ",\n  \"kernel_drops\": "
+        << own_udp_socket_drops() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
+        << "\", \"priority\": " << granted.priority << ", \"cpus\": [";
+    for (std::size_t i = 0; i < granted.cpus.size(); ++i) out << (i ? ", " : "") << granted.cpus[i];
+    out << "], \"memory_locked\": " << (granted.memory_locked ? "true" : "false")
+        << ", \"stack_prefaulted\": " << (granted.stack_prefaulted ? "true" : "false") << "},\n";
+    section("wake_latency_us", wake_run_);
+    section("period_us", period_run_);
+    out << "  \"units\": \"microseconds; percentiles in whole microseconds\"\n}\n";
+  }
 
   // publish: on_input: a pid message accepted since the last cycle.
   bool take_new_pid() {
@@ -237,7 +273,10 @@ class Node {
     LoopTiming timing;
     timing.period_us = period_stats_.take();
     timing.compute_us = compute_stats_.take();
+    timing.wake_latency_us = wake_stats_.take();
     timing.overruns = overruns_;
+    // After this cycle's outputs are out: a read of two small /proc files.
+    timing.kernel_drops = own_udp_socket_drops();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
                         wall_us());
     const int len =
@@ -271,36 +310,14 @@ class Node {
   MotorMask logged_failed_ = 0;
   WindowStats period_stats_;
   WindowStats compute_stats_;
+  WindowStats wake_stats_;
+  LatencyHistogram wake_run_;    // the whole run, for the timing report
+  LatencyHistogram period_run_;
 
   static std::size_t window_capacity(const config::Config& c) {
     return static_cast<std::size_t>(c.loop_rate_hz / c.status_rate_hz) * 2 + 64;
   }
 };
-
-// Real-time settings are requests: when the system refuses, say so and go on.
-void apply_realtime(const config::Realtime& rt, std::ostream& log) {
-  if (rt.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-    log << "motormix: warning: mlockall refused (" << std::strerror(errno) << "); continuing"
-        << std::endl;
-  }
-  if (!rt.cpus.empty()) {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    for (int cpu : rt.cpus) CPU_SET(cpu, &set);
-    if (sched_setaffinity(0, sizeof set, &set) != 0) {
-      log << "motormix: warning: CPU affinity refused (" << std::strerror(errno) << "); continuing"
-          << std::endl;
-    }
-  }
-  if (rt.priority > 0) {
-    sched_param param{};
-    param.sched_priority = rt.priority;
-    if (sched_setscheduler(0, SCHED_FIFO, &param) != 0) {
-      log << "motormix: warning: SCHED_FIFO priority " << rt.priority << " refused ("
-          << std::strerror(errno) << "); continuing with the default scheduler" << std::endl;
-    }
-  }
-}
 
 void log_summary(const config::Config& config, const std::string& url, std::ostream& log) {
   log << "motormix: vehicle '" << config.name << "', " << config.motors() << " motors ("
@@ -349,7 +366,8 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return 1;
   }
   log_summary(config, options.lcm_url, log);
-  apply_realtime(config.realtime, log);
+  const RealtimeGranted granted = apply_realtime(config.realtime, log);
+  log << "motormix: scheduling: " << describe(granted) << std::endl;
   Node node(config, lcm, log);
   node.subscribe();
 
@@ -357,8 +375,12 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   itimerspec spec{};
   spec.it_interval.tv_sec = static_cast<time_t>(period_ns / 1'000'000'000);
   spec.it_interval.tv_nsec = static_cast<long>(period_ns % 1'000'000'000);
-  spec.it_value = spec.it_interval;
-  if (timerfd_settime(timer_fd.get(), 0, &spec, nullptr) != 0) {
+  // Absolute ticks from a known start, so that each wake-up's lateness is
+  // actual minus scheduled time (what cyclictest measures for a thread).
+  const std::int64_t start_ns = monotonic_ns() + period_ns;
+  spec.it_value.tv_sec = static_cast<time_t>(start_ns / 1'000'000'000);
+  spec.it_value.tv_nsec = static_cast<long>(start_ns % 1'000'000'000);
+  if (timerfd_settime(timer_fd.get(), TFD_TIMER_ABSTIME, &spec, nullptr) != 0) {
     log << "motormix: cannot start loop timer: " << std::strerror(errno) << std::endl;
     return 1;
   }
@@ -366,22 +388,35 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   pollfd fds[3] = {
       {lcm.getFileno(), POLLIN, 0}, {timer_fd.get(), POLLIN, 0}, {signal_fd.get(), POLLIN, 0}};
   long long cycles = 0;
+  std::int64_t ticks = 0;  // timer periods elapsed
+  // Written once at the end, whichever way the loop ends.
+  const auto finish = [&](int code) {
+    node.publish_disarmed();
+    if (!options.timing_report_path.empty()) {
+      std::ofstream report(options.timing_report_path);
+      node.write_timing_report(report, granted, ticks);
+      if (!report) {
+        log << "motormix: cannot write the timing report " << options.timing_report_path
+            << std::endl;
+      }
+    }
+    return code;
+  };
   while (true) {
     if (poll(fds, 3, -1) < 0) {
       if (errno == EINTR) continue;
       log << "motormix: poll failed: " << std::strerror(errno) << std::endl;
-      node.publish_disarmed();
-      return 1;
+      return finish(1);
     }
     if (fds[2].revents & POLLIN) {
       signalfd_siginfo info{};
       [[maybe_unused]] const ssize_t got = read(signal_fd.get(), &info, sizeof info);
       log << "motormix: signal " << info.ssi_signo << ", publishing disarmed outputs and exiting"
           << std::endl;
-      node.publish_disarmed();
-      return 0;
+      return finish(0);
     }
-    const std::int64_t woke_us = monotonic_us();
+    const std::int64_t woke_ns = monotonic_ns();
+    const std::int64_t woke_us = woke_ns / 1000;
     bool run_cycle = false;
     if (fds[0].revents & POLLIN) {
       node.drain();
@@ -391,6 +426,11 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
       std::uint64_t expirations = 0;
       if (read(timer_fd.get(), &expirations, sizeof expirations) == sizeof expirations) {
         if (expirations > 1) node.add_overruns(expirations - 1);
+        // Late from the first tick not yet served: a loop that missed
+        // periods was late by all of them, not just by the newest one.
+        const std::int64_t scheduled_ns = start_ns + ticks * period_ns;
+        ticks += static_cast<std::int64_t>(expirations);
+        node.add_wake_latency(static_cast<double>(woke_ns - scheduled_ns) / 1e3, woke_us);
         // Inputs that arrived together with the tick were drained above (the
         // same poll reported them); draining again would cost a select per
         // cycle for nothing.
@@ -399,10 +439,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     }
     if (run_cycle) {
       node.cycle(monotonic_us(), woke_us);
-      if (options.max_cycles > 0 && ++cycles >= options.max_cycles) {
-        node.publish_disarmed();
-        return 0;
-      }
+      if (options.max_cycles > 0 && ++cycles >= options.max_cycles) return finish(0);
     }
   }
 }

@@ -16,6 +16,10 @@ struct RunOptions {
   // Stop by itself after this many cycles (0: run until a signal). Lets tests
   // and demos bound a run without relying on signals.
   long long max_cycles = 0;
+  // When set, the whole run's loop timing (wake-up lateness and period:
+  // percentiles, largest and when, overruns, kernel drops, the scheduling
+  // granted) is written there as JSON at the end of the run.
+  std::string timing_report_path;
 };
 
 // Runs until SIGINT, SIGTERM or SIGHUP (then publishes one disarmed message

@@ -67,8 +67,10 @@ void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters
   for (std::size_t i = 0; i < 4; ++i) {
     s.period_us[i] = timing.period_us[i];
     s.compute_us[i] = timing.compute_us[i];
+    s.wake_latency_us[i] = timing.wake_latency_us[i];
   }
   s.overruns = timing.overruns;
+  s.kernel_drops = timing.kernel_drops;
   s.config_hash = static_cast<int64_t>(config_hash);
   s.motor_test_state = r.motor_test >= 0 ? mixer_status_t::MOTOR_TEST_RUNNING
                                          : mixer_status_t::MOTOR_TEST_NONE;

@@ -22,7 +22,9 @@ namespace motormix::node {
 struct LoopTiming {
   std::array<float, 4> period_us{};   // min, mean, max, p99
   std::array<float, 4> compute_us{};  // min, mean, max, p99
+  std::array<float, 4> wake_latency_us{};  // min, mean, max, p99
   std::int64_t overruns = 0;
+  std::int64_t kernel_drops = -1;  // own_udp_socket_drops(); -1: unknown
 };
 
 // Sizes the variable-length fields for `motors` outputs.

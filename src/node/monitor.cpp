@@ -174,6 +174,11 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
     << fixed(st.period_us[3], 0) << "   compute us mean/p99 " << fixed(st.compute_us[1], 1) << "/"
     << fixed(st.compute_us[3], 1) << "   overruns " << st.overruns << "   cycles " << st.cycles
     << "\n";
+  s << "wake-up   late us mean/p99/max " << fixed(st.wake_latency_us[1], 1) << "/"
+    << fixed(st.wake_latency_us[3], 0) << "/" << fixed(st.wake_latency_us[2], 0)
+    << "   kernel drops " << (st.kernel_drops < 0 ? std::string("unknown")
+                                                     : std::to_string(st.kernel_drops))
+    << "\n";
   s << "accepted  setpoint " << st.setpoint_received << "   pid " << st.pid_received
     << "   motor_status " << st.motor_status_received << "   battery " << st.battery_received
     << "\n";

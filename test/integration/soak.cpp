@@ -4,6 +4,7 @@
 // counters consistent with what was sent. Prints a Markdown report.
 // Not a ctest (it takes minutes): scripts/robustness runs it.
 //   scripts/private-bus motormix_soak --motormix BIN --config FILE [--seconds 600] [--rate 1000]
+//     [--timing-report FILE]   (passed to motormix run: its whole run's loop timing)
 
 #include "integration/bus_recorder.hpp"
 #include "integration/process.hpp"
@@ -53,7 +54,7 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string motormix, config;
+  std::string motormix, config, timing_report;
   double seconds = 600.0;
   int rate = 1000;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
     if (a == "--config") config = argv[i + 1];
     if (a == "--seconds") seconds = std::atof(argv[i + 1]);
     if (a == "--rate") rate = std::atoi(argv[i + 1]);
+    if (a == "--timing-report") timing_report = argv[i + 1];
   }
   const char* bus_flag = std::getenv("MOTORMIX_PRIVATE_BUS");
   if (motormix.empty() || config.empty() || !bus_flag || std::string(bus_flag) != "1" ||
@@ -73,11 +75,16 @@ int main(int argc, char** argv) {
   }
   const double status_hz = 10.0;
   motormix::test::BusRecorder bus("SOAK_PWM", "SOAK_STATUS", /*keep_pwm=*/false);
-  motormix::test::ChildProcess mixer(
-      {motormix, "run", "--config", config, "--set", "loop_rate_hz=" + std::to_string(rate),
-       "--set", "status_rate_hz=10", "--set", "channels.setpoint=SOAK_SETPOINT", "--set",
-       "channels.pid=SOAK_PID", "--set", "channels.motor_pwm=SOAK_PWM", "--set",
-       "channels.status=SOAK_STATUS", "--set", "inputs.arm_max_throttle=0.1"});
+  std::vector<std::string> run = {
+      motormix, "run", "--config", config, "--set", "loop_rate_hz=" + std::to_string(rate),
+      "--set", "status_rate_hz=10", "--set", "channels.setpoint=SOAK_SETPOINT", "--set",
+      "channels.pid=SOAK_PID", "--set", "channels.motor_pwm=SOAK_PWM", "--set",
+      "channels.status=SOAK_STATUS", "--set", "inputs.arm_max_throttle=0.1"};
+  if (!timing_report.empty()) {
+    run.push_back("--timing-report");
+    run.push_back(timing_report);
+  }
+  motormix::test::ChildProcess mixer(run);
   const auto started = Clock::now() + 10s;
   while (bus.pwm_count() == 0 && Clock::now() < started) std::this_thread::sleep_for(10ms);
   if (bus.pwm_count() == 0) {
@@ -198,10 +205,11 @@ int main(int argc, char** argv) {
               static_cast<long long>(last.overruns));
   std::printf(
       "| inputs | pid %lld of %lld sent, setpoint %lld of %lld; %lld not received, %ld datagrams "
-      "dropped by the kernel (full UDP receive buffers); rejected %lld %s |\n",
+      "dropped by the kernel (full UDP receive buffers), %lld of them on motormix's own sockets "
+      "(its kernel_drops); rejected %lld %s |\n",
       static_cast<long long>(last.pid_received), static_cast<long long>(sent_pids),
       static_cast<long long>(last.setpoint_received), static_cast<long long>(sent_setpoints),
-      static_cast<long long>(unaccounted), kernel_drops,
+      static_cast<long long>(unaccounted), kernel_drops, static_cast<long long>(last.kernel_drops),
       static_cast<long long>(last.rejected_decode + last.rejected_range + last.rejected_nonfinite +
                              last.rejected_stale_order + last.rejected_future),
       counters_ok ? "ok" : "FAIL");

@@ -282,6 +282,44 @@ TEST_F(Faults, DuplicatesReorderingAndClockJumpsAreCountedAndFailSafe) {
   stop_and_expect_disarmed_exit();
 }
 
+// A flood while the mixer is frozen fills its socket's receive buffer: the
+// kernel drops what no longer fits, and LCM never sees those messages. The
+// mixer reports the kernel's count for its own sockets (kernel_drops): 0
+// before, more than 0 after, and never more than the namespace lost in all
+// (the private bus holds only this test's sockets and the mixer's).
+TEST_F(Faults, KernelDropsOnTheMixersOwnSocketAreReported) {
+  start({"status_rate_hz=400"});
+  arm();
+  ASSERT_TRUE(bus_->wait_until([](const auto&, const auto& s) { return !s.empty(); }, 5s));
+  ASSERT_EQ(bus_->status().back().kernel_drops, 0)
+      << "-1 means the mixer could not find its sockets in /proc/net/udp";
+  const long namespace_before = udp_receive_buffer_drops();
+  ASSERT_GE(namespace_before, 0);
+  mixer_->signal(SIGSTOP);
+  const std::size_t frozen_at = settled_count();
+  // Far more than a default receive buffer (about 200 kB) holds of small
+  // datagrams; sent slowly enough that this test's own receivers keep up.
+  constexpr int kFlood = 4000;
+  for (int k = 0; k < kFlood; ++k) {
+    pilot_->send(true, 0.5);
+    if (k % 20 == 0) std::this_thread::sleep_for(1ms);
+  }
+  std::this_thread::sleep_for(100ms);
+  mixer_->signal(SIGCONT);
+  ASSERT_TRUE(bus_->wait_until(
+      [&](const auto& pwm, const auto& s) {
+        return pwm.size() > frozen_at + 20 && !s.empty() && s.back().kernel_drops > 0;
+      },
+      5s))
+      << "no kernel drops reported after the flood";
+  const std::int64_t reported = bus_->status().back().kernel_drops;
+  const long namespace_drops = udp_receive_buffer_drops() - namespace_before;
+  EXPECT_GT(reported, 0);
+  EXPECT_LE(reported, namespace_drops);
+  expect_outputs_in_range();
+  stop_and_expect_disarmed_exit();
+}
+
 // Floods on both input channels: random bytes, and messages far larger than
 // any input, at 2 kHz while the pilot flies. The loop keeps cycling through
 // the flood (a drain is bounded per wake-up), every injected message is

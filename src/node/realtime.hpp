@@ -1,0 +1,30 @@
+#pragma once
+// The `realtime:` settings of `motormix run` (SCHED_FIFO priority, CPU
+// affinity, locked and prefaulted memory), applied as requests: what the
+// system refuses is logged and the loop runs on without it. What was
+// actually granted is read back from the kernel, logged, and reported in
+// the timing report, so that a measurement says what it ran under.
+
+#include <motormix/config/config.hpp>
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace motormix::node {
+
+struct RealtimeGranted {
+  std::string policy;     // "SCHED_FIFO", "SCHED_OTHER", ... as the kernel reports it
+  int priority = 0;       // its static priority (0 outside the real-time policies)
+  std::vector<int> cpus;  // the CPUs the thread may run on
+  bool memory_locked = false;
+  bool stack_prefaulted = false;
+};
+
+// Applies `rt`, logging each refusal on `log`, and returns what is in force.
+RealtimeGranted apply_realtime(const config::Realtime& rt, std::ostream& log);
+
+// One line: "SCHED_FIFO 80, cpus 1, memory locked, stack prefaulted".
+std::string describe(const RealtimeGranted& granted);
+
+}  // namespace motormix::node
