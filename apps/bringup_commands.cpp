@@ -37,20 +37,6 @@ using node::wall_us;
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_interrupt(int) { g_interrupted = true; }
 
-std::optional<config::Config> load_vehicle(const std::string& config_path,
-                                           const std::string& preset,
-                                           const std::vector<std::string>& overrides,
-                                           const char* command) {
-  try {
-    return preset.empty() ? config::load_config_file(config_path, overrides)
-                          : config::load_config_text("geometry: {preset: " + preset + "}\n",
-                                                     "preset " + preset, overrides);
-  } catch (const config::ConfigError& e) {
-    std::cerr << "motormix " << command << ": " << e.what() << "\n";
-    return std::nullopt;
-  }
-}
-
 // Motor number as `motormix matrix` prints it, or name; -1 if neither.
 int motor_index(const std::string& text, const config::Config& config) {
   const auto& names = config.motor_names();
@@ -120,7 +106,7 @@ void send_test(lcm::LCM& lcm, const std::string& channel, int motor_1based, doub
 }  // namespace
 
 int motor_test(const MotorTestCommand& cmd) {
-  const auto config = load_vehicle(cmd.config_path, cmd.preset, cmd.overrides, "motor-test");
+  const auto config = load_vehicle(cmd.common, "motor-test");
   if (!config) return kExitUsage;
   std::vector<int> motors;
   if (cmd.sequence) {
@@ -224,7 +210,7 @@ int line_ready() {
 }  // namespace
 
 int esc_calibrate(const EscCalibrateCommand& cmd) {
-  const auto config = load_vehicle(cmd.config_path, cmd.preset, cmd.overrides, "esc-calibrate");
+  const auto config = load_vehicle(cmd.common, "esc-calibrate");
   if (!config) return kExitUsage;
   if (!cmd.props_off) {
     std::cerr << "motormix esc-calibrate: refused: every motor will run at full command. Take the "

@@ -22,14 +22,6 @@ namespace motormix::app {
 
 namespace {
 
-std::optional<config::Config> load(const CommonOptions& common) {
-  try {
-    return config::load_config_file(common.config_path, common.overrides);
-  } catch (const config::ConfigError& e) {
-    std::cerr << "motormix: " << e.what() << "\n";
-    return std::nullopt;
-  }
-}
 
 bool check_range(const char* name, double value, double lo, double hi) {
   if (std::isfinite(value) && value >= lo && value <= hi) return true;
@@ -48,11 +40,25 @@ std::vector<int> motors_in(MotorMask mask, int motors) {
 
 }  // namespace
 
+std::optional<config::Config> load_vehicle(const CommonOptions& common, const char* command) {
+  try {
+    if (common.preset.empty()) return config::load_config_file(common.config_path, common.overrides);
+    return config::load_config_text("geometry: {preset: " + common.preset + "}\n",
+                                    "preset " + common.preset, common.overrides);
+  } catch (const config::ConfigError& e) {
+    std::cerr << "motormix " << command << ": " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
 int run(const RunCommand& cmd) {
-  const auto config = load(cmd.common);
+  const auto config = load_vehicle(cmd.common, "run");
   if (!config) return kExitUsage;
   if (cmd.check_only) {
-    std::cout << "config " << cmd.common.config_path << " is valid: " << config->motors()
+    std::cout << "config "
+              << (cmd.common.preset.empty() ? cmd.common.config_path
+                                            : "of preset " + cmd.common.preset)
+              << " is valid: " << config->motors()
               << " motors, strategy " << config::to_string(config->strategy) << "\n\n"
               << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
@@ -68,7 +74,7 @@ int run(const RunCommand& cmd) {
 }
 
 int mix(const MixCommand& cmd) {
-  const auto config = load(cmd.common);
+  const auto config = load_vehicle(cmd.common, "mix");
   if (!config) return kExitUsage;
   const double throttle_low = thrust_floor(config->thrust_range());
   if (!check_range("throttle", cmd.throttle, throttle_low, 1.0) ||
@@ -84,7 +90,7 @@ int mix(const MixCommand& cmd) {
     std::string list;
     for (const std::string& f : cmd.failed) list += (list.empty() ? "" : ",") + f;
     with_failed.overrides.push_back("mixer.failed_motors=[" + list + "]");
-    failed_config = load(with_failed);
+    failed_config = load_vehicle(with_failed, "mix");
     if (!failed_config) return kExitUsage;
     failed |= failed_config->failed_motors;
   }
@@ -205,7 +211,7 @@ int mix(const MixCommand& cmd) {
 }
 
 int replay(const ReplayCommand& cmd) {
-  const auto config = load(cmd.common);
+  const auto config = load_vehicle(cmd.common, "replay");
   if (!config) return kExitUsage;
   node::ReplayOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
@@ -238,8 +244,8 @@ int replay(const ReplayCommand& cmd) {
 
 int monitor(const MonitorCommand& cmd) {
   node::MonitorOptions o;
-  if (!cmd.config_path.empty()) {
-    const auto config = load(CommonOptions{cmd.config_path, cmd.overrides});
+  if (!cmd.common.config_path.empty() || !cmd.common.preset.empty()) {
+    const auto config = load_vehicle(cmd.common, "monitor");
     if (!config) return kExitUsage;
     o.status_channel = config->channels.status;
     o.pwm_channel = config->channels.motor_pwm;
@@ -259,15 +265,13 @@ int monitor(const MonitorCommand& cmd) {
 }
 
 int matrix(const MatrixCommand& cmd) {
+  const auto config = load_vehicle(cmd.common, "matrix");
+  if (!config) return kExitUsage;
   try {
-    const config::Config config =
-        cmd.preset.empty() ? config::load_config_file(cmd.config_path, cmd.overrides)
-                           : config::load_config_text("geometry: {preset: " + cmd.preset + "}\n",
-                                                      "preset " + cmd.preset, cmd.overrides);
-    std::cout << config::export_matrix(config, config::matrix_format_from(cmd.format));
+    std::cout << config::export_matrix(*config, config::matrix_format_from(cmd.format));
     return kExitOk;
-  } catch (const config::ConfigError& e) {
-    std::cerr << "motormix: " << e.what() << "\n";
+  } catch (const config::ConfigError& e) {  // a format the geometry cannot give
+    std::cerr << "motormix matrix: " << e.what() << "\n";
     return kExitUsage;
   }
 }

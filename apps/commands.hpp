@@ -8,6 +8,10 @@
 #include <string>
 #include <vector>
 
+namespace motormix::config {
+struct Config;
+}
+
 namespace motormix::app {
 
 inline constexpr int kExitOk = 0;
@@ -19,8 +23,11 @@ inline constexpr int kExitDamagedLog = 3;
 // sim: the run ended in a crash (the JSON result says how and when).
 inline constexpr int kExitCrashed = 4;
 
+// A vehicle: exactly one of a configuration file and a preset (checked
+// after parsing; `monitor` takes at most one), and --set overrides.
 struct CommonOptions {
   std::string config_path;
+  std::string preset;
   std::vector<std::string> overrides;  // --set key.path=value
 };
 
@@ -32,6 +39,11 @@ struct RunCommand {
   std::string timing_report;
 };
 int run(const RunCommand& cmd);
+
+// The configuration `common` names (the file, or the preset's defaults),
+// with its overrides; on error, says so on stderr as "motormix COMMAND: ..."
+// and returns nothing.
+std::optional<config::Config> load_vehicle(const CommonOptions& common, const char* command);
 
 struct MixCommand {
   CommonOptions common;
@@ -47,16 +59,13 @@ struct MixCommand {
 int mix(const MixCommand& cmd);
 
 struct MatrixCommand {
-  std::string config_path;  // one of config_path and preset
-  std::string preset;
-  std::vector<std::string> overrides;
+  CommonOptions common;
   std::string format = "table";
 };
 int matrix(const MatrixCommand& cmd);
 
 struct MonitorCommand {
-  std::string config_path;  // optional: channels, motor names, unit
-  std::vector<std::string> overrides;
+  CommonOptions common;  // optional: channels, motor names, unit
   std::string lcm_url;
   std::string status_channel;  // empty: from the config, else MIXER_STATUS
   std::string pwm_channel;     // empty: from the config, else MOTOR_PWM
@@ -76,9 +85,7 @@ struct ReplayCommand {
 int replay(const ReplayCommand& cmd);
 
 struct SimCommand {
-  std::string config_path;  // one of config_path and preset
-  std::string preset;
-  std::vector<std::string> overrides;
+  CommonOptions common;
   std::string scenario = "hover";
   std::vector<std::string> fail;  // MOTOR@SECONDS
   bool undetected = false;
@@ -93,9 +100,7 @@ struct SimCommand {
 int sim(const SimCommand& cmd);
 
 struct MotorTestCommand {
-  std::string config_path;  // one of config_path and preset
-  std::string preset;
-  std::vector<std::string> overrides;
+  CommonOptions common;
   std::string lcm_url;
   std::string motor;  // number as motormix matrix prints it, or name
   double throttle = 0.1;
@@ -106,9 +111,7 @@ struct MotorTestCommand {
 int motor_test(const MotorTestCommand& cmd);
 
 struct EscCalibrateCommand {
-  std::string config_path;  // one of config_path and preset
-  std::string preset;
-  std::vector<std::string> overrides;
+  CommonOptions common;
   std::string lcm_url;
   bool props_off = false;    // required: the user says the propellers are off
   double timeout_s = 30.0;   // at the maximum, waiting for the user's Enter

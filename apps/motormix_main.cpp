@@ -14,27 +14,31 @@ int main(int argc, char** argv) {
   CLI::App app{"motormix: attitude/thrust commands in, one command per motor out, over LCM"};
   app.set_version_flag("--version", std::string("motormix ") + motormix::kVersion);
   app.require_subcommand(1);
+  // Parse and validate everything (options, files, one of --config and
+  // --preset), then stop: the documentation's commands are checked this way.
+  bool parse_only = false;
+  app.add_flag("--parse-only", parse_only,
+               "check the command line (options, values, files) and exit without running")
+      ->group("");
 
-  const auto add_common = [](CLI::App* sub, CommonOptions& common) {
-    sub->add_option("--config", common.config_path, "YAML configuration file")
-        ->required()
-        ->check(CLI::ExistingFile);
-    sub->add_option("--set", common.overrides, "override a config value: key.path=value");
-  };
-
-  // A vehicle by configuration file or by preset (exactly one: checked
-  // after parsing), and --set overrides.
-  const auto add_vehicle = [](CLI::App* sub, std::string& config_path, std::string& preset,
-                              std::vector<std::string>& overrides) {
-    auto* config = sub->add_option("--config", config_path, "YAML configuration file")
+  // A vehicle by configuration file or by preset, and --set overrides, the
+  // same way in every subcommand. Exactly one of the two (checked after
+  // parsing, for the subcommands listed in `vehicles`).
+  std::vector<std::pair<CLI::App*, const CommonOptions*>> vehicles;
+  const auto add_vehicle = [&vehicles](CLI::App* sub, CommonOptions& common,
+                                       const char* config_help = "YAML configuration file",
+                                       bool required = true) {
+    auto* config = sub->add_option("--config", common.config_path, config_help)
                        ->check(CLI::ExistingFile);
-    config->excludes(sub->add_option("--preset", preset, "a preset vehicle"));
-    sub->add_option("--set", overrides, "override a config value: key.path=value");
+    config->excludes(sub->add_option("--preset", common.preset,
+                                     "a preset vehicle (its defaults; motormix matrix lists them)"));
+    sub->add_option("--set", common.overrides, "override a config value: key.path=value");
+    if (required) vehicles.emplace_back(sub, &common);
   };
 
   RunCommand run_cmd;
   CLI::App* run_app = app.add_subcommand("run", "run the mixer process on the LCM bus");
-  add_common(run_app, run_cmd.common);
+  add_vehicle(run_app, run_cmd.common);
   run_app->add_option("--lcm-url", run_cmd.lcm_url,
                       "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   run_app->add_flag("--check", run_cmd.check_only,
@@ -51,7 +55,7 @@ int main(int argc, char** argv) {
   MixCommand mix_cmd;
   CLI::App* mix_app = app.add_subcommand(
       "mix", "evaluate the configured mixer once, as if armed with fresh inputs");
-  add_common(mix_app, mix_cmd.common);
+  add_vehicle(mix_app, mix_cmd.common);
   mix_app->add_option("--throttle", mix_cmd.throttle, "collective thrust 0..1 (ground: -1..1)");
   mix_app->add_option("--roll", mix_cmd.roll, "roll demand -1..1");
   mix_app->add_option("--pitch", mix_cmd.pitch, "pitch demand -1..1");
@@ -71,19 +75,14 @@ int main(int argc, char** argv) {
   MatrixCommand matrix_cmd;
   CLI::App* matrix_app =
       app.add_subcommand("matrix", "print the mixing matrix of a configuration or a preset");
-  auto* config_opt =
-      matrix_app->add_option("--config", matrix_cmd.config_path, "YAML configuration file")
-          ->check(CLI::ExistingFile);
-  auto* preset_opt = matrix_app->add_option("--preset", matrix_cmd.preset, "a preset vehicle");
-  config_opt->excludes(preset_opt);
-  matrix_app->add_option("--set", matrix_cmd.overrides, "override a config value: key.path=value");
+  add_vehicle(matrix_app, matrix_cmd.common);
   matrix_app->add_option("--format", matrix_cmd.format, "output format")
       ->check(CLI::IsMember(motormix::config::matrix_format_names()));
 
   ReplayCommand replay_cmd;
   CLI::App* replay_app = app.add_subcommand(
       "replay", "run the mixer offline over a flight log (log time as the clock)");
-  add_common(replay_app, replay_cmd.common);
+  add_vehicle(replay_app, replay_cmd.common);
   replay_app->add_option("in", replay_cmd.in_log, "input LCM event log")
       ->required()
       ->check(CLI::ExistingFile);
@@ -100,12 +99,9 @@ int main(int argc, char** argv) {
   MonitorCommand monitor_cmd;
   CLI::App* monitor_app =
       app.add_subcommand("monitor", "live terminal view of a running motormix on the bus");
-  monitor_app
-      ->add_option("--config", monitor_cmd.config_path,
-                   "configuration of the running mixer (channels, motor names, unit)")
-      ->check(CLI::ExistingFile);
-  monitor_app->add_option("--set", monitor_cmd.overrides,
-                          "override a config value: key.path=value");
+  add_vehicle(monitor_app, monitor_cmd.common,
+              "configuration of the running mixer (channels, motor names, unit)",
+              /*required=*/false);
   monitor_app->add_option("--lcm-url", monitor_cmd.lcm_url,
                           "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   monitor_app->add_option("--status-channel", monitor_cmd.status_channel,
@@ -126,7 +122,7 @@ int main(int argc, char** argv) {
   CLI::App* sim_app = app.add_subcommand(
       "sim",
       "fly the configuration in closed loop: lockstep (default) or live beside motormix run");
-  add_vehicle(sim_app, sim_cmd.config_path, sim_cmd.preset, sim_cmd.overrides);
+  add_vehicle(sim_app, sim_cmd.common);
   sim_app->add_option("--scenario", sim_cmd.scenario,
                       "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
                       "drive) or a YAML file (default hover)");
@@ -151,7 +147,7 @@ int main(int argc, char** argv) {
   MotorTestCommand test_cmd;
   CLI::App* test_app = app.add_subcommand(
       "motor-test", "spin one motor alone through a running, disarmed motormix run");
-  add_vehicle(test_app, test_cmd.config_path, test_cmd.preset, test_cmd.overrides);
+  add_vehicle(test_app, test_cmd.common);
   test_app->add_option("--lcm-url", test_cmd.lcm_url,
                        "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   auto* test_motor = test_app->add_option(
@@ -172,7 +168,7 @@ int main(int argc, char** argv) {
   EscCalibrateCommand esc_cmd;
   CLI::App* esc_app = app.add_subcommand(
       "esc-calibrate", "teach PWM ESCs their range: maximum, your Enter, minimum, disarmed");
-  add_vehicle(esc_app, esc_cmd.config_path, esc_cmd.preset, esc_cmd.overrides);
+  add_vehicle(esc_app, esc_cmd.common);
   esc_app->add_option("--lcm-url", esc_cmd.lcm_url,
                       "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   esc_app->add_flag("--props-off", esc_cmd.props_off,
@@ -188,20 +184,13 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
-    if (esc_app->parsed() && esc_cmd.config_path.empty() == esc_cmd.preset.empty()) {
-      throw CLI::RequiredError("exactly one of --config and --preset");
-    }
-    if (test_app->parsed() && test_cmd.config_path.empty() == test_cmd.preset.empty()) {
-      throw CLI::RequiredError("exactly one of --config and --preset");
+    for (const auto& [sub, common] : vehicles) {
+      if (sub->parsed() && common->config_path.empty() == common->preset.empty()) {
+        throw CLI::RequiredError(sub->get_name() + ": exactly one of --config and --preset");
+      }
     }
     if (test_app->parsed() && test_cmd.motor.empty() && !test_cmd.sequence) {
       throw CLI::RequiredError("--motor or --sequence");
-    }
-    if (sim_app->parsed() && sim_cmd.config_path.empty() == sim_cmd.preset.empty()) {
-      throw CLI::RequiredError("exactly one of --config and --preset");
-    }
-    if (matrix_app->parsed() && matrix_cmd.config_path.empty() == matrix_cmd.preset.empty()) {
-      throw CLI::RequiredError("exactly one of --config and --preset");
     }
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
@@ -212,6 +201,14 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return kExitUsage;
+  }
+  if (parse_only) {
+    // The vehicle named must load too: a configuration shown in the guide
+    // is checked with the command that uses it.
+    for (const auto& [sub, common] : vehicles) {
+      if (sub->parsed() && !load_vehicle(*common, sub->get_name().c_str())) return kExitUsage;
+    }
+    return kExitOk;
   }
   if (run_app->parsed()) return run(run_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);

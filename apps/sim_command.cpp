@@ -77,10 +77,8 @@ int sim(const SimCommand& cmd) {
   std::optional<config::Config> config;
   std::optional<sim::Scenario> scenario;
   try {
-    config = cmd.preset.empty()
-                 ? config::load_config_file(cmd.config_path, cmd.overrides)
-                 : config::load_config_text("geometry: {preset: " + cmd.preset + "}\n",
-                                            "preset " + cmd.preset, cmd.overrides);
+    config = load_vehicle(cmd.common, "sim");
+    if (!config) return kExitUsage;
     scenario = sim::load_scenario(cmd.scenario);
     if (!config->physics.incomplete.empty()) throw config::ConfigError(config->physics.incomplete);
     sim::scenario_config(*config, *scenario);  // the scenario fits the vehicle

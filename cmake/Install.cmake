@@ -32,8 +32,9 @@ install(DIRECTORY examples/ DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/exampl
 # The shipped scenarios (also compiled into motormix sim), as examples to copy.
 install(DIRECTORY scenarios/ DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/scenarios
   FILES_MATCHING PATTERN "*.yaml")
-install(FILES README.md CHANGELOG.md BENCHMARKS.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
-install(DIRECTORY docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(FILES README.md CHANGELOG.md BENCHMARKS.md SIM.md ROBUSTNESS.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# The guide keeps its place next to the README, so the links between them hold.
+install(DIRECTORY docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 if(MOTORMIX_JAVA_BUILT)
   install_jar(motormix_lcmtypes_java DESTINATION ${CMAKE_INSTALL_DATADIR}/java)
 endif()

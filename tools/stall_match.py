@@ -66,9 +66,16 @@ def main():
         print(f"Verdict: the machine. cyclictest was late by {near[1] / 1e3:.2f} ms within "
               f"{args.window_ms:.0f} ms of motormix's largest stall ({mm_max / 1e3:.2f} ms): both "
               "threads were kept off the CPU together.")
+    elif worst[1] >= mm_max:
+        print(f"Verdict: the machine stalls this long without motormix's help. Around motormix's "
+              f"largest stall ({mm_max / 1e3:.2f} ms) cyclictest was late by {near[1] / 1e3:.2f} ms "
+              f"at most, but at another moment cyclictest itself stalled longer "
+              f"({worst[1] / 1e3:.2f} ms): stalls of this size hit any thread on this machine, one "
+              "at a time.")
     else:
         print(f"Verdict: motormix alone. cyclictest was never late by more than {near[1] / 1e3:.2f} ms "
-              f"within {args.window_ms:.0f} ms of motormix's largest stall ({mm_max / 1e3:.2f} ms).")
+              f"within {args.window_ms:.0f} ms of motormix's largest stall ({mm_max / 1e3:.2f} ms), "
+              f"nor by more than {worst[1] / 1e3:.2f} ms anywhere.")
 
 
 if __name__ == "__main__":

@@ -111,7 +111,8 @@ class MatrixAllocator : public Allocator {
 
 // The shifts k along a direction d for which every motor of u + k d is in
 // range. Motors with d <= 0 cannot be moved by the shift: if one of them is
-// out of range, no shift helps and the interval is empty.
+// out of range (by more than 1e-12), no shift helps and the interval is
+// empty.
 struct ShiftInterval {
   double lo;
   double hi;

@@ -37,18 +37,14 @@ class YawYieldingAllocator final : public Allocator {
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
  private:
-  struct Interval {
-    double lo;
-    double hi;
-    bool empty() const { return lo > hi; }
-  };
   // The gains g for which every motor of u + g * yaw_alone_ is in range.
-  Interval room_along_yaw(const MotorVector& u) const;
+  ShiftInterval room_along_yaw(const MotorVector& u) const;
 
   PrioritizedAllocator full_;
   PrioritizedAllocator yaw_free_;
   OptimalAllocator least_squares_;  // roll, pitch >> thrust >> yaw
   MotorVector yaw_alone_;           // command change per unit of yaw, nothing else
+  MotorVector yaw_inverse_;         // its direction_inverse (0: a motor yaw does not move)
   EffectivenessMatrix effectiveness_;
   CommandRange range_;
   CycleConstants cycle_constants_;  // the range and the controlled axes, for the report

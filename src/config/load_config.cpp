@@ -103,12 +103,7 @@ std::vector<double> read_numbers(const YAML::Node& node, const std::string& path
 }
 
 bool read_bool(MapReader& map, const std::string& key, bool fallback) {
-  const YAML::Node node = map.raw(key);
-  if (!node.IsDefined() || node.IsNull()) return fallback;
-  if (!node.IsScalar() || (node.Scalar() != "true" && node.Scalar() != "false")) {
-    fail(map.path_of(key), describe(node), "true or false");
-  }
-  return node.Scalar() == "true";
+  return map.boolean(key, fallback);
 }
 
 Eigen::Vector3d read_vector(const YAML::Node& node, const std::string& path) {
@@ -602,7 +597,8 @@ void read_realtime(MapReader rt, Config& config) {
   config.realtime.priority = static_cast<int>(rt.number("priority", 0, 0, 99));
   const YAML::Node cpus = rt.raw("cpus");
   if (cpus.IsDefined() && !cpus.IsNull()) {
-    for (double c : read_numbers(cpus, rt.path_of("cpus"), 1, 1024, 0, 1023)) {
+    // An empty list, like no list, leaves the affinity alone.
+    for (double c : read_numbers(cpus, rt.path_of("cpus"), 0, 1024, 0, 1023)) {
       config.realtime.cpus.push_back(static_cast<int>(c));
     }
   }

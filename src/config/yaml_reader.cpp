@@ -1,6 +1,7 @@
 #include "config/yaml_reader.hpp"
 
 #include <cmath>
+#include <regex>
 #include <sstream>
 
 namespace motormix::config {
@@ -19,7 +20,20 @@ std::string where(const YAML::Node& node) {
   return " (line " + std::to_string(mark.line + 1) + ")";
 }
 
+thread_local KeyLog* t_key_log = nullptr;
+
 }  // namespace
+
+KeyLog::KeyLog() : previous_(t_key_log) { t_key_log = this; }
+KeyLog::~KeyLog() { t_key_log = previous_; }
+
+void MapReader::record(const std::string& key, const char* kind, std::string fallback,
+                       std::string allowed, bool required) const {
+  if (t_key_log == nullptr) return;
+  static const std::regex kIndex(R"(\[[0-9]+\])");
+  t_key_log->add({std::regex_replace(path_of(key), kIndex, "[]"), kind, std::move(fallback),
+                  std::move(allowed), required});
+}
 
 void fail(const std::string& path, const std::string& found, const std::string& allowed) {
   throw ConfigError("config key '" + path + "': found " + found + "; allowed: " + allowed);
@@ -60,34 +74,57 @@ std::string MapReader::path_of(const std::string& key) const {
   return path_.empty() ? key : path_ + "." + key;
 }
 
-YAML::Node MapReader::raw(const std::string& key) {
+YAML::Node MapReader::get(const std::string& key) {
   read_.insert(key);
   if (!node_.IsMap()) return YAML::Node();
   return node_[key];
 }
 
+YAML::Node MapReader::raw(const std::string& key) {
+  record(key, "value", "", "");
+  return get(key);
+}
+
 double MapReader::number(const std::string& key, double fallback, double lo, double hi) {
+  record(key, "number", format_number(fallback), format_number(lo) + " to " + format_number(hi));
   if (!has(key)) {
     read_.insert(key);
     return fallback;
   }
-  return to_number(raw(key), path_of(key), lo, hi);
+  return to_number(get(key), path_of(key), lo, hi);
 }
 
 double MapReader::required_number(const std::string& key, double lo, double hi) {
+  record(key, "number", "", format_number(lo) + " to " + format_number(hi), true);
   if (!has(key)) {
     fail(path_of(key), "nothing",
          "a number from " + format_number(lo) + " to " + format_number(hi) + " (required)");
   }
-  return to_number(raw(key), path_of(key), lo, hi);
+  return to_number(get(key), path_of(key), lo, hi);
+}
+
+bool MapReader::boolean(const std::string& key, bool fallback) {
+  record(key, "boolean", fallback ? "true" : "false", "true or false");
+  const YAML::Node node = get(key);
+  if (!node.IsDefined() || node.IsNull()) return fallback;
+  if (!node.IsScalar() || (node.Scalar() != "true" && node.Scalar() != "false")) {
+    fail(path_of(key), describe(node), "true or false");
+  }
+  return node.Scalar() == "true";
 }
 
 std::string MapReader::text(const std::string& key, const std::string& fallback) {
+  return text_as(key, fallback, "text", "a non-empty string");
+}
+
+std::string MapReader::text_as(const std::string& key, const std::string& fallback,
+                               const char* kind, const std::string& allowed) {
+  record(key, kind, fallback, allowed);
   if (!has(key)) {
     read_.insert(key);
     return fallback;
   }
-  const YAML::Node value = raw(key);
+  const YAML::Node value = get(key);
   if (!value.IsScalar() || value.Scalar().empty()) {
     fail(path_of(key), describe(value), "a non-empty string");
   }
@@ -96,16 +133,19 @@ std::string MapReader::text(const std::string& key, const std::string& fallback)
 
 std::string MapReader::choice(const std::string& key, const std::string& fallback,
                               const std::vector<std::string>& allowed) {
-  const std::string value = text(key, fallback);
+  std::string list;
+  for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  const std::string value = text_as(key, fallback, "choice", "one of " + list);
   for (const std::string& a : allowed) {
     if (a == value) return value;
   }
-  std::string list;
-  for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
   fail(path_of(key), "'" + value + "'" + where(node_[key]), "one of " + list);
 }
 
-MapReader MapReader::map(const std::string& key) { return MapReader(raw(key), path_of(key)); }
+MapReader MapReader::map(const std::string& key) {
+  record(key, "mapping", "", "");
+  return MapReader(get(key), path_of(key));
+}
 
 void MapReader::finish() const {
   if (!node_.IsMap()) return;

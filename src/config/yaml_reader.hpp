@@ -14,6 +14,33 @@
 
 namespace motormix::config {
 
+// Every key a MapReader reads, as the loader reads it: the configuration
+// reference (docs/configuration.md) is generated from these records by
+// loading the bundled configurations, so it cannot drift from the loader.
+struct KeyRecord {
+  std::string path;      // key path, list indices as []: geometry.rotors[].spin
+  std::string kind;      // number, text, choice, mapping, value (a list or a structure)
+  std::string fallback;  // the default, as text; empty when required or structured
+  std::string allowed;   // "0 to 1", "one of off, roll_pitch, ...", ...
+  bool required = false;
+};
+
+// While one of these lives on a thread, that thread's MapReaders record
+// every key they read into it.
+class KeyLog {
+ public:
+  KeyLog();
+  ~KeyLog();
+  KeyLog(const KeyLog&) = delete;
+  KeyLog& operator=(const KeyLog&) = delete;
+  const std::vector<KeyRecord>& records() const { return records_; }
+  void add(KeyRecord r) { records_.push_back(std::move(r)); }
+
+ private:
+  std::vector<KeyRecord> records_;
+  KeyLog* previous_;
+};
+
 class MapReader {
  public:
   // `node` must be a mapping (or null, read as empty); `path` is its key path
@@ -26,6 +53,7 @@ class MapReader {
   double number(const std::string& key, double fallback, double lo, double hi);
   double required_number(const std::string& key, double lo, double hi);
   std::string text(const std::string& key, const std::string& fallback);
+  bool boolean(const std::string& key, bool fallback);
   std::string choice(const std::string& key, const std::string& fallback,
                      const std::vector<std::string>& allowed);
   MapReader map(const std::string& key);   // an absent key reads as an empty map
@@ -35,6 +63,12 @@ class MapReader {
   void finish() const;
 
  private:
+  YAML::Node get(const std::string& key);  // raw() without a record
+  std::string text_as(const std::string& key, const std::string& fallback, const char* kind,
+                      const std::string& allowed);
+  void record(const std::string& key, const char* kind, std::string fallback,
+              std::string allowed, bool required = false) const;
+
   YAML::Node node_;
   std::string path_;
   std::set<std::string> read_;

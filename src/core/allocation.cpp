@@ -1,5 +1,7 @@
 #include <motormix/allocation.hpp>
 
+#include "shift_kernel.hpp"
+
 #include "fixed_size.hpp"
 #include "report_kernel.hpp"
 
@@ -25,17 +27,12 @@ AllocationResult describe_allocation(const EffectivenessMatrix& effectiveness,
 }
 
 ShiftInterval feasible_shifts(const MotorVector& u, const MotorVector& d, CommandRange range) {
-  ShiftInterval k{-std::numeric_limits<double>::infinity(),
-                  std::numeric_limits<double>::infinity()};
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    if (d[i] <= 0.0) {
-      if (u[i] < range.lower || u[i] > range.upper) return {1.0, -1.0};
-      continue;
-    }
-    k.lo = std::max(k.lo, (range.lower - u[i]) / d[i]);
-    k.hi = std::min(k.hi, (range.upper - u[i]) / d[i]);
-  }
-  return k;
+  return detail::with_motor_count(u.size(), [&](auto size) {
+    constexpr int kN = decltype(size)::value;
+    detail::LocalMotors<kN> inverse(u.size());
+    detail::direction_inverse(d, /*positive_only=*/true, 0.0, inverse);
+    return detail::shifts_that_fit<kN>(u, inverse, u.size(), range);
+  });
 }
 
 CycleConstants::CycleConstants(CommandRange range, AxisMask controlled)

@@ -110,39 +110,6 @@ double largest_fitting_scale(const Motors& base, const Motors& part, const Lift&
   });
 }
 
-// Every motor with the same positive share of thrust (symmetric multirotors):
-// the common factor drops out, and G is, in command units, the spread of
-// offset + base + s part beyond the range (and, when thrust may not rise,
-// how far its lowest motor sits below the bottom). `offset` is the part of
-// the base every motor shares (thrust): only the bottom sees it. One vector
-// a step.
-template <int N, typename Motors>
-double largest_fitting_scale_equal_lift(double offset, const Motors& base, const Motors& part,
-                                        Eigen::Index n, CommandRange range, bool may_raise) {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  const double room = range.upper - range.lower;
-  const double bottom = range.lower - offset;
-  return top_of_fitting_scales(0.0, 1.0, n, [&](double s) {
-    double highest = -kInf;
-    double lowest = kInf;
-    double part_high = kInf;  // slope of the highest motor just below s
-    double part_low = -kInf;  // slope of the lowest motor just below s
-    for (Eigen::Index i = 0; i < count<N>(n); ++i) {
-      const double w = base[i] + s * part[i];
-      const bool sets_high = w > highest || (w == highest && part[i] < part_high);
-      const bool sets_low = w < lowest || (w == lowest && part[i] > part_low);
-      highest = sets_high ? w : highest;
-      part_high = sets_high ? part[i] : part_high;
-      lowest = sets_low ? w : lowest;
-      part_low = sets_low ? part[i] : part_low;
-    }
-    ExcessAt g{highest - lowest - room, part_high - part_low};
-    const double below_bottom = bottom - lowest;
-    if (!may_raise && below_bottom > g.excess) g = {below_bottom, -part_low};
-    return g;
-  });
-}
-
 // Equal lift and a base the same for every motor (thrust alone): G is
 // linear in s, so the answer is closed form. `part` spans [low, high].
 inline double largest_fitting_scale_uniform_base(double base, double part_low, double part_high,

@@ -374,8 +374,8 @@ class PrioritizedAllocator::Kernel {
         rp_high = std::max(e.high_a, e.high_b);
       } else {
         const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
-        r.yaw_scale = detail::largest_fitting_scale_equal_lift<N>(offset, r.rp_part, yaw_part, n_,
-                                                                  range_, may_raise);
+        const Motors base = (r.rp_part.array() + offset).matrix();
+        r.yaw_scale = largest_fitting_scale(base, yaw_part, may_raise);
         rp_low = r.rp_part.minCoeff();
         rp_high = r.rp_part.maxCoeff();
       }

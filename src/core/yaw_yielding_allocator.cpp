@@ -1,5 +1,7 @@
 #include <motormix/yaw_yielding_allocator.hpp>
 
+#include "shift_kernel.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -37,24 +39,18 @@ YawYieldingAllocator::YawYieldingAllocator(const MixingBasis& reduced, const Mix
                 yaw_headroom, tie_tolerance),
       least_squares_(reduced, range, kPriorityWeights),
       yaw_alone_(yaw_free.col(index(Axis::kYaw))),
+      yaw_inverse_(yaw_alone_.size()),
       effectiveness_(reduced.effectiveness),
       range_(range),
-      cycle_constants_(range, reduced.controlled) {}
+      cycle_constants_(range, reduced.controlled) {
+  // Entries this small do not move a motor: the yaw-free mix leaves them.
+  detail::direction_inverse(yaw_alone_, /*positive_only=*/false,
+                            std::numeric_limits<double>::epsilon(), yaw_inverse_);
+}
 
-YawYieldingAllocator::Interval YawYieldingAllocator::room_along_yaw(const MotorVector& u) const {
-  Interval k{-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
-  for (Eigen::Index i = 0; i < u.size(); ++i) {
-    const double d = yaw_alone_[i];
-    if (std::abs(d) < std::numeric_limits<double>::epsilon()) {
-      if (u[i] < range_.lower || u[i] > range_.upper) return {1.0, -1.0};
-      continue;
-    }
-    const double a = (range_.lower - u[i]) / d;
-    const double b = (range_.upper - u[i]) / d;
-    k.lo = std::max(k.lo, std::min(a, b));
-    k.hi = std::min(k.hi, std::max(a, b));
-  }
-  return k;
+ShiftInterval YawYieldingAllocator::room_along_yaw(const MotorVector& u) const {
+  return detail::shifts_that_fit<Eigen::Dynamic>(u, yaw_inverse_, u.size(), range_,
+                                                 /*all_move=*/false, /*positive=*/false);
 }
 
 AllocationResult YawYieldingAllocator::allocate(const AxisVector& demand,
@@ -69,7 +65,7 @@ AllocationResult YawYieldingAllocator::allocate(const AxisVector& demand,
   // some amount of yaw fits, that is the answer.
   MotorVector free_commands;
   free_commands.noalias() = yaw_free_.mixing() * without_yaw;
-  Interval yaw_room = room_along_yaw(free_commands);
+  ShiftInterval yaw_room = room_along_yaw(free_commands);
   if (yaw_room.empty()) {
     // No yaw at all fits: desaturate roll, pitch and thrust in their own
     // priority order on the yaw-free basis, then the room for yaw again.

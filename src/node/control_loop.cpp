@@ -248,10 +248,14 @@ Rejection ControlLoop::on_battery(const BatterySample& sample, std::int64_t now_
 void ControlLoop::record_vehicle_state(std::int64_t now_us) {
   const MotorMask all = (MotorMask{1} << mixer_.motors()) - 1;
   result_.failed = (config_failed_ | reported_failed_) & all;
-  const Mixer::FailureReport report = mixer_.failure_report(result_.failed);
-  result_.failure = report.handling;
-  result_.held = report.held;
-  result_.authority = report.authority;
+  if (!failure_report_known_ || failure_report_for_ != result_.failed) {
+    const Mixer::FailureReport report = mixer_.failure_report(result_.failed);
+    result_.failure = report.handling;
+    result_.held = report.held;
+    result_.authority = report.authority;
+    failure_report_for_ = result_.failed;
+    failure_report_known_ = true;
+  }
   result_.battery = battery_ ? battery_->state(now_us) : BatteryState::kOff;
   result_.battery_v =
       battery_ && std::isfinite(battery_->filtered_v()) ? battery_->filtered_v() : 0.0;

@@ -192,6 +192,10 @@ class ControlLoop {
   std::int64_t last_cycle_us_ = kNever;
   MotorMask config_failed_ = 0;
   MotorMask reported_failed_ = 0;  // from the latest accepted motor_status
+  // The failure report of the set in force, looked up again only when the
+  // set changes (Mixer::mix looks the set up for itself every cycle).
+  bool failure_report_known_ = false;
+  MotorMask failure_report_for_ = 0;
   std::int64_t motor_status_received_us_ = kNever;
   std::int64_t last_motor_status_utime_ = kNever;
   std::optional<BatteryCompensation> battery_;

@@ -188,7 +188,7 @@ class Node {
 
   // The whole run's loop timing as JSON (`motormix run --timing-report`).
   void write_timing_report(std::ostream& out, const RealtimeGranted& granted,
-                           std::int64_t ticks) const {
+                           std::int64_t ticks) {
     const auto section = [&out](const char* name, const LatencyHistogram& h) {
       out << "  \"" << name << "\": {\"count\": " << h.count() << ", \"min\": " << h.min()
           << ", \"mean\": " << h.mean() << ", \"p50\": " << h.percentile(0.5)
@@ -197,7 +197,7 @@ class Node {
     };
     out << "{\n  \"loop_rate_hz\": " << config_.loop_rate_hz << ",\n  \"timer_ticks\": " << ticks
         << ",\n  \"overruns\": " << overruns_ << ",\n  \"kernel_drops\": "
-        << own_udp_socket_drops() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
+        << socket_drops_.read() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
         << "\", \"priority\": " << granted.priority << ", \"cpus\": [";
     for (std::size_t i = 0; i < granted.cpus.size(); ++i) out << (i ? ", " : "") << granted.cpus[i];
     out << "], \"memory_locked\": " << (granted.memory_locked ? "true" : "false")
@@ -276,7 +276,7 @@ class Node {
     timing.wake_latency_us = wake_stats_.take();
     timing.overruns = overruns_;
     // After this cycle's outputs are out: a read of two small /proc files.
-    timing.kernel_drops = own_udp_socket_drops();
+    timing.kernel_drops = socket_drops_.read();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
                         wall_us());
     const int len =
@@ -313,6 +313,7 @@ class Node {
   WindowStats wake_stats_;
   LatencyHistogram wake_run_;    // the whole run, for the timing report
   LatencyHistogram period_run_;
+  SocketDrops socket_drops_;
 
   static std::size_t window_capacity(const config::Config& c) {
     return static_cast<std::size_t>(c.loop_rate_hz / c.status_rate_hz) * 2 + 64;

@@ -61,13 +61,15 @@ bool add_drops(const char* table, const std::vector<unsigned long>& inodes, std:
 
 }  // namespace
 
-std::int64_t own_udp_socket_drops() {
-  const std::vector<unsigned long> inodes = own_socket_inodes();
-  if (inodes.empty()) return -1;
+std::int64_t SocketDrops::read() {
+  const bool remembered = !inodes_.empty();
+  if (!remembered) inodes_ = own_socket_inodes();
+  if (inodes_.empty()) return -1;
   std::int64_t drops = 0;
   bool found = false;
-  const bool v4 = add_drops("/proc/net/udp", inodes, drops, found);
-  const bool v6 = add_drops("/proc/net/udp6", inodes, drops, found);
+  const bool v4 = add_drops("/proc/net/udp", inodes_, drops, found);
+  const bool v6 = add_drops("/proc/net/udp6", inodes_, drops, found);
+  if (!found) inodes_.clear();  // not UDP sockets (yet): look again next time
   return (v4 || v6) && found ? drops : -1;
 }
 

@@ -8,11 +8,20 @@
 // from outside LCM.)
 
 #include <cstdint>
+#include <vector>
 
 namespace motormix::node {
 
-// Since the sockets were opened; -1 when /proc cannot be read (no procfs,
-// or no UDP socket of this process in the tables).
-std::int64_t own_udp_socket_drops();
+class SocketDrops {
+ public:
+  // Since the sockets were opened; -1 when /proc cannot be read (no procfs,
+  // or no UDP socket of this process in the tables yet). The process's
+  // sockets are looked up in /proc/self/fd until found, then remembered: a
+  // read is then one pass over the UDP tables.
+  std::int64_t read();
+
+ private:
+  std::vector<unsigned long> inodes_;
+};
 
 }  // namespace motormix::node

@@ -32,7 +32,7 @@ for f in bin/motormix \
     share/motormix/scenarios/hover.yaml share/motormix/scenarios/motor_out.yaml \
     share/motormix/lcmtypes/motor_pwm_t.lcm share/motormix/config/quad_x.yaml \
     share/motormix/examples/embedding/embed.cpp share/doc/motormix/README.md \
-    share/doc/motormix/CHANGELOG.md; do
+    share/doc/motormix/CHANGELOG.md share/doc/motormix/docs/running.md; do
   [ -e "$prefix/$f" ] || fail "missing from the install tree: $f"
 done
 ls "$prefix/$libdir"/libmotormix_core.* "$prefix/$libdir"/libmotormix_config.* >/dev/null \

@@ -69,18 +69,18 @@ TEST(EmbeddedMixer, ConfigurationErrorsNameTheKey) {
                config::ConfigError);
 }
 
-// The README shows examples/embedding/embed.cpp; the package test compiles
-// and runs that file against the installed tree. Here: the README's copy is
-// that file, line for line.
-TEST(EmbeddedMixer, ReadmeShowsTheExampleThatIsBuilt) {
-  std::ifstream readme_file(source_path("README.md"));
+// The guide (docs/embedding.md) shows examples/embedding/embed.cpp; the
+// package test compiles and runs that file against the installed tree.
+// Here: the guide's copy is that file, line for line.
+TEST(EmbeddedMixer, GuideShowsTheExampleThatIsBuilt) {
+  std::ifstream readme_file(source_path("docs/embedding.md"));
   std::ifstream example_file(source_path("examples/embedding/embed.cpp"));
   std::stringstream readme, example;
   readme << readme_file.rdbuf();
   example << example_file.rdbuf();
   ASSERT_FALSE(example.str().empty());
   EXPECT_NE(readme.str().find("```cpp\n" + example.str() + "```"), std::string::npos)
-      << "README.md must contain examples/embedding/embed.cpp verbatim in a ```cpp block";
+      << "docs/embedding.md must contain examples/embedding/embed.cpp verbatim in a ```cpp block";
   int lines = 0;
   for (char c : example.str()) lines += c == '\n';
   EXPECT_LE(lines, 25) << "the embedding example should stay short";

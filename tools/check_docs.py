@@ -1,0 +1,141 @@
+#!/usr/bin/env python3
+"""Checks the README and the guide (docs/*.md) the way a reader meets them:
+
+- every relative link and image resolves to a file of the repository;
+- every `motormix ...` line shown in a shell block parses and validates
+  (`motormix --parse-only ...`: options, values, files, exactly one of
+  --config and --preset, and the configuration it names loads), lines
+  continued with a backslash joined first;
+- every `scripts/...`, `tools/...` or `python3 tools/...` line names a file
+  that exists.
+
+Synopsis lines (with `[`, `|` or `...`) are reference, not commands, and are
+skipped. A YAML block whose first line is `# NAME.yaml` is written to NAME.yaml
+in the directory the commands run in, so a configuration shown in a page is
+checked by the commands that use it; a `cp A B` line is carried out there
+too. Commands run in a scratch directory that links the repository's
+config/, scenarios/, test/, tools/, scripts/ and examples/.
+
+    python3 tools/check_docs.py --motormix build/motormix [--root .]
+Exit 0 when everything resolves; otherwise each failure is printed.
+"""
+
+import argparse
+import glob
+import os
+import re
+import shlex
+import subprocess
+import sys
+import tempfile
+
+LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def blocks(text):
+    """(language, first line number, lines) of each fenced block."""
+    out, lang, start, body = [], None, 0, None
+    for n, line in enumerate(text.split("\n"), 1):
+        if line.startswith("```"):
+            if body is None:
+                lang, start, body = line[3:].strip(), n + 1, []
+            else:
+                out.append((lang, start, body))
+                body = None
+        elif body is not None:
+            body.append(line)
+    return out
+
+
+def outside_blocks(text):
+    keep, inside = [], False
+    for line in text.split("\n"):
+        if line.startswith("```"):
+            inside = not inside
+            continue
+        keep.append("" if inside else line)
+    return "\n".join(keep)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--motormix", required=True)
+    ap.add_argument("--root", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    args = ap.parse_args()
+    root = os.path.abspath(args.root)
+    motormix = os.path.abspath(args.motormix)
+    pages = [os.path.join(root, "README.md")] + sorted(glob.glob(os.path.join(root, "docs", "*.md")))
+    failures, links, commands = [], 0, 0
+    with tempfile.TemporaryDirectory() as scratch:
+        for d in ("config", "scenarios", "test", "tools", "scripts", "examples"):
+            os.symlink(os.path.join(root, d), os.path.join(scratch, d))
+        os.makedirs(os.path.join(scratch, "out"))
+        for page in pages:
+            name = os.path.relpath(page, root)
+            text = open(page).read()
+            for target in LINK.findall(outside_blocks(text)):
+                if re.match(r"^(https?:|mailto:|#)", target):
+                    continue
+                links += 1
+                path = os.path.normpath(os.path.join(os.path.dirname(page), target.split("#")[0]))
+                if not os.path.exists(path):
+                    failures.append(f"{name}: link to {target}: no such file")
+            for lang, start, body in blocks(text):
+                if lang == "yaml" and body and re.match(r"^# [\w.-]+\.yaml$", body[0]):
+                    with open(os.path.join(scratch, body[0][2:]), "w") as f:
+                        f.write("\n".join(body) + "\n")
+            for lang, start, body in blocks(text):
+                if lang not in ("sh", "bash", "console", ""):
+                    continue
+                joined, first = [], None
+                for offset, line in enumerate(body):
+                    if first is None:
+                        first = offset
+                        joined.append("")
+                    joined[-1] += line.rstrip()[:-1] + " " if line.rstrip().endswith("\\") else line
+                    if not line.rstrip().endswith("\\"):
+                        joined[-1] = (first, joined[-1])
+                        first = None
+                for offset, line in [j for j in joined if isinstance(j, tuple)]:
+                    line = line.strip()
+                    if line.startswith("$ "):
+                        line = line[2:]
+                    line = re.split(r"\s+#", line, maxsplit=1)[0].strip()
+                    if not line or any(s in line for s in ("[", " | ", "...")):
+                        continue
+                    where = f"{name}:{start + offset}"
+                    try:
+                        words = shlex.split(line)
+                    except ValueError as e:
+                        failures.append(f"{where}: cannot split '{line}': {e}")
+                        continue
+                    if words[0] == "sudo":
+                        words = words[1:]
+                    if words[0] == "cp" and len(words) == 3:
+                        # a file the page's later commands use (its own copy)
+                        subprocess.run(["cp"] + words[1:], cwd=scratch, check=False)
+                        continue
+                    if words[0] in ("motormix", "build/motormix", "build-release/motormix"):
+                        commands += 1
+                        r = subprocess.run([motormix, "--parse-only"] + words[1:], cwd=scratch,
+                                           capture_output=True, text=True)
+                        if r.returncode != 0:
+                            failures.append(f"{where}: '{line}' is refused: "
+                                            f"{(r.stderr or r.stdout).strip().splitlines()[:2]}")
+                        continue
+                    program = words[1] if words[0] in ("python3", "bash") and len(words) > 1 else words[0]
+                    if program.startswith(("scripts/", "tools/", "build", ".ci/")):
+                        commands += 1
+                        if program.startswith("build"):
+                            continue  # produced by a build, not in the repository
+                        if not os.path.exists(os.path.join(root, program)):
+                            failures.append(f"{where}: '{program}' does not exist")
+    for f in failures:
+        print(f)
+    print(f"check_docs: {len(pages)} pages, {links} links, {commands} commands checked, "
+          f"{len(failures)} failures")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
