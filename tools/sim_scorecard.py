@@ -113,7 +113,7 @@ def main():
             "with an axis not fully delivered. Ground cells: speed error RMS (m/s) · yaw-rate error "
             "RMS (deg/s) · share saturated. `motor_out mN` stops motor N at 6 s; *reported* tells the "
             "mixer on motor_status 100 ms later, *undetected* never does. PX4 columns are the "
-            "PX4-style sequential desaturation of `test/reference` (the older epsilon rule), with the "
+            "PX4-style sequential desaturation of `test/reference` (PX4's current rule: entries below 0.2 ignored; on these frames the same as its older epsilon rule), with the "
             "same failure reallocation as motormix.", ""]
 
     # Targets.
