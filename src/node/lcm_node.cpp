@@ -69,8 +69,10 @@ class Fd {
 
 class Node {
  public:
-  Node(const config::Config& config, lcm::LCM& lcm, std::ostream& log)
+  Node(const config::Config& config, lcm::LCM& lcm, const SocketDropsWatcher& drops,
+       std::ostream& log)
       : config_(config),
+        drops_(drops),
         lcm_(lcm),
         log_(log),
         loop_(config, config::build_mixer(config)),
@@ -197,7 +199,7 @@ class Node {
     };
     out << "{\n  \"loop_rate_hz\": " << config_.loop_rate_hz << ",\n  \"timer_ticks\": " << ticks
         << ",\n  \"overruns\": " << overruns_ << ",\n  \"kernel_drops\": "
-        << socket_drops_.read() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
+        << SocketDrops().read() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
         << "\", \"priority\": " << granted.priority << ", \"cpus\": [";
     for (std::size_t i = 0; i < granted.cpus.size(); ++i) out << (i ? ", " : "") << granted.cpus[i];
     out << "], \"memory_locked\": " << (granted.memory_locked ? "true" : "false")
@@ -275,8 +277,7 @@ class Node {
     timing.compute_us = compute_stats_.take();
     timing.wake_latency_us = wake_stats_.take();
     timing.overruns = overruns_;
-    // After this cycle's outputs are out: a read of two small /proc files.
-    timing.kernel_drops = socket_drops_.read();
+    timing.kernel_drops = drops_.latest();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
                         wall_us());
     const int len =
@@ -287,6 +288,7 @@ class Node {
   }
 
   const config::Config& config_;
+  const SocketDropsWatcher& drops_;
   lcm::LCM& lcm_;
   std::ostream& log_;
   ControlLoop loop_;
@@ -313,7 +315,6 @@ class Node {
   WindowStats wake_stats_;
   LatencyHistogram wake_run_;    // the whole run, for the timing report
   LatencyHistogram period_run_;
-  SocketDrops socket_drops_;
 
   static std::size_t window_capacity(const config::Config& c) {
     return static_cast<std::size_t>(c.loop_rate_hz / c.status_rate_hz) * 2 + 64;
@@ -367,9 +368,11 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return 1;
   }
   log_summary(config, options.lcm_url, log);
+  // Before the real-time settings: the watcher keeps the default scheduler.
+  const SocketDropsWatcher drops;
   const RealtimeGranted granted = apply_realtime(config.realtime, log);
   log << "motormix: scheduling: " << describe(granted) << std::endl;
-  Node node(config, lcm, log);
+  Node node(config, lcm, drops, log);
   node.subscribe();
 
   const auto period_ns = static_cast<long long>(std::llround(1e9 / config.loop_rate_hz));

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <chrono>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -62,15 +63,36 @@ bool add_drops(const char* table, const std::vector<unsigned long>& inodes, std:
 }  // namespace
 
 std::int64_t SocketDrops::read() {
-  const bool remembered = !inodes_.empty();
-  if (!remembered) inodes_ = own_socket_inodes();
-  if (inodes_.empty()) return -1;
+  // Looked up every time: LCM opens its receive socket on the first
+  // subscription, after a reader may have started.
+  const std::vector<unsigned long> inodes = own_socket_inodes();
+  if (inodes.empty()) return -1;
   std::int64_t drops = 0;
   bool found = false;
-  const bool v4 = add_drops("/proc/net/udp", inodes_, drops, found);
-  const bool v6 = add_drops("/proc/net/udp6", inodes_, drops, found);
-  if (!found) inodes_.clear();  // not UDP sockets (yet): look again next time
+  const bool v4 = add_drops("/proc/net/udp", inodes, drops, found);
+  const bool v6 = add_drops("/proc/net/udp6", inodes, drops, found);
   return (v4 || v6) && found ? drops : -1;
+}
+
+SocketDropsWatcher::SocketDropsWatcher()
+    : thread_([this] {
+        SocketDrops drops;
+        std::unique_lock<std::mutex> lock(mutex_);
+        while (!stop_) {
+          lock.unlock();
+          latest_.store(drops.read(), std::memory_order_relaxed);
+          lock.lock();
+          wake_.wait_for(lock, std::chrono::seconds(1), [this] { return stop_; });
+        }
+      }) {}
+
+SocketDropsWatcher::~SocketDropsWatcher() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
 }
 
 }  // namespace motormix::node
