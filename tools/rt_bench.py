@@ -114,7 +114,9 @@ def main():
             granted = (f"{rt['policy']} {rt['priority']}".strip() + ", cpus "
                        + ",".join(str(c) for c in rt["cpus"])
                        + (", locked" if rt["memory_locked"] else "")
-                       + (", stack prefaulted" if rt["stack_prefaulted"] else ""))
+                       + (", stack prefaulted" if rt["stack_prefaulted"] else "")
+                       + (f", other threads on cpus {','.join(str(c) for c in rt['other_cpus'])}"
+                          if rt.get("other_threads_moved") else ""))
             p99_ok = wake["p99"] <= floor["p99"] + 10
             max_ok = wake["max"] <= floor["max"] + 50
             verdict = ("met" if p99_ok and max_ok else

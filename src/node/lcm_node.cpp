@@ -203,7 +203,12 @@ class Node {
         << "\", \"priority\": " << granted.priority << ", \"cpus\": [";
     for (std::size_t i = 0; i < granted.cpus.size(); ++i) out << (i ? ", " : "") << granted.cpus[i];
     out << "], \"memory_locked\": " << (granted.memory_locked ? "true" : "false")
-        << ", \"stack_prefaulted\": " << (granted.stack_prefaulted ? "true" : "false") << "},\n";
+        << ", \"stack_prefaulted\": " << (granted.stack_prefaulted ? "true" : "false")
+        << ", \"other_threads_moved\": " << granted.other_threads << ", \"other_cpus\": [";
+    for (std::size_t i = 0; i < granted.other_cpus.size(); ++i) {
+      out << (i ? ", " : "") << granted.other_cpus[i];
+    }
+    out << "]},\n";
     section("wake_latency_us", wake_run_);
     section("period_us", period_run_);
     out << "  \"units\": \"microseconds; percentiles in whole microseconds\"\n}\n";
@@ -368,12 +373,13 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return 1;
   }
   log_summary(config, options.lcm_url, log);
-  // Before the real-time settings: the watcher keeps the default scheduler.
   const SocketDropsWatcher drops;
+  Node node(config, lcm, drops, log);
+  node.subscribe();  // starts LCM's receive thread
+  // After every other thread has started: they keep the default scheduler,
+  // and move off the loop's CPUs (realtime.hpp).
   const RealtimeGranted granted = apply_realtime(config.realtime, log);
   log << "motormix: scheduling: " << describe(granted) << std::endl;
-  Node node(config, lcm, drops, log);
-  node.subscribe();
 
   const auto period_ns = static_cast<long long>(std::llround(1e9 / config.loop_rate_hz));
   itimerspec spec{};

@@ -1,9 +1,12 @@
 #include "node/realtime.hpp"
 
+#include <dirent.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <ostream>
 #include <sstream>
@@ -42,6 +45,31 @@ std::string policy_name(int policy) {
   }
 }
 
+// Every thread of this process but the caller, to the online CPUs outside
+// `loop` (none left: they stay where they are).
+void move_other_threads(const cpu_set_t& loop, RealtimeGranted& granted) {
+  cpu_set_t others;
+  CPU_ZERO(&others);
+  const long online = sysconf(_SC_NPROCESSORS_ONLN);
+  for (int cpu = 0; cpu < online && cpu < CPU_SETSIZE; ++cpu) {
+    if (!CPU_ISSET(cpu, &loop)) CPU_SET(cpu, &others);
+  }
+  if (CPU_COUNT(&others) == 0) return;
+  for (int cpu = 0; cpu < online && cpu < CPU_SETSIZE; ++cpu) {
+    if (CPU_ISSET(cpu, &others)) granted.other_cpus.push_back(cpu);
+  }
+  const pid_t self = static_cast<pid_t>(gettid());
+  DIR* tasks = opendir("/proc/self/task");
+  if (tasks == nullptr) return;
+  while (const dirent* entry = readdir(tasks)) {
+    if (entry->d_name[0] == '.') continue;
+    const pid_t tid = static_cast<pid_t>(std::atoi(entry->d_name));
+    if (tid == self || tid <= 0) continue;
+    if (sched_setaffinity(tid, sizeof others, &others) == 0) ++granted.other_threads;
+  }
+  closedir(tasks);
+}
+
 }  // namespace
 
 RealtimeGranted apply_realtime(const config::Realtime& rt, std::ostream& log) {
@@ -63,6 +91,8 @@ RealtimeGranted apply_realtime(const config::Realtime& rt, std::ostream& log) {
     if (sched_setaffinity(0, sizeof set, &set) != 0) {
       log << "motormix: warning: CPU affinity refused (" << std::strerror(errno) << "); continuing"
           << std::endl;
+    } else {
+      move_other_threads(set, granted);
     }
   }
   if (rt.priority > 0) {
@@ -96,6 +126,13 @@ std::string describe(const RealtimeGranted& granted) {
   for (std::size_t i = 0; i < granted.cpus.size(); ++i) s << (i ? "," : " ") << granted.cpus[i];
   s << (granted.memory_locked ? ", memory locked" : ", memory not locked");
   if (granted.stack_prefaulted) s << ", stack prefaulted";
+  if (granted.other_threads > 0) {
+    s << ", " << granted.other_threads << " other thread" << (granted.other_threads > 1 ? "s" : "")
+      << " moved to cpus";
+    for (std::size_t i = 0; i < granted.other_cpus.size(); ++i) {
+      s << (i ? "," : " ") << granted.other_cpus[i];
+    }
+  }
   return s.str();
 }
 

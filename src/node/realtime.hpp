@@ -19,9 +19,19 @@ struct RealtimeGranted {
   std::vector<int> cpus;  // the CPUs the thread may run on
   bool memory_locked = false;
   bool stack_prefaulted = false;
+  // The process's other threads (LCM's receive thread, the drops reader),
+  // moved off the loop's CPUs when `cpus` leaves some free.
+  int other_threads = 0;
+  std::vector<int> other_cpus;
 };
 
-// Applies `rt`, logging each refusal on `log`, and returns what is in force.
+// Applies `rt` to the calling thread (the loop), logging each refusal on
+// `log`, and returns what is in force. Call it after every other thread has
+// started: those keep the default scheduler (a thread started later would
+// inherit SCHED_FIFO and share the loop's priority), and with `cpus` set
+// they are moved to the CPUs the loop does not use, so that LCM's receive
+// thread, which wakes for every message on the bus (the mixer's own outputs
+// included), never runs on the loop's CPU.
 RealtimeGranted apply_realtime(const config::Realtime& rt, std::ostream& log);
 
 // One line: "SCHED_FIFO 80, cpus 1, memory locked, stack prefaulted".
