@@ -4,7 +4,7 @@
 // output. No LCM and no clock here, so a bus, a log replay and a test all
 // drive the same logic.
 //
-// Safety rules (documented in the README):
+// Safety rules (documented in docs/running.md):
 // - Outputs are the disarmed values until a fresh setpoint with armed=true
 //   arrives while a fresh pid is in force, and only after a setpoint with
 //   armed=false has been seen: arming needs an explicit disarmed -> armed

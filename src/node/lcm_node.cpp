@@ -368,7 +368,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     log << "motormix: cannot open LCM" << (options.lcm_url.empty() ? "" : " at " + options.lcm_url)
         << ". For UDP multicast the host needs an interface up and a multicast route "
            "(on a host with only loopback: ip link set lo up; ip route add 224.0.0.0/4 dev lo); "
-           "see Troubleshooting in the README"
+           "see docs/troubleshooting.md"
         << std::endl;
     return 1;
   }

@@ -260,7 +260,7 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
   lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
     log << "motormix monitor: cannot open LCM" << (o.lcm_url.empty() ? "" : " at " + o.lcm_url)
-        << " (see Troubleshooting in the README)\n";
+        << " (see docs/troubleshooting.md)\n";
     if (signal_fd >= 0) close(signal_fd);
     return 1;
   }
