@@ -190,7 +190,7 @@ class Node {
 
   // The whole run's loop timing as JSON (`motormix run --timing-report`).
   void write_timing_report(std::ostream& out, const RealtimeGranted& granted,
-                           std::int64_t ticks) {
+                           std::int64_t ticks) const {
     const auto section = [&out](const char* name, const LatencyHistogram& h) {
       out << "  \"" << name << "\": {\"count\": " << h.count() << ", \"min\": " << h.min()
           << ", \"mean\": " << h.mean() << ", \"p50\": " << h.percentile(0.5)
@@ -199,7 +199,7 @@ class Node {
     };
     out << "{\n  \"loop_rate_hz\": " << config_.loop_rate_hz << ",\n  \"timer_ticks\": " << ticks
         << ",\n  \"overruns\": " << overruns_ << ",\n  \"kernel_drops\": "
-        << SocketDrops().read() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
+        << own_udp_socket_drops() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
         << "\", \"priority\": " << granted.priority << ", \"cpus\": [";
     for (std::size_t i = 0; i < granted.cpus.size(); ++i) out << (i ? ", " : "") << granted.cpus[i];
     out << "], \"memory_locked\": " << (granted.memory_locked ? "true" : "false")

@@ -62,7 +62,7 @@ bool add_drops(const char* table, const std::vector<unsigned long>& inodes, std:
 
 }  // namespace
 
-std::int64_t SocketDrops::read() {
+std::int64_t own_udp_socket_drops() {
   // Looked up every time: LCM opens its receive socket on the first
   // subscription, after a reader may have started.
   const std::vector<unsigned long> inodes = own_socket_inodes();
@@ -76,11 +76,10 @@ std::int64_t SocketDrops::read() {
 
 SocketDropsWatcher::SocketDropsWatcher()
     : thread_([this] {
-        SocketDrops drops;
         std::unique_lock<std::mutex> lock(mutex_);
         while (!stop_) {
           lock.unlock();
-          latest_.store(drops.read(), std::memory_order_relaxed);
+          latest_.store(own_udp_socket_drops(), std::memory_order_relaxed);
           lock.lock();
           wake_.wait_for(lock, std::chrono::seconds(1), [this] { return stop_; });
         }

@@ -16,14 +16,11 @@
 
 namespace motormix::node {
 
-class SocketDrops {
- public:
-  // Since the sockets were opened; -1 when /proc cannot be read (no procfs,
-  // or no UDP socket of this process in the tables yet).
-  std::int64_t read();
-};
+// Since the sockets were opened; -1 when /proc cannot be read (no procfs,
+// or no UDP socket of this process in the tables yet).
+std::int64_t own_udp_socket_drops();
 
-// Reads SocketDrops once a second on a thread of its own: the kernel takes
+// Reads own_udp_socket_drops() once a second on a thread of its own: the kernel takes
 // about 0.2 ms to produce /proc/net/udp (measured on a private bus), far too
 // long for the loop thread (at 8 kHz it was the p99.9 of the wake-up
 // lateness). Start it before the loop thread takes its real-time settings,
