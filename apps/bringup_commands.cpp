@@ -6,7 +6,7 @@
 #include "commands.hpp"
 
 #include <motormix/config/load_config.hpp>
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "node/wall_clock.hpp"
 
 #include <motormix/mixer_status_t.hpp>
@@ -142,9 +142,9 @@ int motor_test(const MotorTestCommand& cmd) {
                 << cmd.wait_s << " s: is motormix run running with this configuration?\n";
       return kExitRuntime;
     }
-    const auto result = static_cast<node::MotorTestResult>(watch.latest->motor_test_result);
-    if (result != node::MotorTestResult::kOk) {
-      std::cerr << "motormix motor-test: refused: " << node::to_string(result) << "\n";
+    const auto result = static_cast<loop::MotorTestResult>(watch.latest->motor_test_result);
+    if (result != loop::MotorTestResult::kOk) {
+      std::cerr << "motormix motor-test: refused: " << loop::to_string(result) << "\n";
       return kExitRuntime;
     }
     std::cout << where(*config, m) << ": spinning at " << cmd.throttle << " for " << cmd.seconds

@@ -1,7 +1,7 @@
 #include <motormix/config/load_config.hpp>
 
-#include "config/paparazzi_import.hpp"
-#include "config/vehicle_physics_reader.hpp"
+#include "paparazzi_import.hpp"
+#include "vehicle_physics_reader.hpp"
 #include "config/yaml_reader.hpp"
 
 #include <motormix/presets.hpp>

@@ -1,4 +1,4 @@
-#include "config/paparazzi_import.hpp"
+#include "paparazzi_import.hpp"
 
 #include <motormix/motor_vector.hpp>
 

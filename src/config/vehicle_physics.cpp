@@ -2,7 +2,7 @@
 // defaults derived from the geometry and the output stage (documented in
 // docs/simulation.md).
 
-#include "config/vehicle_physics_reader.hpp"
+#include "vehicle_physics_reader.hpp"
 
 #include "config/yaml_reader.hpp"
 

@@ -3,12 +3,12 @@
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/matrix_export.hpp>
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "node/messages.hpp"
-#include "node/latency_histogram.hpp"
-#include "node/realtime.hpp"
-#include "node/socket_drops.hpp"
-#include "node/window_stats.hpp"
+#include "latency_histogram.hpp"
+#include "realtime.hpp"
+#include "socket_drops.hpp"
+#include "window_stats.hpp"
 
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
@@ -116,17 +116,17 @@ class Node {
       period_run_.add(period, now_us);
     }
     last_cycle_us_ = now_us;
-    const CycleResult& r = loop_.cycle(now_us);
+    const loop::CycleResult& r = loop_.cycle(now_us);
     if (r.state_changed) {
       log_ << "motormix: " << to_string(r.state);
-      if (r.state == LoopState::kFailsafe) log_ << " (" << to_string(r.reason) << ")";
+      if (r.state == loop::LoopState::kFailsafe) log_ << " (" << to_string(r.reason) << ")";
       log_ << std::endl;
     }
     if (r.failed != logged_failed_) {
       log_failures(r);
       logged_failed_ = r.failed;
     }
-    if (motor_test_answer_due_ && r.motor_test_result != MotorTestResult::kOk) {
+    if (motor_test_answer_due_ && r.motor_test_result != loop::MotorTestResult::kOk) {
       log_ << "motormix: motor test refused: " << to_string(r.motor_test_result) << std::endl;
     }
     if (r.motor_test_changed) {
@@ -149,7 +149,7 @@ class Node {
     }
   }
 
-  void log_failures(const CycleResult& r) {
+  void log_failures(const loop::CycleResult& r) {
     log_ << "motormix: failed motors:";
     if (r.failed == 0) log_ << " none";
     for (int i = 0; i < config_.motors(); ++i) {
@@ -169,7 +169,7 @@ class Node {
   // At most one line per second, and only when something was rejected: a
   // flood of bad input cannot flood the log.
   void warn_about_rejections(std::int64_t now_us) {
-    const Counters& c = loop_.counters();
+    const loop::Counters& c = loop_.counters();
     const std::int64_t total = c.rejected();
     if (total == warned_total_ || now_us - last_warning_us_ < 1'000'000) return;
     log_ << "motormix: warning: " << total - warned_total_
@@ -223,9 +223,9 @@ class Node {
 
   // Final word on shutdown: every output at its disarmed value.
   void publish_disarmed() {
-    CycleResult r = loop_.last();
+    loop::CycleResult r = loop_.last();
     loop_.mixer().disarm(r.mix);
-    r.state = LoopState::kDisarmed;
+    r.state = loop::LoopState::kDisarmed;
     publish_pwm(r);
     publish_status(r);
   }
@@ -268,7 +268,7 @@ class Node {
     motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
   }
 
-  void publish_pwm(const CycleResult& r) {
+  void publish_pwm(const loop::CycleResult& r) {
     fill_pwm_message(pwm_msg_, r, wall_us());
     const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
     if (len > 0) {
@@ -276,7 +276,7 @@ class Node {
     }
   }
 
-  void publish_status(const CycleResult& r) {
+  void publish_status(const loop::CycleResult& r) {
     LoopTiming timing;
     timing.period_us = period_stats_.take();
     timing.compute_us = compute_stats_.take();
@@ -296,7 +296,7 @@ class Node {
   const SocketDropsWatcher& drops_;
   lcm::LCM& lcm_;
   std::ostream& log_;
-  ControlLoop loop_;
+  loop::ControlLoop loop_;
   motor_pwm_t pwm_msg_;
   mixer_status_t status_msg_;
   std::vector<uint8_t> pwm_buffer_;

@@ -1,7 +1,7 @@
 #include "node/log_replay.hpp"
 
 #include <motormix/config/build_mixer.hpp>
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "node/log_reader.hpp"
 #include "node/messages.hpp"
 
@@ -74,8 +74,8 @@ class Writer {
 // gap or tail stay far from the int64 limit.
 constexpr std::int64_t kLatestTimestampUs = 100'000'000'000'000'000;
 
-Counters add(const Counters& a, const Counters& b) {
-  Counters s;
+loop::Counters add(const loop::Counters& a, const loop::Counters& b) {
+  loop::Counters s;
   s.cycles = a.cycles + b.cycles;
   s.setpoint_received = a.setpoint_received + b.setpoint_received;
   s.pid_received = a.pid_received + b.pid_received;
@@ -151,8 +151,8 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   // The log is replayed in segments of continuous time. A segment starts as a
   // freshly started mixer would (disarmed until the controller arms it), and
   // no loop cycle is ever synthesized across the gap between two segments.
-  std::optional<ControlLoop> loop;
-  Counters totals;
+  std::optional<loop::ControlLoop> loop;
+  loop::Counters totals;
   std::int64_t segment_first = 0;
   std::int64_t next_tick = 0;
   std::int64_t next_status = 0;
@@ -166,7 +166,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
 
   MotorMask last_failed = config.failed_motors;
   const auto cycle_at = [&](std::int64_t t) {
-    const CycleResult& r = loop->cycle(t);
+    const loop::CycleResult& r = loop->cycle(t);
     fill_pwm_message(pwm, r, t);
     out.write(config.channels.motor_pwm, t, pwm);
     ++summary.outputs;

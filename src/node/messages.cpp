@@ -11,7 +11,7 @@ void size_pwm_message(motor_pwm_t& msg, int motors) {
   msg.direction.assign(static_cast<std::size_t>(motors), 0);
 }
 
-void fill_pwm_message(motor_pwm_t& msg, const CycleResult& r, std::int64_t utime) {
+void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t utime) {
   msg.utime = utime;
   for (int i = 0; i < msg.num_motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -25,7 +25,7 @@ void fill_pwm_message(motor_pwm_t& msg, const CycleResult& r, std::int64_t utime
   msg.failed_motors = static_cast<int32_t>(r.mix.armed ? r.mix.failed : r.failed);
 }
 
-void fill_status_message(mixer_status_t& s, const CycleResult& r, const Counters& c,
+void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
                          std::int64_t utime) {
   s.utime = utime;
@@ -95,14 +95,14 @@ bool decode_whole(const void* data, int size, Message& msg) {
 }
 }  // namespace
 
-bool decode_setpoint(const void* data, int size, SetpointSample& out) {
+bool decode_setpoint(const void* data, int size, loop::SetpointSample& out) {
   setpoint_t msg{};
   if (!decode_whole(data, size, msg)) return false;
-  out = SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0};
+  out = loop::SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0};
   return true;
 }
 
-bool decode_motor_status(const void* data, int size, MotorStatusSample& out) {
+bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out) {
   // fingerprint (8) + utime (8) + num_motors (4, big-endian) + one byte per motor.
   constexpr int kHeader = 20;
   if (data == nullptr || size < kHeader) return false;
@@ -114,35 +114,35 @@ bool decode_motor_status(const void* data, int size, MotorStatusSample& out) {
   if (n < 0 || n > kMaxMotors || size != kHeader + n) return false;
   motor_status_t msg{};
   if (!decode_whole(data, size, msg)) return false;
-  out = MotorStatusSample{msg.utime, msg.num_motors, 0};
+  out = loop::MotorStatusSample{msg.utime, msg.num_motors, 0};
   for (int i = 0; i < msg.num_motors; ++i) {
     if (msg.failed[static_cast<std::size_t>(i)] != 0) out.failed |= std::uint32_t{1} << i;
   }
   return true;
 }
 
-bool decode_battery(const void* data, int size, BatterySample& out) {
+bool decode_battery(const void* data, int size, loop::BatterySample& out) {
   battery_t msg{};
   if (!decode_whole(data, size, msg)) return false;
-  out = BatterySample{msg.utime, msg.voltage};
+  out = loop::BatterySample{msg.utime, msg.voltage};
   return true;
 }
 
-bool decode_pid(const void* data, int size, PidSample& out) {
+bool decode_pid(const void* data, int size, loop::PidSample& out) {
   pid_t msg{};
   if (!decode_whole(data, size, msg)) return false;
-  out = PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw};
+  out = loop::PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw};
   return true;
 }
 
-bool decode_motor_test(const void* data, int size, MotorTestSample& out) {
+bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out) {
   motor_test_t msg{};
   if (!decode_whole(data, size, msg)) return false;
-  out = MotorTestSample{msg.utime, msg.motor, msg.throttle, msg.duration_s};
+  out = loop::MotorTestSample{msg.utime, msg.motor, msg.throttle, msg.duration_s};
   return true;
 }
 
-bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size,
+bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, int size,
                    std::int64_t now_us, std::int64_t wall_us) {
   // Decodes into `sample` and hands it over with `on`; undecodable bytes are counted.
   const auto hand_over = [&](auto sample, auto decode, auto on) {
@@ -150,24 +150,24 @@ bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size
       loop.on_undecodable();
       return false;
     }
-    return (loop.*on)(sample, now_us, wall_us) == Rejection::kNone;
+    return (loop.*on)(sample, now_us, wall_us) == loop::Rejection::kNone;
   };
   switch (kind) {
     case InputKind::kSetpoint:
-      return hand_over(SetpointSample{}, decode_setpoint, &ControlLoop::on_setpoint);
+      return hand_over(loop::SetpointSample{}, decode_setpoint, &loop::ControlLoop::on_setpoint);
     case InputKind::kPid:
-      return hand_over(PidSample{}, decode_pid, &ControlLoop::on_pid);
+      return hand_over(loop::PidSample{}, decode_pid, &loop::ControlLoop::on_pid);
     case InputKind::kMotorStatus:
-      return hand_over(MotorStatusSample{}, decode_motor_status, &ControlLoop::on_motor_status);
+      return hand_over(loop::MotorStatusSample{}, decode_motor_status, &loop::ControlLoop::on_motor_status);
     case InputKind::kBattery:
-      return hand_over(BatterySample{}, decode_battery, &ControlLoop::on_battery);
+      return hand_over(loop::BatterySample{}, decode_battery, &loop::ControlLoop::on_battery);
     case InputKind::kMotorTest: {
-      MotorTestSample sample;
+      loop::MotorTestSample sample;
       if (!decode_motor_test(data, size, sample)) {
         loop.on_undecodable();
         return false;
       }
-      return loop.on_motor_test(sample, now_us, wall_us) == MotorTestResult::kOk;
+      return loop.on_motor_test(sample, now_us, wall_us) == loop::MotorTestResult::kOk;
     }
   }
   return false;

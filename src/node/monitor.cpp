@@ -1,6 +1,6 @@
 #include "node/monitor.hpp"
 
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -27,12 +27,12 @@ using Clock = std::chrono::steady_clock;
 // The wire's codes carry the control loop's own enums: their names are the
 // ones the mixer logs (a code this build does not know reads "?").
 std::string state_name(int8_t s) {
-  std::string name = to_string(static_cast<LoopState>(s));
+  std::string name = to_string(static_cast<loop::LoopState>(s));
   for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return name;
 }
 
-const char* reason_name(int8_t r) { return to_string(static_cast<FailsafeReason>(r)); }
+const char* reason_name(int8_t r) { return to_string(static_cast<loop::FailsafeReason>(r)); }
 
 const char* failure_name(int8_t f) {
   switch (f) {

@@ -1,4 +1,4 @@
-#include "node/realtime.hpp"
+#include "realtime.hpp"
 
 #include <dirent.h>
 #include <sched.h>

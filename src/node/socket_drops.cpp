@@ -1,4 +1,4 @@
-#include "node/socket_drops.hpp"
+#include "socket_drops.hpp"
 
 #include <dirent.h>
 #include <unistd.h>

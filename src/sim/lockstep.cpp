@@ -165,7 +165,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   const bool wheeled = config_in.thrust_range() == ThrustRange::kBipolar;
   const config::Config config = scenario_config(config_in, scenario);
   VehicleModel vehicle(config);
-  node::ControlLoop loop(config, std::move(mixer));
+  loop::ControlLoop loop(config, std::move(mixer));
   const double tau = (config.physics.time_constant_up_s + config.physics.time_constant_down_s) / 2;
   Controller controller(config, loop.mixer(), vehicle.command_effect(), config.physics.mass_kg,
                         config.physics.inertia_kgm2, tau);
@@ -186,10 +186,10 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   double next_battery = 0.0;
   double next_motor_status = 0.0;
   MotorMask reported = 0;
-  node::SetpointSample setpoint;
-  node::PidSample pid;
-  node::BatterySample battery;
-  node::MotorStatusSample motor_status;
+  loop::SetpointSample setpoint;
+  loop::PidSample pid;
+  loop::BatterySample battery;
+  loop::MotorStatusSample motor_status;
 
   for (std::int64_t k = 0; k < cycles; ++k) {
     const double t = static_cast<double>(k) * period;
@@ -225,8 +225,8 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
       }
     }
 
-    const node::CycleResult& cycle = loop.cycle(now);
-    mixer_armed = cycle.state == node::LoopState::kArmed;
+    const loop::CycleResult& cycle = loop.cycle(now);
+    mixer_armed = cycle.state == loop::LoopState::kArmed;
     unallocated = mixer_armed ? cycle.mix.allocation.unallocated : AxisVector::Zero();
     if (observer) {
       SimFrame f;

@@ -1,7 +1,7 @@
 #include "sim/scenario.hpp"
 
 #include "config/yaml_reader.hpp"
-#include "sim/shipped_scenarios.hpp"
+#include "shipped_scenarios.hpp"
 
 #include <algorithm>
 #include <fstream>

@@ -8,7 +8,7 @@
 // cycle runs 2.5 ms later, and its outputs must be in range.
 
 #include "fuzz_checks.hpp"
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "node/messages.hpp"
 
 #include <motormix/config/build_mixer.hpp>
@@ -33,9 +33,9 @@ const motormix::config::Config& fuzz_config() {
 #ifndef MOTORMIX_FUZZ_SETPOINT
 // Well-formed inputs the other channels get, made from the chunk's bytes so
 // the fuzzer also steers arming, throttle, roll and pitch.
-motormix::node::SetpointSample setpoint_from(const std::uint8_t* msg, std::size_t len,
+motormix::loop::SetpointSample setpoint_from(const std::uint8_t* msg, std::size_t len,
                                              std::int64_t utime) {
-  motormix::node::SetpointSample s;
+  motormix::loop::SetpointSample s;
   s.utime = utime;
   s.armed = len > 0 && (msg[0] & 1U);
   s.throttle = len > 1 ? msg[1] / 255.0 : 0.0;
@@ -47,7 +47,7 @@ motormix::node::SetpointSample setpoint_from(const std::uint8_t* msg, std::size_
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace motormix;
-  node::ControlLoop loop(fuzz_config(), config::build_mixer(fuzz_config()));
+  loop::ControlLoop loop(fuzz_config(), config::build_mixer(fuzz_config()));
   std::int64_t now = 1'000'000;
   const std::int64_t wall_offset = 1'764'000'000'000'000;
   std::size_t at = 0;
@@ -56,26 +56,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint8_t* msg = data + at + 1;
     at += 1 + len;
 #ifdef MOTORMIX_FUZZ_SETPOINT
-    node::SetpointSample s;
+    loop::SetpointSample s;
     if (node::decode_setpoint(msg, static_cast<int>(len), s)) {
       loop.on_setpoint(s, now, now + wall_offset);
     } else {
       loop.on_undecodable();
     }
-    node::PidSample p;
+    loop::PidSample p;
     p.utime = now + wall_offset;
     p.roll = len > 0 ? (msg[0] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #elif defined(MOTORMIX_FUZZ_FAILURES)
     if (at % 2 == 0) {
-      node::MotorStatusSample m;
+      loop::MotorStatusSample m;
       if (node::decode_motor_status(msg, static_cast<int>(len), m)) {
         loop.on_motor_status(m, now, now + wall_offset);
       } else {
         loop.on_undecodable();
       }
     } else {
-      node::BatterySample b;
+      loop::BatterySample b;
       if (node::decode_battery(msg, static_cast<int>(len), b)) {
         loop.on_battery(b, now, now + wall_offset);
       } else {
@@ -83,13 +83,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     }
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
-    node::PidSample p;
+    loop::PidSample p;
     p.utime = now + wall_offset;
     p.roll = len > 3 ? (msg[3] - 128) / 128.0 : 0.0;
     p.pitch = len > 4 ? (msg[4] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #else
-    node::PidSample p;
+    loop::PidSample p;
     if (node::decode_pid(msg, static_cast<int>(len), p)) {
       loop.on_pid(p, now, now + wall_offset);
     } else {
@@ -98,9 +98,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
 #endif
     now += len > 2 && msg[2] == 0xFF ? 200'000 : 2'500;  // sometimes long enough to go stale
-    const node::CycleResult& r = loop.cycle(now);
+    const loop::CycleResult& r = loop.cycle(now);
     motormix::fuzz::check_outputs(loop.mixer(), r.mix);
-    const node::Counters& c = loop.counters();
+    const loop::Counters& c = loop.counters();
     if (c.rejected() < 0 || c.cycles <= 0) std::abort();
   }
   return 0;

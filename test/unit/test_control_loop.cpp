@@ -1,7 +1,7 @@
 // The control loop's decisions with injected time: arming, staleness,
 // failsafe, recovery and rejection accounting.
 
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -11,12 +11,12 @@
 namespace motormix::test {
 namespace {
 
-using node::ControlLoop;
-using node::FailsafeReason;
-using node::LoopState;
-using node::PidSample;
-using node::Rejection;
-using node::SetpointSample;
+using loop::ControlLoop;
+using loop::FailsafeReason;
+using loop::LoopState;
+using loop::PidSample;
+using loop::Rejection;
+using loop::SetpointSample;
 
 class ControlLoopTest : public ::testing::Test {
  protected:
@@ -42,7 +42,7 @@ class ControlLoopTest : public ::testing::Test {
     setpoint(now, true);
     ASSERT_EQ(loop_.cycle(now).state, LoopState::kArmed);
   }
-  static void expect_disarmed_outputs(const node::CycleResult& r) {
+  static void expect_disarmed_outputs(const loop::CycleResult& r) {
     EXPECT_FALSE(r.mix.armed);
     for (int i = 0; i < r.mix.output.size(); ++i) EXPECT_EQ(r.mix.output[i], 1000.0);
   }

@@ -2,7 +2,7 @@
 // motor_status (failure sets in flight), battery voltage (thrust
 // compensation), their decoders against hostile bytes, and their config keys.
 
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "node/messages.hpp"
 #include "test_support.hpp"
 
@@ -14,13 +14,13 @@
 namespace motormix::test {
 namespace {
 
-using node::BatterySample;
-using node::ControlLoop;
-using node::LoopState;
-using node::MotorStatusSample;
-using node::PidSample;
-using node::Rejection;
-using node::SetpointSample;
+using loop::BatterySample;
+using loop::ControlLoop;
+using loop::LoopState;
+using loop::MotorStatusSample;
+using loop::PidSample;
+using loop::Rejection;
+using loop::SetpointSample;
 
 // The compensated gain and command after the loop's float and double steps.
 constexpr double kCompensatedGain = 1e-9;
@@ -60,7 +60,7 @@ TEST_F(FailureInputsTest, MotorStatusSwitchesTheFailureSetInFlight) {
   EXPECT_EQ(loop_->last().failed, 0U);
   ASSERT_EQ(status(1 * kMs, 0b000100), Rejection::kNone);
   inputs(2 * kMs, true);
-  const node::CycleResult& r = loop_->cycle(2 * kMs);
+  const loop::CycleResult& r = loop_->cycle(2 * kMs);
   EXPECT_EQ(r.state, LoopState::kArmed) << "a failure does not disarm";
   EXPECT_EQ(r.failed, 0b000100U);
   EXPECT_EQ(r.failure, FailureHandling::kReallocated);
@@ -108,7 +108,7 @@ TEST_F(FailureInputsTest, BatteryScalesTheThrustDemandWhileFresh) {
   ASSERT_EQ(loop_->on_battery(BatterySample{utime_ += 1000, 14.0}, 1 * kMs, kWall),
             Rejection::kNone);
   inputs(2 * kMs, true);
-  const node::CycleResult& r = loop_->cycle(2 * kMs);
+  const loop::CycleResult& r = loop_->cycle(2 * kMs);
   EXPECT_EQ(r.battery, BatteryState::kOk);
   EXPECT_NEAR(r.thrust_gain, 16.8 / 14.0, kCompensatedGain);
   EXPECT_NEAR(r.mix.command[0], healthy * 16.8 / 14.0, kCompensatedGain);
@@ -119,7 +119,7 @@ TEST_F(FailureInputsTest, BatteryScalesTheThrustDemandWhileFresh) {
     ASSERT_EQ(loop_->cycle(t * kMs).state, LoopState::kArmed);
   }
   inputs(600 * kMs, true);
-  const node::CycleResult& stale = loop_->cycle(600 * kMs);
+  const loop::CycleResult& stale = loop_->cycle(600 * kMs);
   EXPECT_EQ(stale.battery, BatteryState::kStale);
   EXPECT_EQ(stale.thrust_gain, 1.0);
   EXPECT_NEAR(stale.mix.command[0], healthy, kCompensatedGain);
@@ -152,7 +152,7 @@ TEST_F(FailureInputsTest, InputAgesAreReported) {
   EXPECT_EQ(loop_->cycle(0).input_age_ms[3], -1.0);
   inputs(10 * kMs, false);
   status(10 * kMs, 0);
-  const node::CycleResult& r = loop_->cycle(25 * kMs);
+  const loop::CycleResult& r = loop_->cycle(25 * kMs);
   EXPECT_DOUBLE_EQ(r.input_age_ms[0], 15.0);
   EXPECT_DOUBLE_EQ(r.input_age_ms[1], 15.0);
   EXPECT_DOUBLE_EQ(r.input_age_ms[2], -1.0);

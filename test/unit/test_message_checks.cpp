@@ -1,4 +1,4 @@
-#include "node/message_checks.hpp"
+#include "loop/message_checks.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,11 +7,11 @@
 namespace motormix::test {
 namespace {
 
-using node::check_pid;
-using node::check_setpoint;
-using node::PidSample;
-using node::Rejection;
-using node::SetpointSample;
+using loop::check_pid;
+using loop::check_setpoint;
+using loop::PidSample;
+using loop::Rejection;
+using loop::SetpointSample;
 
 constexpr std::int64_t kFirst = std::numeric_limits<std::int64_t>::min();
 

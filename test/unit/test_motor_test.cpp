@@ -1,7 +1,7 @@
 // Motor tests in the control loop, with injected time: which requests are
 // obeyed, what the outputs do while one runs, and every way it ends.
 
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -12,12 +12,12 @@
 namespace motormix::test {
 namespace {
 
-using node::ControlLoop;
-using node::LoopState;
-using node::MotorTestResult;
-using node::MotorTestSample;
-using node::PidSample;
-using node::SetpointSample;
+using loop::ControlLoop;
+using loop::LoopState;
+using loop::MotorTestResult;
+using loop::MotorTestSample;
+using loop::PidSample;
+using loop::SetpointSample;
 
 constexpr double kDisarmedUs = 900.0;  // config/quad_x.yaml output.disarmed
 constexpr std::int64_t kSecond = 1'000'000;
@@ -48,7 +48,7 @@ class MotorTestLoop : public ::testing::Test {
 
 TEST_F(MotorTestLoop, SpinsTheRightMotorAloneWithTheOutputsDisarmed) {
   ASSERT_EQ(request(0, 3, 0.1, 1.0), MotorTestResult::kOk);
-  const node::CycleResult& r = loop_.cycle(10 * kMs);
+  const loop::CycleResult& r = loop_.cycle(10 * kMs);
   EXPECT_EQ(r.state, LoopState::kDisarmed);
   EXPECT_FALSE(r.mix.armed);
   EXPECT_EQ(r.motor_test, 2);
@@ -67,7 +67,7 @@ TEST_F(MotorTestLoop, SpinsTheRightMotorAloneWithTheOutputsDisarmed) {
 TEST_F(MotorTestLoop, EndsAtItsDurationWithDisarmedOutputs) {
   ASSERT_EQ(request(0, 1, 0.1, 0.5), MotorTestResult::kOk);
   EXPECT_EQ(loop_.cycle(kSecond / 2 - 1).motor_test, 0);
-  const node::CycleResult& r = loop_.cycle(kSecond / 2);
+  const loop::CycleResult& r = loop_.cycle(kSecond / 2);
   EXPECT_EQ(r.motor_test, -1);
   EXPECT_TRUE(r.motor_test_changed);
   for (int i = 0; i < 4; ++i) EXPECT_EQ(r.mix.output[i], kDisarmedUs);
@@ -111,7 +111,7 @@ TEST_F(MotorTestLoop, EndsAtTheFirstArmedSetpoint) {
   ASSERT_EQ(request(kSecond, 2, 0.1, 2.0), MotorTestResult::kOk);
   ASSERT_EQ(loop_.cycle(kSecond).motor_test, 1);
   setpoint(kSecond + kMs, true);
-  const node::CycleResult& r = loop_.cycle(kSecond + kMs);
+  const loop::CycleResult& r = loop_.cycle(kSecond + kMs);
   EXPECT_EQ(r.motor_test, -1);
   EXPECT_TRUE(r.motor_test_changed);
   EXPECT_EQ(r.state, LoopState::kArmed);  // and the pilot arms as usual
@@ -121,7 +121,7 @@ TEST_F(MotorTestLoop, ANewTestReplacesTheRunningOneAndMotorZeroStopsIt) {
   ASSERT_EQ(request(0, 1, 0.1, 2.0), MotorTestResult::kOk);
   ASSERT_EQ(loop_.cycle(kMs).motor_test, 0);
   ASSERT_EQ(request(2 * kMs, 4, 0.12, 2.0), MotorTestResult::kOk);
-  const node::CycleResult& r = loop_.cycle(3 * kMs);
+  const loop::CycleResult& r = loop_.cycle(3 * kMs);
   EXPECT_EQ(r.motor_test, 3);
   EXPECT_EQ(r.mix.output[0], kDisarmedUs);
   EXPECT_NEAR(r.mix.output[3], stage_output(0.12), kExact);
@@ -204,12 +204,12 @@ TEST_F(SpoolUp, OutputsRiseMonotonicallyFromDisarmedToTheMixedValue) {
 
 TEST_F(SpoolUp, ReportedAndRestartedAfterADisarm) {
   // A cycle every 5 ms (a longer gap is a stalled loop), armed from 5 ms.
-  const auto at = [&](std::int64_t t, bool armed) -> const node::CycleResult& {
+  const auto at = [&](std::int64_t t, bool armed) -> const loop::CycleResult& {
     inputs(t, armed, 0.0);
     return loop_.cycle(t);
   };
   at(0, false);
-  const node::CycleResult& r = at(5 * kMs, true);
+  const loop::CycleResult& r = at(5 * kMs, true);
   EXPECT_EQ(r.state, LoopState::kArmed);
   EXPECT_TRUE(r.spooling_up);
   EXPECT_DOUBLE_EQ(r.spool_up, 0.0);
@@ -220,7 +220,7 @@ TEST_F(SpoolUp, ReportedAndRestartedAfterADisarm) {
   EXPECT_FALSE(loop_.last().spooling_up);
   EXPECT_DOUBLE_EQ(loop_.last().spool_up, 1.0);
   EXPECT_EQ(at(t += 5 * kMs, false).spool_up, 0.0);         // disarmed
-  const node::CycleResult& again = at(t += 5 * kMs, true);  // and armed again: from the start
+  const loop::CycleResult& again = at(t += 5 * kMs, true);  // and armed again: from the start
   EXPECT_EQ(again.state, LoopState::kArmed);
   EXPECT_TRUE(again.spooling_up);
   EXPECT_DOUBLE_EQ(again.spool_up, 0.0);

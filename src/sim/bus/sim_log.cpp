@@ -46,7 +46,7 @@ void SimLogWriter::event(const std::string& channel, std::int64_t utime, const M
   log_->writeEvent(&e);
 }
 
-void SimLogWriter::write(const SimFrame& f, const node::Counters& counters) {
+void SimLogWriter::write(const SimFrame& f, const loop::Counters& counters) {
   const config::Channels& ch = config_.channels;
   setpoint_t sp;
   sp.utime = f.setpoint->utime;

@@ -4,7 +4,7 @@
 // messages' storage (sized once at set-up): no allocation per cycle.
 
 #include <motormix/config/config.hpp>
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 
 #include <motormix/battery_t.hpp>
 #include <motormix/mixer_status_t.hpp>
@@ -30,21 +30,21 @@ struct LoopTiming {
 // Sizes the variable-length fields for `motors` outputs.
 void size_pwm_message(motor_pwm_t& msg, int motors);
 
-void fill_pwm_message(motor_pwm_t& msg, const CycleResult& r, std::int64_t utime);
-void fill_status_message(mixer_status_t& msg, const CycleResult& r, const Counters& c,
+void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t utime);
+void fill_status_message(mixer_status_t& msg, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
                          std::int64_t utime);
 
 // Decoded inputs, or nothing when the bytes are not a whole message of the
 // type (wrong type, truncated, trailing bytes).
-bool decode_setpoint(const void* data, int size, SetpointSample& out);
-bool decode_pid(const void* data, int size, PidSample& out);
+bool decode_setpoint(const void* data, int size, loop::SetpointSample& out);
+bool decode_pid(const void* data, int size, loop::PidSample& out);
 // A motor_status_t is checked for a plausible length before it is decoded,
 // so a hostile num_motors cannot make the decoder allocate gigabytes.
 // Lengths other than 0..kMaxMotors decode as nothing.
-bool decode_motor_status(const void* data, int size, MotorStatusSample& out);
-bool decode_battery(const void* data, int size, BatterySample& out);
-bool decode_motor_test(const void* data, int size, MotorTestSample& out);
+bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out);
+bool decode_battery(const void* data, int size, loop::BatterySample& out);
+bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out);
 
 // The input channels a mixer reads.
 enum class InputKind : std::uint8_t { kSetpoint, kPid, kMotorStatus, kBattery, kMotorTest };
@@ -52,7 +52,7 @@ enum class InputKind : std::uint8_t { kSetpoint, kPid, kMotorStatus, kBattery, k
 // Decodes one input message of `kind` and hands it to the loop, which counts
 // it if it does not decode or is rejected. True when the loop accepted it.
 // Shared by the live node and the offline replay, so both read inputs alike.
-bool deliver_input(ControlLoop& loop, InputKind kind, const void* data, int size,
+bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, int size,
                    std::int64_t now_us, std::int64_t wall_us);
 
 }  // namespace motormix::node

@@ -1,11 +1,11 @@
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <utility>
 
-namespace motormix::node {
+namespace motormix::loop {
 
 namespace {
 
@@ -385,4 +385,4 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   return result_;
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::loop

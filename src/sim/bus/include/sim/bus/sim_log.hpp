@@ -27,7 +27,7 @@ class SimLogWriter {
  public:
   SimLogWriter(const std::string& path, const config::Config& config);
   bool good() const { return log_ && log_->good(); }
-  void write(const SimFrame& frame, const node::Counters& counters);
+  void write(const SimFrame& frame, const loop::Counters& counters);
 
  private:
   template <typename Message>

@@ -1,6 +1,6 @@
 #pragma once
 // One simulated run in lockstep: the scenario, the built-in controller, the
-// real control loop (node::ControlLoop: arming, staleness, battery
+// real control loop (loop::ControlLoop: arming, staleness, battery
 // compensation, motor_status handling) around the real Mixer and output
 // stage, and the vehicle model, all on the simulated clock. Nothing waits
 // on a wall clock, so a run is as fast as the CPU and the same inputs and
@@ -12,7 +12,7 @@
 // delivered when due; the control loop cycles; the vehicle integrates the
 // outputs over the period in steps of at most 1 ms.
 
-#include "node/control_loop.hpp"
+#include "loop/control_loop.hpp"
 #include "sim/controller.hpp"
 #include "sim/noise.hpp"
 #include "sim/scenario.hpp"
@@ -66,15 +66,15 @@ struct SimResult {
 // Everything one loop period produced, for logs and plots.
 struct SimFrame {
   std::int64_t utime = 0;
-  const node::SetpointSample* setpoint = nullptr;
-  const node::PidSample* pid = nullptr;
-  const node::CycleResult* cycle = nullptr;
+  const loop::SetpointSample* setpoint = nullptr;
+  const loop::PidSample* pid = nullptr;
+  const loop::CycleResult* cycle = nullptr;
   const VehicleModel* vehicle = nullptr;
-  const node::BatterySample* battery = nullptr;           // when one was sent this period
-  const node::MotorStatusSample* motor_status = nullptr;  // when one was sent this period
+  const loop::BatterySample* battery = nullptr;           // when one was sent this period
+  const loop::MotorStatusSample* motor_status = nullptr;  // when one was sent this period
   const Reference* reference = nullptr;
   const ControllerCommand* command = nullptr;  // what the controller sent
-  const node::Counters* counters = nullptr;
+  const loop::Counters* counters = nullptr;
 };
 using FrameObserver = std::function<void(const SimFrame&)>;
 

@@ -1,8 +1,8 @@
-#include "node/message_checks.hpp"
+#include "loop/message_checks.hpp"
 
 #include <cmath>
 
-namespace motormix::node {
+namespace motormix::loop {
 
 namespace {
 
@@ -64,4 +64,4 @@ Rejection check_battery(const BatterySample& b, std::int64_t last_utime) {
   return check_order(b.utime, last_utime);
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::loop

@@ -45,8 +45,8 @@
 //   stale, missing or implausible voltage means gain 1 (no compensation).
 
 #include <motormix/config/config.hpp>
-#include "node/input_samples.hpp"
-#include "node/message_checks.hpp"
+#include "loop/input_samples.hpp"
+#include "loop/message_checks.hpp"
 
 #include <motormix/mixer.hpp>
 
@@ -57,7 +57,7 @@
 #include <limits>
 #include <optional>
 
-namespace motormix::node {
+namespace motormix::loop {
 
 enum class LoopState : std::int8_t { kDisarmed = 0, kArmed = 1, kFailsafe = 2 };
 enum class FailsafeReason : std::int8_t {
@@ -219,4 +219,4 @@ class ControlLoop {
   Counters counters_;
 };
 
-}  // namespace motormix::node
+}  // namespace motormix::loop

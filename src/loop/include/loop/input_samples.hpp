@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-namespace motormix::node {
+namespace motormix::loop {
 
 struct SetpointSample {
   std::int64_t utime = 0;  // publisher's timestamp, microseconds
@@ -38,4 +38,4 @@ struct MotorTestSample {
   double duration_s = 0.0;
 };
 
-}  // namespace motormix::node
+}  // namespace motormix::loop

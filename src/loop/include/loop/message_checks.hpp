@@ -2,13 +2,13 @@
 // Acceptance rules for input messages. A message is either accepted whole or
 // rejected with one reason, which the control loop counts.
 
-#include "node/input_samples.hpp"
+#include "loop/input_samples.hpp"
 
 #include <motormix/mixer.hpp>
 
 #include <cstdint>
 
-namespace motormix::node {
+namespace motormix::loop {
 
 enum class Rejection : std::uint8_t {
   kNone = 0,
@@ -32,4 +32,4 @@ Rejection check_motor_status(const MotorStatusSample& m, int motors, std::int64_
 // Only the order: the voltage's plausibility is the battery compensation's.
 Rejection check_battery(const BatterySample& b, std::int64_t last_utime);
 
-}  // namespace motormix::node
+}  // namespace motormix::loop
