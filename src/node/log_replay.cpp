@@ -74,23 +74,7 @@ class Writer {
 // gap or tail stay far from the int64 limit.
 constexpr std::int64_t kLatestTimestampUs = 100'000'000'000'000'000;
 
-loop::Counters add(const loop::Counters& a, const loop::Counters& b) {
-  loop::Counters s;
-  s.cycles = a.cycles + b.cycles;
-  s.setpoint_received = a.setpoint_received + b.setpoint_received;
-  s.pid_received = a.pid_received + b.pid_received;
-  s.rejected_decode = a.rejected_decode + b.rejected_decode;
-  s.rejected_nonfinite = a.rejected_nonfinite + b.rejected_nonfinite;
-  s.rejected_range = a.rejected_range + b.rejected_range;
-  s.rejected_out_of_order = a.rejected_out_of_order + b.rejected_out_of_order;
-  s.rejected_future = a.rejected_future + b.rejected_future;
-  s.failsafe_events = a.failsafe_events + b.failsafe_events;
-  s.arming_refused = a.arming_refused + b.arming_refused;
-  s.motor_status_received = a.motor_status_received + b.motor_status_received;
-  s.battery_received = a.battery_received + b.battery_received;
-  s.rejected_size = a.rejected_size + b.rejected_size;
-  return s;
-}
+loop::Counters add(loop::Counters a, const loop::Counters& b) { return a += b; }
 
 void draw_progress(std::ostream& log, double fraction) {
   constexpr int kWidth = 40;

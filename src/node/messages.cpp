@@ -34,7 +34,9 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.setpoint_stale = r.setpoint_stale;
   s.pid_stale = r.pid_stale;
   s.num_motors = motors;
-  const AllocationResult& a = r.last_armed_allocation;
+  // What is true in this cycle: a cycle that did not mix reports nothing
+  // saturated and nothing unallocated.
+  const AllocationResult& a = r.mix.allocation;
   s.saturated_upper = static_cast<int32_t>(a.saturated_upper);
   s.saturated_lower = static_cast<int32_t>(a.saturated_lower);
   for (int i = 0; i < kNumAxes; ++i) {

@@ -2,6 +2,7 @@
 // failsafe, recovery and rejection accounting.
 
 #include "loop/control_loop.hpp"
+#include "node/messages.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -260,6 +261,54 @@ TEST_F(FailsafeActionTest, IdleSpinsWithZeroDemand) {
   EXPECT_EQ(r.state, LoopState::kFailsafe);
   EXPECT_TRUE(r.mix.armed);
   for (int i = 0; i < 4; ++i) EXPECT_EQ(r.mix.output[i], 1150.0);
+}
+
+
+// A status reports what is true in its own cycle: once disarmed, nothing
+// saturated, nothing limited, nothing unallocated, even right after a
+// saturated armed cycle (it used to repeat the last armed cycle's).
+TEST(ControlLoopStatus, ADisarmedStatusReportsNoSaturation) {
+  // quad X with `prioritized`: full throttle with full roll and pitch
+  // saturates (the team quad's budgets never do).
+  const config::Config config = config::load_config_file(
+      source_path("config/quad_x.yaml"), {"inputs.arm_max_throttle=1", "output.spool_up_s=0"});
+  ControlLoop loop_(config, config::build_mixer(config));
+  std::int64_t utime = 1'700'000'000'000'000;
+  const auto send = [&](std::int64_t now, bool armed, double throttle, double tilt) {
+    ASSERT_EQ(loop_.on_setpoint(SetpointSample{utime += 1000, throttle, 0.0, armed}, now, kWall),
+              Rejection::kNone);
+    ASSERT_EQ(loop_.on_pid(PidSample{utime += 1000, tilt, tilt, 0.0}, now, kWall),
+              Rejection::kNone);
+  };
+  send(0, false, 0.0, 0.0);
+  loop_.cycle(0);
+  send(1 * kMs, true, 1.0, 1.0);
+  const auto status_of = [&](const loop::CycleResult& r) {
+    mixer_status_t s;
+    node::fill_status_message(s, r, loop_.counters(), node::LoopTiming{}, 0, 4, 0);
+    return s;
+  };
+  const mixer_status_t armed = status_of(loop_.cycle(1 * kMs));
+  ASSERT_EQ(armed.state, mixer_status_t::STATE_ARMED);
+  ASSERT_NE(armed.saturated_upper | armed.saturated_lower, 0);
+  bool any_limited = false;
+  for (int a = 0; a < 4; ++a) any_limited = any_limited || armed.axis_limited[a];
+  ASSERT_TRUE(any_limited);
+
+  send(2 * kMs, false, 0.0, 0.0);
+  const mixer_status_t disarmed = status_of(loop_.cycle(2 * kMs));
+  ASSERT_EQ(disarmed.state, mixer_status_t::STATE_DISARMED);
+  EXPECT_EQ(disarmed.saturated_upper, 0);
+  EXPECT_EQ(disarmed.saturated_lower, 0);
+  for (int a = 0; a < 4; ++a) {
+    EXPECT_FALSE(disarmed.axis_limited[a]) << "axis " << a;
+    EXPECT_EQ(disarmed.unallocated[a], 0.0F) << "axis " << a;
+  }
+  EXPECT_FALSE(disarmed.spooling_up);
+  EXPECT_EQ(disarmed.spool_up, 0.0F);
+  EXPECT_EQ(disarmed.motor_test_state, mixer_status_t::MOTOR_TEST_NONE);
+  EXPECT_EQ(disarmed.failed_motors, 0);
+  EXPECT_EQ(disarmed.thrust_gain, 1.0F);
 }
 
 }  // namespace
