@@ -37,18 +37,6 @@ using node::wall_us;
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_interrupt(int) { g_interrupted = true; }
 
-// Motor number as `motormix matrix` prints it, or name; -1 if neither.
-int motor_index(const std::string& text, const config::Config& config) {
-  const auto& names = config.motor_names();
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == text) return static_cast<int>(i);
-  }
-  char* end = nullptr;
-  const long n = std::strtol(text.c_str(), &end, 10);
-  if (end == text.c_str() || *end != '\0' || n < 1 || n > config.motors()) return -1;
-  return static_cast<int>(n - 1);
-}
-
 std::string where(const config::Config& config, int motor) {
   const auto& details = config.vehicle.motor_details;
   const std::string name = config.motor_names()[static_cast<std::size_t>(motor)];
@@ -112,7 +100,7 @@ int motor_test(const MotorTestCommand& cmd) {
   if (cmd.sequence) {
     for (int i = 0; i < config->motors(); ++i) motors.push_back(i);
   } else {
-    const int m = motor_index(cmd.motor, *config);
+    const int m = config->motor_index(cmd.motor);
     if (m < 0) {
       std::cerr << "motormix motor-test: --motor " << cmd.motor << ": expected 1.."
                 << config->motors() << " or a motor name\n";

@@ -65,9 +65,6 @@ int run(const RunCommand& cmd) {
   }
   node::RunOptions options;
   options.lcm_url = cmd.lcm_url;
-  if (options.lcm_url.empty()) {
-    if (const char* env = std::getenv("LCM_DEFAULT_URL")) options.lcm_url = env;
-  }
   options.max_cycles = cmd.max_cycles;
   options.timing_report_path = cmd.timing_report;
   return node::run_node(*config, options, std::cerr);
@@ -255,9 +252,6 @@ int monitor(const MonitorCommand& cmd) {
   if (!cmd.status_channel.empty()) o.status_channel = cmd.status_channel;
   if (!cmd.pwm_channel.empty()) o.pwm_channel = cmd.pwm_channel;
   o.lcm_url = cmd.lcm_url;
-  if (o.lcm_url.empty()) {
-    if (const char* env = std::getenv("LCM_DEFAULT_URL")) o.lcm_url = env;
-  }
   o.once = cmd.once;
   o.wait_s = cmd.wait_s;
   o.duration_s = cmd.duration_s;

@@ -36,11 +36,19 @@ int main(int argc, char** argv) {
     if (required) vehicles.emplace_back(sub, &common);
   };
 
+  // The bus, the same way in every subcommand that uses it: --lcm-url, else
+  // $LCM_DEFAULT_URL, else LCM's own default. Taking the variable here
+  // (rather than leaving it to LCM) lets messages name the URL in use.
+  const auto add_lcm_url = [](CLI::App* sub, std::string& url, const char* when = "") {
+    sub->add_option("--lcm-url", url,
+                    std::string("LCM URL") + when + " (default: $LCM_DEFAULT_URL, then LCM's default)")
+        ->envname("LCM_DEFAULT_URL");
+  };
+
   RunCommand run_cmd;
   CLI::App* run_app = app.add_subcommand("run", "run the mixer process on the LCM bus");
   add_vehicle(run_app, run_cmd.common);
-  run_app->add_option("--lcm-url", run_cmd.lcm_url,
-                      "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  add_lcm_url(run_app, run_cmd.lcm_url);
   run_app->add_flag("--check", run_cmd.check_only,
                     "validate the configuration and exit without touching the bus");
   run_app
@@ -102,8 +110,7 @@ int main(int argc, char** argv) {
   add_vehicle(monitor_app, monitor_cmd.common,
               "configuration of the running mixer (channels, motor names, unit)",
               /*required=*/false);
-  monitor_app->add_option("--lcm-url", monitor_cmd.lcm_url,
-                          "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  add_lcm_url(monitor_app, monitor_cmd.lcm_url);
   monitor_app->add_option("--status-channel", monitor_cmd.status_channel,
                           "mixer_status_t channel (default: from --config, else MIXER_STATUS)");
   monitor_app->add_option("--pwm-channel", monitor_cmd.pwm_channel,
@@ -136,8 +143,7 @@ int main(int argc, char** argv) {
   sim_app->add_option("--log", sim_cmd.log_path, "write the run as an LCM event log (lockstep)");
   sim_app->add_flag("--lcm", sim_cmd.lcm,
                     "run in real time on the bus against a separate motormix run");
-  sim_app->add_option("--lcm-url", sim_cmd.lcm_url,
-                      "LCM URL with --lcm (default: $LCM_DEFAULT_URL, then LCM's default)");
+  add_lcm_url(sim_app, sim_cmd.lcm_url, " with --lcm");
   sim_app->add_flag("!--no-controller", sim_cmd.controller,
                     "with --lcm: publish no setpoint or pid (your controller flies from "
                     "VEHICLE_STATE)");
@@ -148,8 +154,7 @@ int main(int argc, char** argv) {
   CLI::App* test_app = app.add_subcommand(
       "motor-test", "spin one motor alone through a running, disarmed motormix run");
   add_vehicle(test_app, test_cmd.common);
-  test_app->add_option("--lcm-url", test_cmd.lcm_url,
-                       "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  add_lcm_url(test_app, test_cmd.lcm_url);
   auto* test_motor = test_app->add_option(
       "--motor", test_cmd.motor, "the motor: number as motormix matrix prints it, or name");
   auto* test_sequence = test_app->add_flag("--sequence", test_cmd.sequence,
@@ -169,8 +174,7 @@ int main(int argc, char** argv) {
   CLI::App* esc_app = app.add_subcommand(
       "esc-calibrate", "teach PWM ESCs their range: maximum, your Enter, minimum, disarmed");
   add_vehicle(esc_app, esc_cmd.common);
-  esc_app->add_option("--lcm-url", esc_cmd.lcm_url,
-                      "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  add_lcm_url(esc_app, esc_cmd.lcm_url);
   esc_app->add_flag("--props-off", esc_cmd.props_off,
                     "required: the propellers are off (every motor runs at full command)");
   esc_app

@@ -32,17 +32,8 @@ bool parse_failure(const std::string& text, const config::Config& config, sim::M
   const double seconds = std::strtod(text.c_str() + at + 1, &end);
   if (*end != '\0' || !std::isfinite(seconds) || seconds < 0) return false;
   out.at_s = seconds;
-  const auto& names = config.motor_names();
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == motor) {
-      out.motor = static_cast<int>(i);
-      return true;
-    }
-  }
-  const long n = std::strtol(motor.c_str(), &end, 10);
-  if (*end != '\0' || n < 1 || n > config.motors()) return false;
-  out.motor = static_cast<int>(n - 1);
-  return true;
+  out.motor = config.motor_index(motor);
+  return out.motor >= 0;
 }
 
 nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {

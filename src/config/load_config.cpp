@@ -129,7 +129,7 @@ Vehicle rotors_vehicle(const YAML::Node& list, const std::string& path) {
       rotor.axis = read_vector(r.raw("axis"), r.path_of("axis"));
       if (rotor.axis.norm() < 1e-9) fail(r.path_of("axis"), "a zero vector", "a thrust direction");
     } else {
-      r.raw("axis");
+      r.allow("axis");
     }
     r.finish();
     rotors.push_back(rotor);
@@ -295,14 +295,14 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
     PresetOptions options;
     if (geometry.has("arm_length"))
       options.arm_length = geometry.number("arm_length", 0.25, 1e-4, 1e3);
-    geometry.raw("arm_length");
+    geometry.allow("arm_length");
     options.reverse_spin = read_bool(geometry, "reverse_spin", false);
     if (geometry.has("motor_order")) {
       const int motors = find_preset(name)->motors();
       options.motor_order =
           read_motor_order(geometry.raw("motor_order"), geometry.path_of("motor_order"), motors);
     } else {
-      geometry.raw("motor_order");
+      geometry.allow("motor_order");
     }
     config.vehicle = *find_preset(name, options);
     config.geometry_source = "preset " + name;
@@ -363,7 +363,7 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
       config.vehicle.motor_names.push_back(n.Scalar());
     }
   } else {
-    geometry.raw("motor_names");
+    geometry.allow("motor_names");
   }
   geometry.finish();
 }
@@ -391,20 +391,7 @@ void read_failed_motors(MapReader& mixer, Config& config) {
     const std::string item_path = path + "[" + std::to_string(k) + "]";
     const YAML::Node& item = list[k];
     if (!item.IsScalar()) fail(item_path, describe(item), allowed);
-    int motor = -1;
-    const auto& names = config.motor_names();
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      if (names[i] == item.Scalar()) motor = static_cast<int>(i);
-    }
-    if (motor < 0) {
-      try {
-        std::size_t used = 0;
-        const int number = std::stoi(item.Scalar(), &used);
-        if (used == item.Scalar().size() && number >= 1 && number <= n) motor = number - 1;
-      } catch (const std::exception&) {
-        // not a number: reported below
-      }
-    }
+    const int motor = config.motor_index(item.Scalar());
     if (motor < 0) fail(item_path, describe(item), allowed);
     const MotorMask b = MotorMask{1} << motor;
     if (mask & b) fail(item_path, describe(item) + ", listed twice", "each motor once");
@@ -737,6 +724,20 @@ Config load_config_file(const std::string& path, const std::vector<std::string>&
 }  // namespace motormix::config
 
 namespace motormix::config {
+
+int Config::motor_index(const std::string& text) const {
+  const auto& names = motor_names();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == text) return static_cast<int>(i);
+  }
+  // A number alone, digits only (no sign, space or suffix), 1..motors.
+  if (text.empty() || text.size() > 4 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
+    return -1;
+  }
+  const int number = std::stoi(text);
+  return number >= 1 && number <= motors() ? number - 1 : -1;
+}
 
 std::string Config::description() const {
   return geometry_source + " (" + vehicle.description + ")";

@@ -89,12 +89,12 @@ std::vector<RotorEntry> explicit_rotors(const YAML::Node& list, const std::strin
       rotor.axis = {a[0], a[1], a[2]};
       if (rotor.axis.norm() < 1e-9) fail(r.path_of("axis"), "a zero vector", "a thrust direction");
     } else {
-      r.raw("axis");
+      r.allow("axis");
     }
     if (r.has("max_thrust_n")) entry.max_thrust_n = r.number("max_thrust_n", 1.0, 1e-3, 1e5);
-    r.raw("max_thrust_n");
+    r.allow("max_thrust_n");
     if (r.has("torque_ratio_m")) entry.torque_ratio_m = r.number("torque_ratio_m", 0.0, 0.0, 1.0);
-    r.raw("torque_ratio_m");
+    r.allow("torque_ratio_m");
     r.finish();
     rotors.push_back(entry);
   }
@@ -159,8 +159,8 @@ void read_escs(MapReader esc, const Config& config, VehiclePhysics& v) {
       v.esc_max[i] = hi;
     }
   }
-  esc.raw("min");
-  esc.raw("max");
+  esc.allow("min");
+  esc.allow("max");
   v.thrust_expo = esc.number("thrust_expo", 0.3, 0.0, 1.0);
   esc.finish();
 }
@@ -177,7 +177,7 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
     if (vehicle.has("rotors")) {
       fail(vehicle.path_of("rotors"), "rotors on a ground vehicle", "wheel_radius_m, track_m");
     }
-    vehicle.raw("rotors");
+    vehicle.allow("rotors");
     v.mass_kg = vehicle.number("mass_kg", 2.0, 0.01, 1e4);
     v.wheels.per_side = config.wheel_base ? config.wheel_base->wheels_per_side : motors / 2;
     v.wheels.radius_m = vehicle.number("wheel_radius_m", v.wheels.radius_m, 1e-3, 10.0);
@@ -201,7 +201,7 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
       rotors.clear();
       for (const RotorEntry& e : entries) rotors.push_back(e.rotor);
     } else {
-      vehicle.raw("rotors");
+      vehicle.allow("rotors");
       if (rotors.empty() && config.vehicle.name == "team_quad") rotors = team_quad_rotors();
     }
     const std::string rotor_path = vehicle.path_of("rotors");

@@ -1,5 +1,7 @@
 #include <motormix/presets.hpp>
 
+#include <motormix/angles.hpp>
+
 #include <array>
 #include <cmath>
 #include <functional>
@@ -10,7 +12,6 @@ namespace motormix {
 namespace {
 
 constexpr double kDefaultArm = 0.25;
-constexpr double kPi = 3.14159265358979323846;
 
 // A rotor at `angle_deg` from the nose, clockwise positive seen from above
 // (90 = right), as PX4 and ArduPilot number their frames.

@@ -1,5 +1,7 @@
 #include "sim/controller.hpp"
 
+#include <motormix/angles.hpp>
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,7 +9,6 @@ namespace motormix::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kStep = 0.02;  // demand step of the linearization
 constexpr double kMaxRateDps = 400.0;
 constexpr double kMaxYawRateDps = 200.0;

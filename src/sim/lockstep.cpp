@@ -1,5 +1,9 @@
 #include "sim/lockstep.hpp"
 
+#include "sim/period.hpp"
+
+#include <motormix/angles.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,11 +12,6 @@ namespace motormix::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
-constexpr double kMaxPhysicsStepS = 1e-3;
-constexpr double kBatteryPeriodS = 0.02;     // battery_t at 50 Hz
-constexpr double kMotorStatusPeriodS = 0.1;  // motor_status_t at 10 Hz once a failure is seen
 constexpr double kReachedM = 0.1;            // within this of the commanded altitude: arrived
 
 double wrap(double angle) { return std::remainder(angle, 2 * kPi); }
@@ -44,12 +43,12 @@ MotorMask ScenarioClock::advance(double t) {
   ref_.armed = t >= scenario_.arm_at_s;
   while (next_ < scenario_.timeline.size() && scenario_.timeline[next_].at_s <= t) {
     const ScenarioEvent& e = scenario_.timeline[next_++];
-    if (e.roll_deg) ref_.roll = *e.roll_deg * kDeg;
-    if (e.pitch_deg) ref_.pitch = *e.pitch_deg * kDeg;
-    if (e.yaw_deg) ref_.yaw = wrap(*e.yaw_deg * kDeg);
+    if (e.roll_deg) ref_.roll = *e.roll_deg * kRadPerDeg;
+    if (e.pitch_deg) ref_.pitch = *e.pitch_deg * kRadPerDeg;
+    if (e.yaw_deg) ref_.yaw = wrap(*e.yaw_deg * kRadPerDeg);
     if (e.altitude_m) ref_.altitude_m = *e.altitude_m;
     if (e.speed_mps) ref_.speed_mps = *e.speed_mps;
-    if (e.yaw_rate_dps) ref_.yaw_rate = *e.yaw_rate_dps * kDeg;
+    if (e.yaw_rate_dps) ref_.yaw_rate = *e.yaw_rate_dps * kRadPerDeg;
     if (e.wind_mps) wind_ = *e.wind_mps;
     if (e.gust) gusts_.emplace_back(e.at_s, *e.gust);
   }
@@ -64,7 +63,7 @@ MotorMask ScenarioClock::advance(double t) {
 MotorMask ScenarioClock::detected(double t, double detection_s) const {
   MotorMask mask = 0;
   for (const auto& [at, motor] : failures_) {
-    if (t + 1e-9 >= at + detection_s) mask |= MotorMask{1} << motor;
+    if (due(t, at + detection_s)) mask |= MotorMask{1} << motor;
   }
   return mask;
 }
@@ -104,14 +103,14 @@ void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
   const BodyState& b = vehicle.body();
   if (wheeled_) {
     const double ds = ref.speed_mps - vehicle.forward_speed();
-    const double dr = (ref.yaw_rate - b.rates.z()) / kDeg;
+    const double dr = (ref.yaw_rate - b.rates.z()) / kRadPerDeg;
     speed_sq_ += ds * ds;
     rate_sq_ += dr * dr;
   } else {
     const Eigen::Vector3d z = b.attitude * Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d z_sp = cmd.attitude_sp * Eigen::Vector3d::UnitZ();
-    const double att = std::acos(std::clamp(z.dot(z_sp), -1.0, 1.0)) / kDeg;
-    const double yaw = wrap(ref.yaw - heading(b.attitude)) / kDeg;
+    const double att = std::acos(std::clamp(z.dot(z_sp), -1.0, 1.0)) / kRadPerDeg;
+    const double yaw = wrap(ref.yaw - heading(b.attitude)) / kRadPerDeg;
     att_sq_ += att * att;
     yaw_sq_ += yaw * yaw;
     att_max_ = std::max(att_max_, att);
@@ -172,27 +171,23 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   ScenarioClock clock(scenario, config, options.failures);
   Sensors sensors(scenario.noise, options.seed);
 
-  const double period = 1.0 / config.loop_rate_hz;
-  const int substeps = static_cast<int>(std::ceil(period / kMaxPhysicsStepS - 1e-9));
-  const double dt = period / substeps;
-  const double duration = options.duration_s > 0 ? options.duration_s : scenario.duration_s;
-  const auto cycles = static_cast<std::int64_t>(std::floor(duration * config.loop_rate_hz + 1e-9));
+  const SimulationPeriod periods(
+      config.loop_rate_hz, options.duration_s > 0 ? options.duration_s : scenario.duration_s);
+  const double period = periods.period_s;
+  MessageSchedule schedule;
 
   SimResult r;
   r.min_battery_v = vehicle.battery().terminal_v();
   Scorer scorer(scenario, config);
   bool mixer_armed = false;
   AxisVector unallocated = AxisVector::Zero();
-  double next_battery = 0.0;
-  double next_motor_status = 0.0;
-  MotorMask reported = 0;
   loop::SetpointSample setpoint;
   loop::PidSample pid;
   loop::BatterySample battery;
   loop::MotorStatusSample motor_status;
 
-  for (std::int64_t k = 0; k < cycles; ++k) {
-    const double t = static_cast<double>(k) * period;
+  for (std::int64_t k = 0; k < periods.cycles; ++k) {
+    const double t = periods.start_of(k);
     const std::int64_t now = kEpochUs + to_us(t);
     clock.advance(t);
     const Reference& ref = clock.reference();
@@ -206,23 +201,17 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     loop.on_setpoint(setpoint, now, now);
     loop.on_pid(pid, now, now);
 
-    bool battery_sent = false;
-    if (t + 1e-9 >= next_battery) {
+    const bool battery_sent = schedule.battery_due(t);
+    if (battery_sent) {
       battery = {now, vehicle.battery().terminal_v()};
       loop.on_battery(battery, now, now);
-      battery_sent = true;
-      next_battery += kBatteryPeriodS;
     }
-    bool status_sent = false;
-    if (!options.undetected) {
-      const MotorMask detected = clock.detected(t, scenario.failure_detection_s);
-      if (detected != 0 && (detected != reported || t + 1e-9 >= next_motor_status)) {
-        motor_status = {now, config.motors(), detected};
-        loop.on_motor_status(motor_status, now, now);
-        reported = detected;
-        status_sent = true;
-        next_motor_status = t + kMotorStatusPeriodS;
-      }
+    const MotorMask detected =
+        options.undetected ? 0 : clock.detected(t, scenario.failure_detection_s);
+    const bool status_sent = schedule.motor_status_due(t, detected);
+    if (status_sent) {
+      motor_status = {now, config.motors(), detected};
+      loop.on_motor_status(motor_status, now, now);
     }
 
     const loop::CycleResult& cycle = loop.cycle(now);
@@ -245,10 +234,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
 
     scorer.add(t, ref, cmd, vehicle, mixer_armed, cycle.mix.allocation.axis_limited);
 
-    for (int s = 0; s < substeps; ++s) {
-      vehicle.step(cycle.mix.output, cycle.mix.direction, clock.stopped(),
-                   clock.environment(t + s * dt), dt);
-    }
+    periods.integrate(vehicle, cycle.mix.output, cycle.mix.direction, clock.stopped(), clock, t);
     if (end_of_period(r, vehicle, k, t + period)) break;
   }
   scorer.finish(r);

@@ -43,20 +43,20 @@ ScenarioEvent read_event(MapReader e, double duration) {
   ev.yaw_rate_dps = optional_number(e, "yaw_rate_dps", -3600.0, 3600.0);
   if (const auto m = optional_number(e, "fail", 1, kMaxMotors)) ev.fail = static_cast<int>(*m) - 1;
   if (e.has("wind_mps")) ev.wind_mps = vector3(e.raw("wind_mps"), e.path_of("wind_mps"), 100.0);
-  e.raw("wind_mps");
+  e.allow("wind_mps");
   if (e.has("gust")) {
     MapReader g = e.map("gust");
     Gust gust;
     if (g.has("force_n")) gust.force_n = vector3(g.raw("force_n"), g.path_of("force_n"), 1e4);
-    g.raw("force_n");
+    g.allow("force_n");
     if (g.has("torque_nm"))
       gust.torque_nm = vector3(g.raw("torque_nm"), g.path_of("torque_nm"), 1e3);
-    g.raw("torque_nm");
+    g.allow("torque_nm");
     gust.for_s = g.number("for_s", 0.5, 1e-3, 1e3);
     g.finish();
     ev.gust = gust;
   }
-  e.raw("gust");
+  e.allow("gust");
   e.finish();
   return ev;
 }
@@ -96,10 +96,10 @@ Scenario parse_scenario(const std::string& yaml_text, const std::string& source)
     MapReader battery = root.map("battery");
     if (battery.has("initial_charge"))
       s.battery_initial_charge = battery.number("initial_charge", 1.0, 0.0, 1.0);
-    battery.raw("initial_charge");
+    battery.allow("initial_charge");
     if (battery.has("resistance_factor"))
       s.battery_resistance_factor = battery.number("resistance_factor", 1.0, 0.0, 100.0);
-    battery.raw("resistance_factor");
+    battery.allow("resistance_factor");
     battery.finish();
     const YAML::Node timeline = root.raw("timeline");
     if (timeline.IsDefined() && !timeline.IsNull()) {

@@ -1,5 +1,7 @@
 #include "sim/vehicle_model.hpp"
 
+#include <motormix/angles.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -10,7 +12,6 @@ namespace motormix::sim {
 namespace {
 
 constexpr double kTakenOffAltitudeM = 0.2;  // above this the vehicle has flown
-constexpr double kPi = 3.14159265358979323846;
 
 // Exact discretization of a first-order lag over one step.
 double lag(double value, double target, double alpha_up, double alpha_down) {

@@ -3,6 +3,8 @@
 // of every preset.
 
 #include "config/paparazzi_import.hpp"
+
+#include <motormix/angles.hpp>
 #include "test_support.hpp"
 
 #include <motormix/config/matrix_export.hpp>
@@ -19,7 +21,6 @@
 namespace motormix::test {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // PX4's airframe files give positions to the millimetre.
 constexpr double kPx4PositionM = 1e-3;
 // Paparazzi coefficients are integers on a scale of 256: half a step.

@@ -117,6 +117,9 @@ struct Config {
 
   int motors() const { return static_cast<int>(mixing.rows()); }
   const std::vector<std::string>& motor_names() const { return vehicle.motor_names; }
+  // A motor as users name it: its name, or its number as `motormix matrix`
+  // prints it (1-based). 0-based index, -1 when it is neither.
+  int motor_index(const std::string& text) const;
   ThrustRange thrust_range() const { return vehicle.thrust_range; }
   std::string description() const;
 };

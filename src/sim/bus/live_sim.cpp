@@ -2,6 +2,7 @@
 
 #include "node/wall_clock.hpp"
 #include "sim/bus/sim_log.hpp"
+#include "sim/period.hpp"
 
 #include <motormix/battery_t.hpp>
 #include <motormix/config/build_mixer.hpp>
@@ -111,11 +112,10 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   lcm.subscribe(config.channels.motor_pwm, &MixerOutputs::on_pwm, &mix);
   lcm.subscribe(config.channels.status, &MixerOutputs::on_status, &mix);
 
-  const double period = 1.0 / config.loop_rate_hz;
-  const int substeps = static_cast<int>(std::ceil(period / 1e-3 - 1e-9));
-  const double dt = period / substeps;
-  const double duration = options.sim.duration_s > 0 ? options.sim.duration_s : scenario.duration_s;
-  const auto cycles = static_cast<std::int64_t>(std::floor(duration * config.loop_rate_hz + 1e-9));
+  const SimulationPeriod periods(
+      config.loop_rate_hz, options.sim.duration_s > 0 ? options.sim.duration_s : scenario.duration_s);
+  const double period = periods.period_s;
+  MessageSchedule schedule;
   const auto stale_after = std::chrono::duration<double>(
       std::min(config.inputs.setpoint_timeout_s, config.inputs.pid_timeout_s));
   const MotorMask all = static_cast<MotorMask>((1U << config.motors()) - 1U);
@@ -123,10 +123,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   SimResult& r = result.sim;
   r.min_battery_v = vehicle.battery().terminal_v();
   const auto start = Clock::now();
-  double next_battery = 0.0, next_status = 0.0;
-  MotorMask reported = 0;
   vehicle_state_t state;
-  for (std::int64_t k = 0; k < cycles; ++k) {
+  for (std::int64_t k = 0; k < periods.cycles; ++k) {
     const auto due = start + std::chrono::duration_cast<Clock::duration>(
                                  std::chrono::duration<double>(static_cast<double>(k) * period));
     // Serve the bus until this cycle is due.
@@ -144,7 +142,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     }
     while (lcm.handleTimeout(0) > 0) {
     }
-    const double t = static_cast<double>(k) * period;
+    const double t = periods.start_of(k);
     const std::int64_t now = wall_us();
     clock.advance(t);
     const Reference& ref = clock.reference();
@@ -168,24 +166,20 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       pid.yaw = static_cast<float>(cmd.yaw);
       publish(lcm, config.channels.pid, pid);
     }
-    if (t + 1e-9 >= next_battery) {
+    if (schedule.battery_due(t)) {
       battery_t b;
       b.utime = now;
       b.voltage = static_cast<float>(vehicle.battery().terminal_v());
       publish(lcm, config.channels.battery, b);
-      next_battery += 0.02;
     }
-    if (!options.sim.undetected) {
-      const MotorMask detected = clock.detected(t, scenario.failure_detection_s);
-      if (detected != 0 && (detected != reported || t + 1e-9 >= next_status)) {
-        motor_status_t m;
-        m.utime = now;
-        m.num_motors = config.motors();
-        for (int i = 0; i < m.num_motors; ++i) m.failed.push_back((detected >> i) & 1U);
-        publish(lcm, config.channels.motor_status, m);
-        reported = detected;
-        next_status = t + 0.1;
-      }
+    const MotorMask detected =
+        options.sim.undetected ? 0 : clock.detected(t, scenario.failure_detection_s);
+    if (schedule.motor_status_due(t, detected)) {
+      motor_status_t m;
+      m.utime = now;
+      m.num_motors = config.motors();
+      for (int i = 0; i < m.num_motors; ++i) m.failed.push_back((detected >> i) & 1U);
+      publish(lcm, config.channels.motor_status, m);
     }
     fill_vehicle_state(state, vehicle, now);
     publish(lcm, kVehicleStateChannel, state);
@@ -193,11 +187,10 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     const bool fresh = mix.any && Clock::now() - mix.received <= stale_after;
     const bool armed = fresh && mix.armed;
     scorer.add(t, ref, cmd, vehicle, armed, mix.axis_limited);
-    for (int s = 0; s < substeps; ++s) {
-      vehicle.step(
-          mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
-          mix.direction, fresh ? clock.stopped() : all, clock.environment(t + s * dt), dt);
-    }
+    periods.integrate(
+        vehicle,
+        mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
+        mix.direction, fresh ? clock.stopped() : all, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) {
       fill_vehicle_state(state, vehicle, wall_us());  // the crash, for whoever listens
       publish(lcm, kVehicleStateChannel, state);

@@ -58,6 +58,10 @@ class MapReader {
                      const std::vector<std::string>& allowed);
   MapReader map(const std::string& key);   // an absent key reads as an empty map
   YAML::Node raw(const std::string& key);  // marks the key as read
+  // An optional key that is read only when present (by has() and one of the
+  // readers above): known here even when absent, so finish() does not call
+  // it unknown and the configuration reference lists it.
+  void allow(const std::string& key) { raw(key); }
 
   // Throws ConfigError naming the first key that was never read.
   void finish() const;
