@@ -1,4 +1,6 @@
 #include "node/lcm_node.hpp"
+
+#include <nlohmann/json.hpp>
 #include "node/wall_clock.hpp"
 
 #include <motormix/config/build_mixer.hpp>
@@ -191,27 +193,32 @@ class Node {
   // The whole run's loop timing as JSON (`motormix run --timing-report`).
   void write_timing_report(std::ostream& out, const RealtimeGranted& granted,
                            std::int64_t ticks) const {
-    const auto section = [&out](const char* name, const LatencyHistogram& h) {
-      out << "  \"" << name << "\": {\"count\": " << h.count() << ", \"min\": " << h.min()
-          << ", \"mean\": " << h.mean() << ", \"p50\": " << h.percentile(0.5)
-          << ", \"p99\": " << h.percentile(0.99) << ", \"p999\": " << h.percentile(0.999)
-          << ", \"max\": " << h.max() << ", \"max_at_monotonic_us\": " << h.max_at_us() << "},\n";
+    const auto section = [](const LatencyHistogram& h) {
+      return nlohmann::json{{"count", h.count()},
+                            {"min", h.min()},
+                            {"mean", h.mean()},
+                            {"p50", h.percentile(0.5)},
+                            {"p99", h.percentile(0.99)},
+                            {"p999", h.percentile(0.999)},
+                            {"max", h.max()},
+                            {"max_at_monotonic_us", h.max_at_us()}};
     };
-    out << "{\n  \"loop_rate_hz\": " << config_.loop_rate_hz << ",\n  \"timer_ticks\": " << ticks
-        << ",\n  \"overruns\": " << overruns_ << ",\n  \"kernel_drops\": "
-        << own_udp_socket_drops() << ",\n  \"realtime\": {\"policy\": \"" << granted.policy
-        << "\", \"priority\": " << granted.priority << ", \"cpus\": [";
-    for (std::size_t i = 0; i < granted.cpus.size(); ++i) out << (i ? ", " : "") << granted.cpus[i];
-    out << "], \"memory_locked\": " << (granted.memory_locked ? "true" : "false")
-        << ", \"stack_prefaulted\": " << (granted.stack_prefaulted ? "true" : "false")
-        << ", \"other_threads_moved\": " << granted.other_threads << ", \"other_cpus\": [";
-    for (std::size_t i = 0; i < granted.other_cpus.size(); ++i) {
-      out << (i ? ", " : "") << granted.other_cpus[i];
-    }
-    out << "]},\n";
-    section("wake_latency_us", wake_run_);
-    section("period_us", period_run_);
-    out << "  \"units\": \"microseconds; percentiles in whole microseconds\"\n}\n";
+    nlohmann::json j;
+    j["loop_rate_hz"] = config_.loop_rate_hz;
+    j["timer_ticks"] = ticks;
+    j["overruns"] = overruns_;
+    j["kernel_drops"] = own_udp_socket_drops();
+    j["realtime"] = {{"policy", granted.policy},
+                     {"priority", granted.priority},
+                     {"cpus", granted.cpus},
+                     {"memory_locked", granted.memory_locked},
+                     {"stack_prefaulted", granted.stack_prefaulted},
+                     {"other_threads_moved", granted.other_threads},
+                     {"other_cpus", granted.other_cpus}};
+    j["wake_latency_us"] = section(wake_run_);
+    j["period_us"] = section(period_run_);
+    j["units"] = "microseconds; percentiles rounded up to the microsecond";
+    out << j.dump(2) << "\n";
   }
 
   // publish: on_input: a pid message accepted since the last cycle.

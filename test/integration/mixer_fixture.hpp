@@ -113,7 +113,8 @@ class MixerProcessTest : public ::testing::Test {
   // `run_options`: further options of `motormix run` (e.g. --lcm-url).
   void start(const std::vector<std::string>& test_overrides = {},
              const std::string& config_file = "config/team_quad.yaml",
-             const std::vector<std::string>& run_options = {}) {
+             const std::vector<std::string>& run_options = {},
+             const std::vector<std::string>& wrapper = {}, const std::string& stderr_path = "") {
     // These tests check the outputs from the first armed cycle on: no
     // spool-up ramp unless a test asks for one (it has tests of its own).
     std::vector<std::string> overrides = {"output.spool_up_s=0"};
@@ -121,14 +122,18 @@ class MixerProcessTest : public ::testing::Test {
     config_ = config::load_config_file(source_path(config_file), overrides);
     bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
     pilot_ = std::make_unique<Pilot>(config_);
-    std::vector<std::string> argv = {motormix_binary(), "run", "--config",
-                                     source_path(config_file)};
+    // wrapper: a command the mixer runs under (e.g. `unshare -r`).
+    std::vector<std::string> argv = wrapper;
+    for (const std::string& a : {std::string(motormix_binary()), std::string("run"),
+                                 std::string("--config"), source_path(config_file)}) {
+      argv.push_back(a);
+    }
     for (const auto& o : overrides) {
       argv.push_back("--set");
       argv.push_back(o);
     }
     argv.insert(argv.end(), run_options.begin(), run_options.end());
-    mixer_ = std::make_unique<ChildProcess>(argv);
+    mixer_ = std::make_unique<ChildProcess>(argv, stderr_path);
     ASSERT_TRUE(bus_->wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
   }
 

@@ -1,5 +1,6 @@
 #include "integration/process.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -34,7 +35,10 @@ std::string resolve(const std::string& name) {
 
 }  // namespace
 
-ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
+ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& stderr_path) {
+  const int err_fd = stderr_path.empty()
+                         ? -1
+                         : ::open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -45,9 +49,11 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
     // threads). The child dies with the test: a test killed by its timeout
     // leaves no mixer running.
     prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (err_fd >= 0) dup2(err_fd, STDERR_FILENO);
     execv(program.c_str(), args.data());
     _exit(127);
   }
+  if (err_fd >= 0) ::close(err_fd);
 }
 
 ChildProcess::~ChildProcess() {

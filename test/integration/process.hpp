@@ -13,7 +13,8 @@ namespace motormix::test {
 
 class ChildProcess {
  public:
-  explicit ChildProcess(const std::vector<std::string>& argv);
+  // stderr_path: where the child's standard error goes (empty: inherited).
+  explicit ChildProcess(const std::vector<std::string>& argv, const std::string& stderr_path = "");
   ~ChildProcess();  // kills the child if it is still running
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
