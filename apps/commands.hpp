@@ -1,7 +1,7 @@
 #pragma once
 // The subcommands of the motormix binary. Each returns the process exit code:
 // 0 ok, 1 runtime error, 2 usage or configuration error, 3 (replay) damaged
-// input log.
+// input log, 4 (sim) crashed, 5 (bring-up) refused.
 
 #include <cstdint>
 #include <optional>
@@ -22,6 +22,9 @@ inline constexpr int kExitUsage = 2;
 inline constexpr int kExitDamagedLog = 3;
 // sim: the run ended in a crash (the JSON result says how and when).
 inline constexpr int kExitCrashed = 4;
+// motor-test, esc-calibrate: refused, nothing spun (the mixer refused the
+// test; a mixer runs on the bus while calibrating). stderr says why.
+inline constexpr int kExitRefused = 5;
 
 // A vehicle: exactly one of a configuration file and a preset (checked
 // after parsing; `monitor` takes at most one), and --set overrides.

@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <fstream>
+#include <iterator>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -141,7 +143,7 @@ TEST_F(MixerOnTheBus, MotorTestSpinsTheRightMotorAloneAndEndsDisarmed) {
 TEST_F(MixerOnTheBus, TooMuchThrottleIsRefusedAndNothingSpins) {
   EXPECT_EQ(run_client({"motor-test", "--config", quad(), "--motor", "1", "--throttle", "0.5",
                         "--seconds", "1"}),
-            1);
+            5);  // refused
   std::this_thread::sleep_for(200ms);
   for (const motor_pwm_t& m : bus_.pwm()) {
     for (float v : m.pwm) EXPECT_EQ(v, kDisarmedUs);
@@ -172,7 +174,7 @@ TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
       << "the armed setpoint should end the test and arm";
   EXPECT_EQ(run_client({"motor-test", "--config", quad(), "--motor", "1", "--throttle", "0.1",
                         "--seconds", "1"}),
-            1);
+            5);  // refused
   const auto status = bus_.status();
   EXPECT_EQ(status.back().motor_test_result, mixer_status_t::MOTOR_TEST_REFUSED_NOT_DISARMED);
 }
@@ -214,8 +216,23 @@ TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
   EXPECT_TRUE(spooled);
 }
 
+// Refused for its stated reason: its own exit code, the reason on stderr,
+// and nothing at the maximum or armed on the bus (a bus that cannot open
+// exits 1, and a run that went to the maximum first would show 2000 us).
 TEST_F(MixerOnTheBus, EscCalibrationRefusesWhileAMixerRuns) {
-  EXPECT_EQ(run_client({"esc-calibrate", "--config", quad(), "--props-off", "--timeout", "1"}), 1);
+  const std::string err_path = ::testing::TempDir() + "/esc_refusal_stderr.txt";
+  std::vector<std::string> argv = {motormix_binary(), "esc-calibrate", "--config", quad(),
+                                   "--props-off", "--timeout", "1"};
+  ChildProcess client(argv, err_path);
+  EXPECT_EQ(client.wait_for(15s), 5);
+  std::ifstream err_file(err_path);
+  const std::string err((std::istreambuf_iterator<char>(err_file)), {});
+  EXPECT_NE(err.find("refused: a mixer is running on the bus"), std::string::npos) << err;
+  std::this_thread::sleep_for(100ms);
+  for (const motor_pwm_t& m : bus_.pwm()) {
+    EXPECT_FALSE(m.armed) << "the disarmed mixer's outputs only";
+    for (float v : m.pwm) EXPECT_EQ(v, kDisarmedUs);
+  }
 }
 
 std::optional<int> run_shell(const std::string& line) {

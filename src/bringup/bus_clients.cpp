@@ -1,0 +1,249 @@
+#include "bringup/bus_clients.hpp"
+
+#include "bringup/motor_test_client.hpp"
+#include "node/wall_clock.hpp"
+
+#include <motormix/mixer_status_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+#include <motormix/motor_test_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <optional>
+#include <ostream>
+#include <thread>
+
+namespace motormix::bringup {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// The latest status seen, decoded inside the callback (nothing thrown out).
+struct StatusWatch {
+  std::optional<mixer_status_t> latest;
+  int statuses = 0;
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    mixer_status_t msg;
+    try {
+      if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
+          static_cast<int>(rbuf->data_size)) {
+        latest = msg;
+        ++statuses;
+      }
+    } catch (...) {
+      // undecodable: not a status
+    }
+  }
+};
+
+void send_test(lcm::LCM& lcm, const std::string& channel, int motor_1based, double throttle,
+               double seconds, std::int64_t utime) {
+  motor_test_t msg;
+  msg.utime = utime;
+  msg.motor = motor_1based;
+  msg.throttle = static_cast<float>(throttle);
+  msg.duration_s = static_cast<float>(seconds);
+  lcm.publish(channel, &msg);
+}
+
+// Enter on `fd`, polled without blocking: 1 a line, -1 end of input, 0 nothing yet.
+int line_ready(int fd) {
+  pollfd p{fd, POLLIN, 0};
+  if (poll(&p, 1, 0) <= 0) return 0;
+  char c = 0;
+  while (true) {
+    const ssize_t got = read(fd, &c, 1);
+    if (got <= 0) return -1;
+    if (c == '\n') return 1;
+  }
+}
+
+}  // namespace
+
+std::string describe_motor(const config::Config& config, int motor) {
+  const auto k = static_cast<std::size_t>(motor);
+  const auto& details = config.vehicle.motor_details;
+  const std::string name = config.motor_names()[k];
+  const std::string detail = k < details.size() ? details[k] : "";
+  std::string spin;
+  // A sign table (the team quad) names no spin; the vehicle model's rotors do.
+  const auto& rotors = config.physics.rotors;
+  if (detail.find("CW") == std::string::npos && k < rotors.size()) {
+    spin = rotors[k].spin == Spin::kCw ? ", CW" : ", CCW";
+    spin += " (as the vehicle model has it)";
+  }
+  return "motor " + std::to_string(motor + 1) +
+         (name != "m" + std::to_string(motor + 1) ? " (" + name + ")" : "") +
+         (detail.empty() ? "" : ", " + detail) + spin;
+}
+
+ClientOutcome run_motor_test(const config::Config& config, const std::vector<int>& motors,
+                             double throttle, double seconds, double wait_s,
+                             const std::string& lcm_url, const std::atomic<bool>& interrupted,
+                             std::ostream& out, std::ostream& err) {
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    err << "motormix motor-test: cannot open the LCM bus\n";
+    return ClientOutcome::kBusError;
+  }
+  StatusWatch watch;
+  lcm.subscribe(config.channels.status, &StatusWatch::on_status, &watch);
+  MotorTestClient client(motors, throttle, seconds, wait_s);
+  const auto start = Clock::now();
+  for (;;) {
+    if (interrupted) client.on_interrupt();
+    std::optional<MotorTestAnswer> answer;
+    if (watch.latest) {
+      answer = MotorTestAnswer{watch.latest->motor_test_request_utime,
+                               static_cast<loop::MotorTestResult>(watch.latest->motor_test_result),
+                               watch.latest->motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING};
+    }
+    const MotorTestClient::Action a =
+        client.step(seconds_since(start), node::wall_us(), answer ? &*answer : nullptr);
+    using Kind = MotorTestClient::Action::Kind;
+    switch (a.kind) {
+      case Kind::kSend:
+        send_test(lcm, config.channels.motor_test, a.motor, a.throttle, a.seconds, a.utime);
+        break;
+      case Kind::kSpinning:
+        out << describe_motor(config, a.motor - 1) << ": spinning at " << throttle << " for "
+            << seconds << " s" << std::endl;
+        break;
+      case Kind::kWait:
+        lcm.handleTimeout(20);
+        break;
+      case Kind::kDone:
+        return ClientOutcome::kOk;
+      case Kind::kNoAnswer:
+        err << "motormix motor-test: no answer on " << config.channels.status << " within "
+            << wait_s << " s: is motormix run running with this configuration?\n";
+        return ClientOutcome::kNoAnswer;
+      case Kind::kRefused:
+        err << "motormix motor-test: refused: " << loop::to_string(a.refusal) << "\n";
+        return ClientOutcome::kRefused;
+      case Kind::kStopped:
+        send_test(lcm, config.channels.motor_test, 0, 0.0, 0.0, a.utime);
+        err << "motormix motor-test: interrupted, test stopped\n";
+        return ClientOutcome::kInterrupted;
+    }
+  }
+}
+
+ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibrationTiming& timing,
+                                  const std::string& lcm_url, int input_fd,
+                                  const std::atomic<bool>& interrupted, std::ostream& out,
+                                  std::ostream& err) {
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    err << "motormix esc-calibrate: cannot open the LCM bus\n";
+    return ClientOutcome::kBusError;
+  }
+  // Nothing else may drive the outputs: any status, or any motor_pwm_t
+  // heard before this process publishes its own, is a mixer.
+  StatusWatch watch;
+  int foreign_pwm = 0;
+  bool publishing = false;
+  struct PwmWatch {
+    int* count;
+    const bool* publishing;
+    void on_pwm(const lcm::ReceiveBuffer*, const std::string&) {
+      if (!*publishing) ++*count;
+    }
+  } pwm_watch{&foreign_pwm, &publishing};
+  lcm.subscribe(config.channels.status, &StatusWatch::on_status, &watch);
+  lcm.subscribe(config.channels.motor_pwm, &PwmWatch::on_pwm, &pwm_watch);
+
+  EscCalibrationTiming t = timing;
+  t.listen_s = std::max(timing.listen_s, 2.0 / config.status_rate_hz);
+  const auto start = Clock::now();
+  EscCalibration calibration(config, t, 0.0);
+  motor_pwm_t msg;
+  msg.num_motors = config.motors();
+  msg.direction.assign(static_cast<std::size_t>(msg.num_motors), 0);
+  msg.pwm.resize(static_cast<std::size_t>(msg.num_motors));
+  msg.command.resize(static_cast<std::size_t>(msg.num_motors));
+  msg.setpoint_utime = 0;
+  msg.pid_utime = 0;
+  msg.failed_motors = 0;
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / config.loop_rate_hz));
+  auto next = Clock::now();
+  while (calibration.outcome() == EscCalibration::Outcome::kRunning) {
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    if (watch.statuses > 0 || foreign_pwm > 0) calibration.on_mixer_heard();
+    if (interrupted) calibration.on_interrupt();
+    if (calibration.phase() == EscCalibration::Phase::kMaximum) {
+      const int line = line_ready(input_fd);
+      if (line > 0) calibration.on_enter();
+      if (line < 0) calibration.on_end_of_input();
+    }
+    const EscCalibration::Output o = calibration.step(seconds_since(start));
+    if (calibration.phase_changed()) {
+      const auto& unit = config.output_unit;
+      switch (calibration.phase()) {
+        case EscCalibration::Phase::kMaximum:
+          out << "Every output is at its maximum (" << calibration.maximum().front() << " "
+              << unit << "). Power the ESCs now; when they have beeped, press Enter (Ctrl-C "
+              << "aborts). Waiting at most " << t.timeout_s << " s." << std::endl;
+          break;
+        case EscCalibration::Phase::kMinimum:
+          out << "Minimum (" << calibration.minimum().front() << " " << unit << ") for "
+              << t.min_seconds << " s: the ESCs confirm the range." << std::endl;
+          break;
+        default:
+          break;
+      }
+    }
+    if (o.publish) {
+      publishing = true;
+      msg.utime = node::wall_us();
+      for (int i = 0; i < msg.num_motors; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        msg.pwm[k] = static_cast<float>((*o.pwm)[k]);
+        msg.command[k] = static_cast<float>(o.command);
+      }
+      msg.armed = o.armed;
+      lcm.publish(config.channels.motor_pwm, &msg);
+      // Our own outputs come back on the same channel: from now on only a
+      // status betrays another mixer.
+      while (lcm.handleTimeout(0) > 0) {
+      }
+      foreign_pwm = 0;
+      next += period;
+      std::this_thread::sleep_until(next);
+    } else {
+      lcm.handleTimeout(20);
+      next = Clock::now();
+    }
+  }
+  switch (calibration.outcome()) {
+    case EscCalibration::Outcome::kCalibrated:
+      out << "Done: outputs disarmed." << std::endl;
+      return ClientOutcome::kOk;
+    case EscCalibration::Outcome::kRefused:
+      if (interrupted) {
+        err << "motormix esc-calibrate: interrupted while listening; nothing was sent\n";
+        return ClientOutcome::kInterrupted;
+      }
+      err << "motormix esc-calibrate: refused: " << calibration.reason() << " ("
+          << config.channels.motor_pwm << " or " << config.channels.status << " heard within "
+          << t.listen_s << " s); nothing was sent\n";
+      return ClientOutcome::kRefused;
+    default:
+      err << "motormix esc-calibrate: " << calibration.reason() << "; outputs disarmed\n";
+      return interrupted ? ClientOutcome::kInterrupted : ClientOutcome::kAborted;
+  }
+}
+
+}  // namespace motormix::bringup

@@ -1,0 +1,44 @@
+#pragma once
+// The bring-up clients on the bus: the motor test through a running
+// `motormix run`, and the ESC calibration with no mixer running. Their
+// decisions are in motor_test_client.hpp and esc_calibration.hpp (time
+// passed in, tested on their own); this is the bus, the terminal and the
+// clock around them.
+
+#include "bringup/esc_calibration.hpp"
+
+#include <motormix/config/config.hpp>
+
+#include <atomic>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace motormix::bringup {
+
+enum class ClientOutcome {
+  kOk = 0,
+  kBusError,     // the LCM bus could not be opened
+  kNoAnswer,     // motor test: no mixer answered
+  kRefused,      // the mixer refused the test, or calibration found a mixer running
+  kAborted,      // calibration ended before the range was taught (outputs disarmed)
+  kInterrupted,  // Ctrl-C or SIGTERM (motor test stopped, outputs disarmed)
+};
+
+// "motor 2 (front_left), front left, CW": where a motor is and how it spins.
+std::string describe_motor(const config::Config& config, int motor);
+
+// Spins each of `motors` (0-based) in turn. `interrupted` is set by the
+// caller's signal handler.
+ClientOutcome run_motor_test(const config::Config& config, const std::vector<int>& motors,
+                             double throttle, double seconds, double wait_s,
+                             const std::string& lcm_url, const std::atomic<bool>& interrupted,
+                             std::ostream& out, std::ostream& err);
+
+// The calibration sequence; the user's Enter is read from `input_fd`.
+ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibrationTiming& timing,
+                                  const std::string& lcm_url, int input_fd,
+                                  const std::atomic<bool>& interrupted, std::ostream& out,
+                                  std::ostream& err);
+
+}  // namespace motormix::bringup
