@@ -54,6 +54,7 @@ int motor_test(const MotorTestCommand& cmd) {
     }
     motors.push_back(m);
   }
+  if (cmd.parse_only) return kExitOk;
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   return exit_code(bringup::run_motor_test(*config, motors, cmd.throttle, cmd.seconds, cmd.wait_s,

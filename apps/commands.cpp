@@ -104,6 +104,7 @@ int mix(const MixCommand& cmd) {
     }
     gain = battery_gain(*config->battery, *cmd.battery_voltage);
   }
+  if (cmd.parse_only) return kExitOk;
   const Mixer mixer = config::build_mixer(*config);
   const int n = mixer.motors();
   const auto names_of = [&](MotorMask mask) {

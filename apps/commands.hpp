@@ -58,6 +58,7 @@ struct MixCommand {
   bool batch = false;  // demands from stdin, one JSON line out per demand
   std::optional<double> battery_voltage;  // applied unfiltered, needs a battery section
   std::vector<std::string> failed;        // motor numbers or names, added to mixer.failed_motors
+  bool parse_only = false;                // validate everything, then exit 0 without mixing
 };
 int mix(const MixCommand& cmd);
 
@@ -99,6 +100,7 @@ struct SimCommand {
   std::string lcm_url;
   bool controller = true;
   double duration_s = 0.0;
+  bool parse_only = false;  // resolve the scenario and every --fail, then exit 0 without flying
 };
 int sim(const SimCommand& cmd);
 
@@ -110,6 +112,7 @@ struct MotorTestCommand {
   double seconds = 2.0;
   bool sequence = false;  // every motor in turn, in the diagram's numbering
   double wait_s = 3.0;    // for the mixer's answer
+  bool parse_only = false;  // resolve the motor, then exit 0 without the bus
 };
 int motor_test(const MotorTestCommand& cmd);
 

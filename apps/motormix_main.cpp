@@ -208,7 +208,13 @@ int main(int argc, char** argv) {
   }
   if (parse_only) {
     // The vehicle named must load too: a configuration shown in the guide
-    // is checked with the command that uses it.
+    // is checked with the command that uses it. The subcommands that name
+    // more (a scenario, motors to fail, a motor to test, a battery voltage)
+    // resolve it all and stop before doing anything.
+    mix_cmd.parse_only = sim_cmd.parse_only = test_cmd.parse_only = true;
+    if (mix_app->parsed()) return mix(mix_cmd);
+    if (sim_app->parsed()) return sim(sim_cmd);
+    if (test_app->parsed()) return motor_test(test_cmd);
     for (const auto& [sub, common] : vehicles) {
       if (sub->parsed() && !load_vehicle(*common, sub->get_name().c_str())) return kExitUsage;
     }

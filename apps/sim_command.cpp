@@ -99,6 +99,16 @@ int sim(const SimCommand& cmd) {
     std::cerr << "motormix sim: --log is for lockstep runs; record a live run with lcm-logger\n";
     return kExitUsage;
   }
+  if (cmd.parse_only) {
+    try {
+      const sim::ScenarioClock clock(*scenario, *config, options.failures);  // motors exist
+      (void)clock;
+    } catch (const config::ConfigError& e) {
+      std::cerr << "motormix sim: " << e.what() << "\n";
+      return kExitUsage;
+    }
+    return kExitOk;
+  }
 
   const bool wheeled = config->thrust_range() == ThrustRange::kBipolar;
   nlohmann::json j;

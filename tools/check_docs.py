@@ -1,11 +1,15 @@
 #!/usr/bin/env python3
 """Checks the README and the guide (docs/*.md) the way a reader meets them:
 
-- every relative link and image resolves to a file of the repository;
+- every relative link and image resolves to a file of the repository, and
+  every #anchor (on the same page or another) to one of its headings;
+- no line of a page is 200 characters or longer;
 - every `motormix ...` line shown in a shell block parses and validates
   (`motormix --parse-only ...`: options, values, files, exactly one of
-  --config and --preset, and the configuration it names loads), lines
-  continued with a backslash joined first;
+  --config and --preset, the configuration it names loads, and what it
+  names resolves: the scenario and each --fail of `sim`, the motor of
+  `motor-test`, the --failed motors of `mix`), lines continued with a
+  backslash joined first;
 - every `scripts/...`, `tools/...` or `python3 tools/...` line names a file
   that exists.
 
@@ -17,7 +21,11 @@ too. Commands run in a scratch directory that links the repository's
 config/, scenarios/, test/, tools/, scripts/ and examples/.
 
     python3 tools/check_docs.py --motormix build/motormix [--root .]
-Exit 0 when everything resolves; otherwise each failure is printed.
+        [--min-links N] [--min-commands N]
+Exit 0 when everything resolves and at least the expected numbers of links
+and commands were checked (a page that lost its examples, or a parser that
+stopped finding them, fails); otherwise each failure is printed. Lines
+that run a built binary (build/...) are counted as skipped, not checked.
 """
 
 import argparse
@@ -57,15 +65,28 @@ def outside_blocks(text):
     return "\n".join(keep)
 
 
+def slug(heading):
+    """The anchor a heading gets: lower case, punctuation dropped, spaces as -."""
+    text = re.sub(r"[`*_]", "", heading.strip().lstrip("#").strip()).lower()
+    text = re.sub(r"[^\w\- ]", "", text)
+    return text.replace(" ", "-")
+
+
+def anchors(text):
+    return {slug(line) for line in outside_blocks(text).split("\n") if line.startswith("#")}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--motormix", required=True)
     ap.add_argument("--root", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    ap.add_argument("--min-links", type=int, default=0)
+    ap.add_argument("--min-commands", type=int, default=0)
     args = ap.parse_args()
     root = os.path.abspath(args.root)
     motormix = os.path.abspath(args.motormix)
     pages = [os.path.join(root, "README.md")] + sorted(glob.glob(os.path.join(root, "docs", "*.md")))
-    failures, links, commands = [], 0, 0
+    failures, links, commands, skipped = [], 0, 0, 0
     with tempfile.TemporaryDirectory() as scratch:
         for d in ("config", "scenarios", "test", "tools", "scripts", "examples"):
             os.symlink(os.path.join(root, d), os.path.join(scratch, d))
@@ -73,13 +94,20 @@ def main():
         for page in pages:
             name = os.path.relpath(page, root)
             text = open(page).read()
+            for n, line in enumerate(text.split("\n"), 1):
+                if len(line) >= 200:
+                    failures.append(f"{name}:{n}: a line of {len(line)} characters (at most 199)")
             for target in LINK.findall(outside_blocks(text)):
-                if re.match(r"^(https?:|mailto:|#)", target):
+                if re.match(r"^(https?:|mailto:)", target):
                     continue
                 links += 1
-                path = os.path.normpath(os.path.join(os.path.dirname(page), target.split("#")[0]))
+                file_part, _, anchor = target.partition("#")
+                path = (page if not file_part else
+                        os.path.normpath(os.path.join(os.path.dirname(page), file_part)))
                 if not os.path.exists(path):
                     failures.append(f"{name}: link to {target}: no such file")
+                elif anchor and path.endswith(".md") and anchor not in anchors(open(path).read()):
+                    failures.append(f"{name}: link to {target}: no heading with that anchor")
             for lang, start, body in blocks(text):
                 if lang == "yaml" and body and re.match(r"^# [\w.-]+\.yaml$", body[0]):
                     with open(os.path.join(scratch, body[0][2:]), "w") as f:
@@ -124,16 +152,21 @@ def main():
                                             f"{(r.stderr or r.stdout).strip().splitlines()[:2]}")
                         continue
                     program = words[1] if words[0] in ("python3", "bash") and len(words) > 1 else words[0]
-                    if program.startswith(("scripts/", "tools/", "build", ".ci/")):
+                    if program.startswith("build"):
+                        skipped += 1  # produced by a build, not in the repository
+                        continue
+                    if program.startswith(("scripts/", "tools/", ".ci/")):
                         commands += 1
-                        if program.startswith("build"):
-                            continue  # produced by a build, not in the repository
                         if not os.path.exists(os.path.join(root, program)):
                             failures.append(f"{where}: '{program}' does not exist")
+    if links < args.min_links:
+        failures.append(f"only {links} links checked, at least {args.min_links} expected")
+    if commands < args.min_commands:
+        failures.append(f"only {commands} commands checked, at least {args.min_commands} expected")
     for f in failures:
         print(f)
     print(f"check_docs: {len(pages)} pages, {links} links, {commands} commands checked, "
-          f"{len(failures)} failures")
+          f"{skipped} skipped (built binaries), {len(failures)} failures")
     return 1 if failures else 0
 
 
