@@ -89,12 +89,17 @@ std::string table(const Config& c) {
       << " rad/s -> forward " << c.wheel_base->max_forward_speed() << " m/s, turn "
       << c.wheel_base->max_turn_rate() << " rad/s at full command";
   }
-  s << "\n\n" << std::left << std::setw(7) << "motor" << std::setw(20) << "where" << std::right;
+  int where_width = 20;  // the widest motor detail, and at least this
+  for (int i = 0; i < c.motors(); ++i) {
+    where_width = std::max(where_width, static_cast<int>(detail(c, i).size()) + 2);
+  }
+  s << "\n\n" << std::left << std::setw(7) << "motor" << std::setw(where_width) << "where"
+    << std::right;
   for (const char* axis : kAxisNames) s << std::setw(9) << axis;
   s << "\n";
   for (int i = 0; i < c.motors(); ++i) {
-    s << std::left << std::setw(7) << c.motor_names()[static_cast<std::size_t>(i)] << std::setw(20)
-      << detail(c, i) << std::right;
+    s << std::left << std::setw(7) << c.motor_names()[static_cast<std::size_t>(i)]
+      << std::setw(where_width) << detail(c, i) << std::right;
     for (int a = 0; a < kNumAxes; ++a) s << " " << fixed(c.mixing(i, a));
     s << "\n";
   }

@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cmath>
+#include <sstream>
+#include <cmath>
 #include <functional>
 #include <map>
 
@@ -20,6 +22,10 @@ struct ArmSpec {
   Spin spin;
 };
 
+// Where a rotor sits, as a person names it: front, rear, left, right, or
+// two of them. Off the axes and the diagonals (an octo's 22.5 and 67.5
+// degrees, a hexa's 30 and 150) two rotors share a quadrant, so the angle
+// from the nose is added: "front right, 22.5 deg off the nose".
 std::string side_of(double x, double y) {
   const auto part = [](double v, const char* pos, const char* neg) -> std::string {
     return std::abs(v) < 1e-9 ? "" : (v > 0 ? pos : neg);
@@ -28,7 +34,12 @@ std::string side_of(double x, double y) {
   std::string lr = part(y, "right", "left");
   if (fb.empty()) return lr;
   if (lr.empty()) return fb;
-  return fb + " " + lr;
+  const double off_nose = std::atan2(std::abs(y), x) * 180.0 / kPi;  // 0..180
+  const double from_diagonal = std::abs(std::fmod(off_nose, 90.0) - 45.0);
+  if (from_diagonal < 1.0) return fb + " " + lr;
+  std::ostringstream angle;
+  angle << std::round(off_nose * 10.0) / 10.0;
+  return fb + " " + lr + ", " + angle.str() + " deg off the nose";
 }
 
 const char* spin_name(Spin s) { return s == Spin::kCw ? "CW" : "CCW"; }
