@@ -71,7 +71,7 @@ int sim(const SimCommand& cmd) {
     config = load_vehicle(cmd.common, "sim");
     if (!config) return kExitUsage;
     scenario = sim::load_scenario(cmd.scenario);
-    if (!config->physics.incomplete.empty()) throw config::ConfigError(config->physics.incomplete);
+    if (!config->vehicle_model.incomplete.empty()) throw config::ConfigError(config->vehicle_model.incomplete);
     sim::scenario_config(*config, *scenario);  // the scenario fits the vehicle
   } catch (const config::ConfigError& e) {
     std::cerr << "motormix sim: " << e.what() << "\n";

@@ -72,12 +72,12 @@ int line_ready(int fd) {
 
 std::string describe_motor(const config::Config& config, int motor) {
   const auto k = static_cast<std::size_t>(motor);
-  const auto& details = config.vehicle.motor_details;
+  const auto& details = config.geometry.motor_details;
   const std::string name = config.motor_names()[k];
   const std::string detail = k < details.size() ? details[k] : "";
   std::string spin;
   // A sign table (the team quad) names no spin; the vehicle model's rotors do.
-  const auto& rotors = config.physics.rotors;
+  const auto& rotors = config.vehicle_model.rotors;
   if (detail.find("CW") == std::string::npos && k < rotors.size()) {
     spin = rotors[k].spin == Spin::kCw ? ", CW" : ", CCW";
     spin += " (as the vehicle model has it)";

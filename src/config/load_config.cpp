@@ -304,27 +304,27 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
     } else {
       geometry.allow("motor_order");
     }
-    config.vehicle = *find_preset(name, options);
+    config.geometry = *find_preset(name, options);
     config.geometry_source = "preset " + name;
     if (name == "differential_drive" || name.rfind("skid_steer", 0) == 0) {
       WheelBase base;
-      base.wheels_per_side = config.vehicle.motors() / 2;
+      base.wheels_per_side = config.geometry.motors() / 2;
       config.wheel_base = base;
     }
   } else if (form == "rotors") {
-    config.vehicle = rotors_vehicle(geometry.raw("rotors"), geometry.path_of("rotors"));
+    config.geometry = rotors_vehicle(geometry.raw("rotors"), geometry.path_of("rotors"));
   } else if (form == "effectiveness") {
-    config.vehicle = effectiveness_vehicle(geometry.map("effectiveness"));
+    config.geometry = effectiveness_vehicle(geometry.map("effectiveness"));
   } else if (form == "mixing") {
-    config.vehicle = table_vehicle(geometry.raw("mixing"), geometry.path_of("mixing"));
+    config.geometry = table_vehicle(geometry.raw("mixing"), geometry.path_of("mixing"));
   } else if (form == "paparazzi") {
-    config.vehicle = paparazzi_vehicle(geometry, context);
+    config.geometry = paparazzi_vehicle(geometry, context);
   } else {
     const bool skid = form == "skid_steer";
     const WheelBase base = read_wheel_base(geometry.map(form), skid ? 2 : 1, skid);
     const std::string preset =
         skid ? "skid_steer_" + std::to_string(2 * base.wheels_per_side) : "differential_drive";
-    config.vehicle = *find_preset(preset);
+    config.geometry = *find_preset(preset);
     config.wheel_base = base;
   }
   for (const auto& f : forms) geometry.raw(f);
@@ -334,20 +334,20 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
   config.normalization = norm == "px4"    ? Normalization::kPx4
                          : norm == "none" ? Normalization::kNone
                                           : Normalization::kAxisMax;
-  if (config.vehicle.effectiveness) {
-    config.derivation = derive_mixing(*config.vehicle.effectiveness, config.vehicle.controlled,
+  if (config.geometry.effectiveness) {
+    config.derivation = derive_mixing(*config.geometry.effectiveness, config.geometry.controlled,
                                       config.normalization);
     if (!config.derivation->ok()) {
       fail(geometry.path_of(given[0]),
            "a geometry whose effectiveness has rank " + std::to_string(config.derivation->rank) +
                "; it cannot command " + axis_list(config.derivation->uncontrollable) +
                " independently of the other axes",
-           "a geometry that controls " + axis_list(config.vehicle.controlled) +
+           "a geometry that controls " + axis_list(config.geometry.controlled) +
                " (e.g. not all rotors on one line, not all spinning the same way)");
     }
     config.mixing = config.derivation->mixing;
   } else {
-    config.mixing = *config.vehicle.mixing_table;
+    config.mixing = *config.geometry.mixing_table;
   }
 
   const int motors = config.motors();
@@ -357,10 +357,10 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
     if (!names.IsSequence() || static_cast<int>(names.size()) != motors) {
       fail(path, describe(names), "a list of " + std::to_string(motors) + " names, one per motor");
     }
-    config.vehicle.motor_names.clear();
+    config.geometry.motor_names.clear();
     for (const auto& n : names) {
       if (!n.IsScalar()) fail(path, describe(n), "names (strings)");
-      config.vehicle.motor_names.push_back(n.Scalar());
+      config.geometry.motor_names.push_back(n.Scalar());
     }
   } else {
     geometry.allow("motor_names");
@@ -740,7 +740,7 @@ int Config::motor_index(const std::string& text) const {
 }
 
 std::string Config::description() const {
-  return geometry_source + " (" + vehicle.description + ")";
+  return geometry_source + " (" + geometry.description + ")";
 }
 
 }  // namespace motormix::config

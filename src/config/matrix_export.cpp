@@ -33,7 +33,7 @@ std::string fixed(double v, int width = 8) {
 }
 
 std::string detail(const Config& c, int i) {
-  const auto& d = c.vehicle.motor_details;
+  const auto& d = c.geometry.motor_details;
   return static_cast<std::size_t>(i) < d.size() ? d[static_cast<std::size_t>(i)] : "";
 }
 
@@ -42,8 +42,8 @@ std::string detail(const Config& c, int i) {
 // roll effectiveness is -y; the sign of yaw gives the spin. Coaxial rotors
 // share a spot. Tables and wheels have no positions to draw.
 std::string diagram(const Config& c) {
-  if (!c.vehicle.effectiveness || c.wheel_base) return "";
-  const EffectivenessMatrix& e = *c.vehicle.effectiveness;
+  if (!c.geometry.effectiveness || c.wheel_base) return "";
+  const EffectivenessMatrix& e = *c.geometry.effectiveness;
   constexpr int kRows = 9;
   constexpr int kCols = 41;
   double extent = 0.0;
@@ -218,7 +218,7 @@ std::string param(double v) {
 constexpr double kPx4DefaultCt = 6.5;
 
 std::string px4(const Config& c) {
-  const std::vector<Rotor>& rotors = c.vehicle.rotors;
+  const std::vector<Rotor>& rotors = c.geometry.rotors;
   if (rotors.empty()) {
     throw ConfigError("format px4 needs a rotor geometry (a rotor preset or geometry.rotors); " +
                       c.description() +
@@ -297,7 +297,7 @@ std::string ardupilot(const Config& c) {
     s << "\n";
   }
   s << "assert(MotorsMatrix:init(" << n << "), \"Failed to init MotorsMatrix\")\n"
-    << "motors:set_frame_string(\"motormix " << c.vehicle.name << "\")\n";
+    << "motors:set_frame_string(\"motormix " << c.geometry.name << "\")\n";
   return s.str();
 }
 

@@ -168,7 +168,7 @@ void read_escs(MapReader esc, const Config& config, VehiclePhysics& v) {
 }  // namespace
 
 void read_vehicle_physics(MapReader vehicle, Config& config) {
-  VehiclePhysics& v = config.physics;
+  VehiclePhysics& v = config.vehicle_model;
   v = VehiclePhysics{};
   v.wheeled = config.thrust_range() == ThrustRange::kBipolar;
   const int motors = config.motors();
@@ -194,7 +194,7 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
       vehicle.raw(key);
     }
     const double scale = vehicle.number("length_scale", 1.0, 1e-6, 1e6);
-    std::vector<Rotor> rotors = config.vehicle.rotors;
+    std::vector<Rotor> rotors = config.geometry.rotors;
     std::vector<RotorEntry> entries;
     if (vehicle.has("rotors")) {
       entries = explicit_rotors(vehicle.raw("rotors"), vehicle.path_of("rotors"), motors);
@@ -202,7 +202,7 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
       for (const RotorEntry& e : entries) rotors.push_back(e.rotor);
     } else {
       vehicle.allow("rotors");
-      if (rotors.empty() && config.vehicle.name == "team_quad") rotors = team_quad_rotors();
+      if (rotors.empty() && config.geometry.name == "team_quad") rotors = team_quad_rotors();
     }
     const std::string rotor_path = vehicle.path_of("rotors");
     const int n = static_cast<int>(rotors.size());

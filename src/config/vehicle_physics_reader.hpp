@@ -1,5 +1,5 @@
 #pragma once
-// Reads the `vehicle:` section into config.physics (see vehicle_physics.hpp).
+// Reads the `vehicle:` section into config.vehicle_model (see vehicle_physics.hpp).
 // Needs the geometry and the outputs read first: defaults come from them.
 
 #include "config/yaml_reader.hpp"

@@ -94,7 +94,7 @@ Scorer::Scorer(const Scenario& scenario, const config::Config& config)
     : from_s_(scenario.score_from_s),
       to_s_(scenario.score_to_s),
       wheeled_(config.thrust_range() == ThrustRange::kBipolar),
-      controlled_(config.vehicle.controlled) {}
+      controlled_(config.geometry.controlled) {}
 
 void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
                  const VehicleModel& vehicle, bool armed, std::uint8_t axis_limited) {
@@ -152,9 +152,9 @@ config::Config scenario_config(const config::Config& config_in, const Scenario& 
   }
   config::Config config = config_in;
   if (scenario.battery_initial_charge)
-    config.physics.battery.initial_charge = *scenario.battery_initial_charge;
+    config.vehicle_model.battery.initial_charge = *scenario.battery_initial_charge;
   if (scenario.battery_resistance_factor)
-    config.physics.battery.internal_resistance_ohm *= *scenario.battery_resistance_factor;
+    config.vehicle_model.battery.internal_resistance_ohm *= *scenario.battery_resistance_factor;
   return config;
 }
 
@@ -165,9 +165,9 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   const config::Config config = scenario_config(config_in, scenario);
   VehicleModel vehicle(config);
   loop::ControlLoop loop(config, std::move(mixer));
-  const double tau = (config.physics.time_constant_up_s + config.physics.time_constant_down_s) / 2;
-  Controller controller(config, loop.mixer(), vehicle.command_effect(), config.physics.mass_kg,
-                        config.physics.inertia_kgm2, tau);
+  const double tau = (config.vehicle_model.time_constant_up_s + config.vehicle_model.time_constant_down_s) / 2;
+  Controller controller(config, loop.mixer(), vehicle.command_effect(), config.vehicle_model.mass_kg,
+                        config.vehicle_model.inertia_kgm2, tau);
   ScenarioClock clock(scenario, config, options.failures);
   Sensors sensors(scenario.noise, options.seed);
 

@@ -21,7 +21,7 @@ double lag(double value, double target, double alpha_up, double alpha_down) {
 }  // namespace
 
 VehicleModel::VehicleModel(const config::Config& config)
-    : p_(config.physics), battery_(config.physics.battery) {
+    : p_(config.vehicle_model), battery_(config.vehicle_model.battery) {
   if (!p_.incomplete.empty()) throw std::invalid_argument(p_.incomplete);
   for (const OutputChannel& ch : config.outputs) modes_.push_back(ch.mode);
   speed_.assign(static_cast<std::size_t>(config.motors()), 0.0);

@@ -95,7 +95,7 @@ TEST(RigidBody, FreeRotationConservesMomentumAndEnergy) {
 // The PWM at which every rotor carries its share of the weight, from the
 // physical ESC curve inverted by hand (not by the output stage).
 double hover_pwm(const config::Config& c, double voltage) {
-  const config::VehiclePhysics& p = c.physics;
+  const config::VehiclePhysics& p = c.vehicle_model;
   const double share =
       p.mass_kg * kGravity / static_cast<double>(p.rotors.size()) / p.rotors.front().max_thrust_n;
   const double v = voltage / p.battery.reference_v;
@@ -142,7 +142,7 @@ TEST(VehicleModel, HoverPowerMatchesAFlownReference) {
     VehicleModel v = airborne(c);
     settle_at_hover(c, v);
     const double watts_per_kg =
-        v.battery().terminal_v() * v.battery().current_a() / c.physics.mass_kg;
+        v.battery().terminal_v() * v.battery().current_a() / c.vehicle_model.mass_kg;
     EXPECT_NEAR(watts_per_kg, kReferenceWattsPerKg, kAgreement * kReferenceWattsPerKg) << name;
   }
 }
@@ -197,7 +197,7 @@ TEST(VehicleModel, ACounterClockwiseRotorYawsTheBodyClockwise) {
     out[motor] = 1700.0;
     for (int k = 0; k < 50; ++k) v.step(out, DirectionVector{}, 0, Environment{}, 1e-3);
     const double expected =
-        c.physics.rotors[static_cast<std::size_t>(motor)].spin == Spin::kCcw ? 1 : -1;
+        c.vehicle_model.rotors[static_cast<std::size_t>(motor)].spin == Spin::kCcw ? 1 : -1;
     EXPECT_GT(expected * v.body().rates.z(), kSignRateRadS) << "motor " << motor + 1;
   }
 }
@@ -227,7 +227,7 @@ TEST(VehicleModel, WheelsDriveForwardAndTurnAsTheirDirectionPinsSay) {
   forward[index(Axis::kThrust)] = 0.5;
   mixer.mix(forward, out);
   for (int k = 0; k < 1000; ++k) v.step(out.output, out.direction, 0, Environment{}, 1e-3);
-  EXPECT_GT(v.forward_speed(), 0.4 * c.physics.wheels.radius_m * c.physics.wheels.max_speed_rad_s);
+  EXPECT_GT(v.forward_speed(), 0.4 * c.vehicle_model.wheels.radius_m * c.vehicle_model.wheels.max_speed_rad_s);
   EXPECT_GT(v.body().position.x(), 0.1);
   AxisVector back = -forward;
   mixer.mix(back, out);
@@ -259,7 +259,7 @@ TEST(VehicleConfig, RejectsBadValuesNamingTheKey) {
       "geometry:\n  mixing:\n    - [1, 1, 1, 1]\n    - [-1, -1, 1, 1]\n    - [1, -1, -1, 1]\n"
       "    - [-1, 1, -1, 1]\n",
       "table");
-  EXPECT_NE(table.physics.incomplete.find("vehicle.rotors"), std::string::npos);
+  EXPECT_NE(table.vehicle_model.incomplete.find("vehicle.rotors"), std::string::npos);
   EXPECT_THROW(VehicleModel{table}, std::invalid_argument);
   // Rotors given one by one, each with its own thrust and torque ratio.
   const config::Config given = config::load_config_text(
@@ -271,10 +271,10 @@ TEST(VehicleConfig, RejectsBadValuesNamingTheKey) {
       "    - {position: [0.2, -0.2, 0], spin: cw, torque_ratio_m: 0.02}\n"
       "    - {position: [0.2, 0.2, 0], spin: ccw}\n",
       "table with rotors");
-  ASSERT_TRUE(given.physics.incomplete.empty());
-  EXPECT_DOUBLE_EQ(given.physics.rotors[0].max_thrust_n, 7.0);
-  EXPECT_DOUBLE_EQ(given.physics.rotors[2].torque_ratio_m, 0.02);
-  EXPECT_DOUBLE_EQ(given.physics.rotors[1].torque_ratio_m, 0.016);
+  ASSERT_TRUE(given.vehicle_model.incomplete.empty());
+  EXPECT_DOUBLE_EQ(given.vehicle_model.rotors[0].max_thrust_n, 7.0);
+  EXPECT_DOUBLE_EQ(given.vehicle_model.rotors[2].torque_ratio_m, 0.02);
+  EXPECT_DOUBLE_EQ(given.vehicle_model.rotors[1].torque_ratio_m, 0.016);
 }
 
 TEST(Scenario, ShippedOnesLoadAndBadOnesNameTheirKey) {

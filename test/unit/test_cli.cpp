@@ -83,7 +83,7 @@ TEST(Cli, EveryBundledConfigChecksAndEveryPresetHasOne) {
     const std::string file = entry.path().string();
     SCOPED_TRACE(file);
     EXPECT_EQ(run("run --check --config " + file).exit_code, 0);
-    covered.insert(config::load_config_file(file).vehicle.name);
+    covered.insert(config::load_config_file(file).geometry.name);
   }
   for (const std::string& preset : preset_names()) {
     EXPECT_EQ(covered.count(preset), 1U) << "no config/*.yaml for preset " << preset;

@@ -200,7 +200,7 @@ TEST(Geometry, EveryPresetIsFullRankAndThrustNormalized) {
   for (const std::string& name : preset_names()) {
     SCOPED_TRACE(name);
     const auto c = load("geometry: {preset: " + name + "}\n");
-    const AxisMask controlled = c.vehicle.controlled;
+    const AxisMask controlled = c.geometry.controlled;
     EXPECT_EQ(controlled_axes(c.mixing), controlled);
     for (int i = 0; i < c.motors(); ++i)
       EXPECT_NEAR(c.mixing(i, index(Axis::kThrust)), 1.0, kDerived);

@@ -80,7 +80,7 @@ struct Realtime {
 
 struct Config {
   std::string name;             // for logs and status
-  Vehicle vehicle;              // as described: preset, rotors, effectiveness, table or wheels
+  Vehicle geometry;  // the `geometry:` section: preset, rotors, effectiveness, table or wheels
   std::string geometry_source;  // which form described it, for logs
   Normalization normalization = Normalization::kAxisMax;
   std::optional<MixingDerivation> derivation;  // set when derived from an effectiveness matrix
@@ -112,15 +112,15 @@ struct Config {
   double status_rate_hz = 10.0;
   PublishMode publish = PublishMode::kTimer;
   Realtime realtime;
-  VehiclePhysics physics;  // the `vehicle:` section, for motormix sim only
+  VehiclePhysics vehicle_model;  // the `vehicle:` section: what motormix sim flies
   std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }
-  const std::vector<std::string>& motor_names() const { return vehicle.motor_names; }
+  const std::vector<std::string>& motor_names() const { return geometry.motor_names; }
   // A motor as users name it: its name, or its number as `motormix matrix`
   // prints it (1-based). 0-based index, -1 when it is neither.
   int motor_index(const std::string& text) const;
-  ThrustRange thrust_range() const { return vehicle.thrust_range; }
+  ThrustRange thrust_range() const { return geometry.thrust_range; }
   std::string description() const;
 };
 

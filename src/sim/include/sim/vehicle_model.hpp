@@ -39,7 +39,7 @@ struct Environment {
 
 class VehicleModel {
  public:
-  // Throws std::invalid_argument when config.physics is incomplete.
+  // Throws std::invalid_argument when config.vehicle_model is incomplete.
   explicit VehicleModel(const config::Config& config);
 
   // Advances dt seconds with `outputs` (the mixer's output-stage values) and
