@@ -26,10 +26,15 @@
 namespace motormix::test {
 namespace {
 
-// Keys this close are ties in the tolerant comparison: the allocator's default.
-constexpr double kTie = PrioritizedAllocator::kDefaultTieTolerance;
-// ...and in the strict one: the least gain the allocator counts.
-constexpr double kStrict = PrioritizedAllocator::kGainThatCounts;
+// Keys this close are ties in the tolerant comparison, and in the strict one:
+// the specification's numbers, written here, not read from the allocator, so
+// that loosening its defaults cannot loosen this test.
+constexpr double kTie = 1e-3;
+constexpr double kStrict = 1e-5;
+static_assert(PrioritizedAllocator::kDefaultTieTolerance <= kTie,
+              "the allocator's default tie tolerance exceeds the specification's 1e-3");
+static_assert(PrioritizedAllocator::kGainThatCounts <= kStrict,
+              "the allocator's least counted gain exceeds the specification's 1e-5");
 
 long cases() {
   const char* env = std::getenv("MOTORMIX_PROPERTY_CASES");
