@@ -47,6 +47,11 @@ nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
     j["speed_error_rms_mps"] = r.speed_error_rms_mps;
     j["yaw_rate_error_rms_dps"] = r.yaw_rate_error_rms_dps;
   }
+  j["armed_s"] = r.armed_s;
+  if (!wheeled) {
+    j["reached_altitude"] = r.reached_altitude;
+    j["altitude_error_max_m"] = r.altitude_error_max_m;
+  }
   j["attitude_error_rms_deg"] = r.attitude_error_rms_deg;
   j["attitude_error_max_deg"] = r.attitude_error_max_deg;
   j["yaw_error_rms_deg"] = r.yaw_error_rms_deg;

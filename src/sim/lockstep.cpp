@@ -94,10 +94,16 @@ Scorer::Scorer(const Scenario& scenario, const config::Config& config)
     : from_s_(scenario.score_from_s),
       to_s_(scenario.score_to_s),
       wheeled_(config.thrust_range() == ThrustRange::kBipolar),
-      controlled_(config.geometry.controlled) {}
+      controlled_(config.geometry.controlled),
+      period_s_(1.0 / config.loop_rate_hz) {}
 
 void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
                  const VehicleModel& vehicle, bool armed, std::uint8_t axis_limited) {
+  if (armed) ++armed_cycles_;
+  if (!wheeled_ && ref.altitude_m > 0 &&
+      std::abs(ref.altitude_m + vehicle.body().position.z()) < kReachedM) {
+    ever_reached_ = true;
+  }
   if (t < from_s_ || t > to_s_) return;
   ++scored_;
   const BodyState& b = vehicle.body();
@@ -124,6 +130,7 @@ void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
     }
     if (below < kReachedM) reached_ = true;
     if (reached_) altitude_loss_ = std::max(altitude_loss_, below);
+    altitude_error_max_ = std::max(altitude_error_max_, std::abs(below));
   }
   if (armed && (axis_limited & controlled_) != 0) ++saturated_;
 }
@@ -131,6 +138,9 @@ void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
 void Scorer::finish(SimResult& r) const {
   r.attitude_error_max_deg = att_max_;
   r.altitude_loss_m = altitude_loss_;
+  r.armed_s = static_cast<double>(armed_cycles_) * period_s_;
+  r.reached_altitude = ever_reached_;
+  r.altitude_error_max_m = altitude_error_max_;
   if (scored_ == 0) return;
   const auto n = static_cast<double>(scored_);
   r.attitude_error_rms_deg = std::sqrt(att_sq_ / n);

@@ -51,6 +51,11 @@ struct SimResult {
   double attitude_error_max_deg = 0.0;
   double yaw_error_rms_deg = 0.0;
   double altitude_loss_m = 0.0;         // largest drop below the commanded altitude, once reached
+  // A run that never arms or never climbs scores no loss and no error: these
+  // say whether it flew at all.
+  double armed_s = 0.0;             // simulated time the mixer spent armed, the whole run
+  bool reached_altitude = false;    // aircraft: came within 0.1 m of a commanded altitude
+  double altitude_error_max_m = 0.0;  // aircraft: largest |commanded - flown| altitude, scored window
   double saturated_fraction = 0.0;      // cycles with some axis not fully delivered
   double speed_error_rms_mps = 0.0;     // ground vehicles
   double yaw_rate_error_rms_dps = 0.0;  // ground vehicles
@@ -106,7 +111,10 @@ class Scorer {
   bool wheeled_;
   AxisMask controlled_;
   double att_sq_ = 0, yaw_sq_ = 0, speed_sq_ = 0, rate_sq_ = 0;
-  double att_max_ = 0, altitude_loss_ = 0;
+  double att_max_ = 0, altitude_loss_ = 0, altitude_error_max_ = 0;
+  double period_s_;
+  std::int64_t armed_cycles_ = 0;
+  bool ever_reached_ = false;
   double commanded_altitude_ = -1.0;
   bool reached_ = false;
   std::int64_t scored_ = 0, saturated_ = 0;
