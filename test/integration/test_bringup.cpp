@@ -27,6 +27,8 @@ using namespace std::chrono_literals;
 
 constexpr float kDisarmedUs = 900.0f;  // config/quad_x.yaml
 constexpr float kMinUs = 1000.0f;
+constexpr double kSpoolUpS = 0.5;         // config/quad_x.yaml's output.spool_up_s
+constexpr double kSpoolUpSlackS = 0.03;  // a dozen cycles at 400 Hz, either way
 
 std::int64_t now_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -206,6 +208,32 @@ TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
     }
     EXPECT_EQ(ramp[319].pwm[i], ramp[260].pwm[i]) << "steady once spooled up";
   }
+  // It ramps to what the same mixer gives without spool-up, for the same
+  // inputs (not to the ESC's zero, where a mixer that never spun up would
+  // also be "steady"), and the ramp lasts output.spool_up_s (0.5 s) in the
+  // mixer's own clock, give or take a few cycles.
+  const config::Config no_spool =
+      config::load_config_file(quad(), {"output.spool_up_s=0"});
+  const Mixer mixer = config::build_mixer(no_spool);
+  MixerOutput out;
+  AxisVector demand;
+  demand << 0.05, 0.0, 0.0, 0.08;
+  mixer.mix(demand, out);
+  std::size_t reached = ramp.size();
+  for (std::size_t k = 0; k < ramp.size() && reached == ramp.size(); ++k) {
+    bool all = true;
+    for (std::size_t i = 0; i < 4; ++i) {
+      all = all && std::abs(ramp[k].pwm[i] - out.output[static_cast<Eigen::Index>(i)]) <= kFloatPwmUs;
+    }
+    if (all) reached = k;
+  }
+  ASSERT_LT(reached, ramp.size()) << "never reached the unramped mix " << out.output.transpose();
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_GT(out.output[static_cast<Eigen::Index>(i)], 1000.0 + 10.0) << "a demand that spins";
+  }
+  const double ramp_s = static_cast<double>(ramp[reached].utime - ramp.front().utime) / 1e6;
+  EXPECT_GE(ramp_s, kSpoolUpS - kSpoolUpSlackS);
+  EXPECT_LE(ramp_s, kSpoolUpS + kSpoolUpSlackS);
   bool spooling = false, spooled = false;
   for (const mixer_status_t& st : bus_.status()) {
     if (st.state != mixer_status_t::STATE_ARMED) continue;
