@@ -36,6 +36,17 @@ void EscCalibration::abort(const std::string& why, double now_s) {
   enter(Phase::kDisarming, now_s);
 }
 
+bool EscCalibration::must_stop(double now_s) {
+  if (interrupted_) {
+    abort("interrupted", now_s);
+  } else if (mixer_heard_) {
+    abort("a mixer started on the bus", now_s);
+  } else {
+    return false;
+  }
+  return true;
+}
+
 EscCalibration::Outcome EscCalibration::outcome() const {
   switch (phase_) {
     case Phase::kRefused:
@@ -64,10 +75,8 @@ EscCalibration::Output EscCalibration::step(double now_s) {
       break;
     case Phase::kMaximum:
       // Checked in order of what must stop the motors first.
-      if (interrupted_) {
-        abort("interrupted", now_s);
-      } else if (mixer_heard_) {
-        abort("a mixer started on the bus", now_s);
+      if (must_stop(now_s)) {
+        // disarming
       } else if (enter_) {
         enter(Phase::kMinimum, now_s);
       } else if (end_of_input_) {
@@ -77,10 +86,8 @@ EscCalibration::Output EscCalibration::step(double now_s) {
       }
       break;
     case Phase::kMinimum:
-      if (interrupted_) {
-        abort("interrupted", now_s);
-      } else if (mixer_heard_) {
-        abort("a mixer started on the bus", now_s);
+      if (must_stop(now_s)) {
+        // disarming
       } else if (in_phase >= timing_.min_seconds) {
         calibrated_ = true;
         enter(Phase::kDisarming, now_s);

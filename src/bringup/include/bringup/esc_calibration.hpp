@@ -66,6 +66,9 @@ class EscCalibration {
  private:
   void enter(Phase phase, double now_s);
   void abort(const std::string& why, double now_s);
+  // While the motors run: an interrupt or a mixer on the bus aborts to
+  // disarmed (true when it did).
+  bool must_stop(double now_s);
 
   EscCalibrationTiming timing_;
   std::vector<double> high_, low_, disarmed_;
