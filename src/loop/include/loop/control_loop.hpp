@@ -43,7 +43,6 @@
 
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <optional>
 
 namespace motormix::loop {
