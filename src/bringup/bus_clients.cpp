@@ -104,9 +104,10 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
     if (interrupted) client.on_interrupt();
     std::optional<MotorTestAnswer> answer;
     if (watch.latest) {
-      answer = MotorTestAnswer{watch.latest->motor_test_request_utime,
-                               static_cast<loop::MotorTestResult>(watch.latest->motor_test_result),
-                               watch.latest->motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING};
+      answer =
+          MotorTestAnswer{watch.latest->motor_test_request_utime,
+                          static_cast<loop::MotorTestResult>(watch.latest->motor_test_result),
+                          watch.latest->motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING};
     }
     const MotorTestClient::Action a =
         client.step(seconds_since(start), node::wall_us(), answer ? &*answer : nullptr);
@@ -193,8 +194,8 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       const auto& unit = config.output_unit;
       switch (calibration.phase()) {
         case EscCalibration::Phase::kMaximum:
-          out << "Every output is at its maximum (" << calibration.maximum().front() << " "
-              << unit << "). Power the ESCs now; when they have beeped, press Enter (Ctrl-C "
+          out << "Every output is at its maximum (" << calibration.maximum().front() << " " << unit
+              << "). Power the ESCs now; when they have beeped, press Enter (Ctrl-C "
               << "aborts). Waiting at most " << t.timeout_s << " s." << std::endl;
           break;
         case EscCalibration::Phase::kMinimum:

@@ -205,8 +205,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
              failsafe_action_ == config::FailsafeAction::kHoldLast &&
              now_us - arming_.failsafe_since_us() <= hold_last_us_) {
     mix_inputs(demand, now_us, ramp);
-  } else if (state == LoopState::kFailsafe &&
-             failsafe_action_ == config::FailsafeAction::kIdle) {
+  } else if (state == LoopState::kFailsafe && failsafe_action_ == config::FailsafeAction::kIdle) {
     mix_inputs(AxisVector::Zero(), now_us, ramp);
   } else {
     mixer_.disarm(result_.mix);

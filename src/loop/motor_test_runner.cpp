@@ -29,8 +29,7 @@ const char* to_string(MotorTestResult result) {
 bool MotorTestRunner::out_of_order(std::int64_t utime) const {
   // Not newer than the last valid request, unless far enough back to be a
   // client with a new clock.
-  return last_utime_ != kNever && utime <= last_utime_ &&
-         last_utime_ - utime < kPublisherRestartUs;
+  return last_utime_ != kNever && utime <= last_utime_ && last_utime_ - utime < kPublisherRestartUs;
 }
 
 MotorTestResult MotorTestRunner::decide(const MotorTestSample& s, std::int64_t now_us,

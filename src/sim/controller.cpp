@@ -157,4 +157,11 @@ ControllerCommand Controller::update(const Reference& ref, const BodyState& m, d
   return c;
 }
 
+Controller Controller::for_vehicle(const config::Config& config, const Mixer& mixer,
+                                   const VehicleModel& vehicle) {
+  const auto& v = config.vehicle_model;
+  const double tau = (v.time_constant_up_s + v.time_constant_down_s) / 2;
+  return Controller(config, mixer, vehicle.command_effect(), v.mass_kg, v.inertia_kgm2, tau);
+}
+
 }  // namespace motormix::sim

@@ -175,9 +175,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   const config::Config config = scenario_config(config_in, scenario);
   VehicleModel vehicle(config);
   loop::ControlLoop loop(config, std::move(mixer));
-  const double tau = (config.vehicle_model.time_constant_up_s + config.vehicle_model.time_constant_down_s) / 2;
-  Controller controller(config, loop.mixer(), vehicle.command_effect(), config.vehicle_model.mass_kg,
-                        config.vehicle_model.inertia_kgm2, tau);
+  Controller controller = Controller::for_vehicle(config, loop.mixer(), vehicle);
   ScenarioClock clock(scenario, config, options.failures);
   Sensors sensors(scenario.noise, options.seed);
 

@@ -95,12 +95,12 @@ TEST_F(EscCalibrationTest, EveryAbortEndsDisarmed) {
 }
 
 TEST(EscCalibrationRefusal, OnlyUnipolarOutputsCanBeCalibrated) {
-  EXPECT_EQ(bringup::calibration_refusal(
-                config::load_config_file(source_path("config/quad_x.yaml"))),
-            "");
-  EXPECT_NE(bringup::calibration_refusal(
-                config::load_config_file(source_path("config/diff_drive.yaml"))),
-            "");
+  EXPECT_EQ(
+      bringup::calibration_refusal(config::load_config_file(source_path("config/quad_x.yaml"))),
+      "");
+  EXPECT_NE(
+      bringup::calibration_refusal(config::load_config_file(source_path("config/diff_drive.yaml"))),
+      "");
 }
 
 using bringup::MotorTestAnswer;

@@ -16,7 +16,8 @@ namespace {
 // The nearest-rank percentile of `sorted`, rounded up to the microsecond:
 // what the histogram promises.
 double nearest_rank_us(const std::vector<double>& sorted, double fraction) {
-  const auto rank = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(sorted.size())));
+  const auto rank =
+      static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(sorted.size())));
   return std::ceil(sorted[std::max<std::size_t>(rank, 1) - 1]);
 }
 

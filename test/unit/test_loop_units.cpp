@@ -70,7 +70,7 @@ TEST(Arming, RefusesHighThrottleOncePerRequest) {
   EXPECT_TRUE(a.update(fresh_inputs(true, 0.5), 0).arming_refused);
   EXPECT_FALSE(a.update(fresh_inputs(true, 0.5), 1).arming_refused);
   EXPECT_EQ(a.state(), LoopState::kDisarmed);
-  a.update(fresh_inputs(false), 2);  // the request ends
+  a.update(fresh_inputs(false), 2);                                   // the request ends
   EXPECT_TRUE(a.update(fresh_inputs(true, -0.5), 3).arming_refused);  // |throttle|
 }
 
@@ -184,8 +184,7 @@ TEST_F(MotorTestRunnerTest, OutOfOrderRefusedUnlessAPublisherRestart) {
   EXPECT_EQ(ask(1, 0.2, 1.0, 0, true, 5'000'000), MotorTestResult::kOk);
   EXPECT_EQ(ask(1, 0.2, 1.0, 0, true, 5'000'000), MotorTestResult::kRefusedInvalid);
   EXPECT_EQ(ask(1, 0.2, 1.0, 0, true, 4'500'000), MotorTestResult::kRefusedInvalid);
-  EXPECT_EQ(ask(1, 0.2, 1.0, 0, true, 5'000'000 - loop::kPublisherRestartUs),
-            MotorTestResult::kOk);
+  EXPECT_EQ(ask(1, 0.2, 1.0, 0, true, 5'000'000 - loop::kPublisherRestartUs), MotorTestResult::kOk);
   EXPECT_EQ(runner_.last_request_utime(), 5'000'000 - loop::kPublisherRestartUs);
 }
 
@@ -193,9 +192,9 @@ TEST_F(MotorTestRunnerTest, DisabledRefusesEverythingAndStopAlwaysObeyed) {
   config::MotorTestSettings disabled = settings_;
   disabled.enabled = false;
   loop::MotorTestRunner r(disabled, 4, 100 * kMs);
-  EXPECT_EQ(r.request(loop::MotorTestSample{1, 1, 0.1, 1.0}, 0, true, [](std::int64_t) {
-    return false;
-  }), MotorTestResult::kRefusedDisabled);
+  EXPECT_EQ(
+      r.request(loop::MotorTestSample{1, 1, 0.1, 1.0}, 0, true, [](std::int64_t) { return false; }),
+      MotorTestResult::kRefusedDisabled);
   EXPECT_EQ(ask(3, 0.2, 1.0, 0), MotorTestResult::kOk);
   EXPECT_EQ(ask(0, 0.0, 0.0, 0, /*disarmed=*/false), MotorTestResult::kOk);
   EXPECT_FALSE(runner_.running());

@@ -100,9 +100,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   const bool wheeled = config.thrust_range() == ThrustRange::kBipolar;
   VehicleModel vehicle(config);
   const Mixer mixer = config::build_mixer(config);  // only linearized by the controller
-  const double tau = (config.vehicle_model.time_constant_up_s + config.vehicle_model.time_constant_down_s) / 2;
-  Controller controller(config, mixer, vehicle.command_effect(), config.vehicle_model.mass_kg,
-                        config.vehicle_model.inertia_kgm2, tau);
+  Controller controller = Controller::for_vehicle(config, mixer, vehicle);
   ScenarioClock clock(scenario, config, options.sim.failures);
   Sensors sensors(scenario.noise, options.sim.seed);
   Scorer scorer(scenario, config);

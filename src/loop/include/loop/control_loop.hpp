@@ -54,9 +54,9 @@ struct CycleResult {
   bool state_changed = false;  // state differs from the previous cycle's
   bool setpoint_stale = true;
   bool pid_stale = true;
-  std::int64_t setpoint_utime = 0;         // utime of the setpoint in force, 0 if none
-  std::int64_t pid_utime = 0;              // utime of the pid in force, 0 if none
-  MotorMask failed = 0;                    // failure set in force (config and motor_status)
+  std::int64_t setpoint_utime = 0;  // utime of the setpoint in force, 0 if none
+  std::int64_t pid_utime = 0;       // utime of the pid in force, 0 if none
+  MotorMask failed = 0;             // failure set in force (config and motor_status)
   FailureHandling failure = FailureHandling::kNone;  // how that set is handled
   AxisMask held = kAllAxes;                          // axes the working motors still command
   AxisVector authority = AxisVector::Zero();         // per axis, for that set

@@ -33,15 +33,21 @@ struct Counters {
   // Every counter once: the sum below walks this list, and the
   // static_assert after the struct fails the build when a counter is added
   // above but not here.
-  static constexpr std::array kAll = {
-      &Counters::cycles,           &Counters::setpoint_received,
-      &Counters::pid_received,     &Counters::rejected_decode,
-      &Counters::rejected_nonfinite, &Counters::rejected_range,
-      &Counters::rejected_out_of_order, &Counters::rejected_future,
-      &Counters::failsafe_events,  &Counters::arming_refused,
-      &Counters::motor_status_received, &Counters::battery_received,
-      &Counters::rejected_size,    &Counters::motor_tests_started,
-      &Counters::motor_tests_refused};
+  static constexpr std::array kAll = {&Counters::cycles,
+                                      &Counters::setpoint_received,
+                                      &Counters::pid_received,
+                                      &Counters::rejected_decode,
+                                      &Counters::rejected_nonfinite,
+                                      &Counters::rejected_range,
+                                      &Counters::rejected_out_of_order,
+                                      &Counters::rejected_future,
+                                      &Counters::failsafe_events,
+                                      &Counters::arming_refused,
+                                      &Counters::motor_status_received,
+                                      &Counters::battery_received,
+                                      &Counters::rejected_size,
+                                      &Counters::motor_tests_started,
+                                      &Counters::motor_tests_refused};
 
   Counters& operator+=(const Counters& other) {
     for (const auto field : kAll) this->*field += other.*field;

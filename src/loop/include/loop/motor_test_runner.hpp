@@ -55,8 +55,8 @@ class MotorTestRunner {
     MotorTestResult r = MotorTestResult::kOk;
     if (!settings_.enabled) {
       r = MotorTestResult::kRefusedDisabled;
-    } else if (!std::isfinite(s.throttle) || !std::isfinite(s.duration_s) ||
-               from_future(s.utime) || out_of_order(s.utime)) {
+    } else if (!std::isfinite(s.throttle) || !std::isfinite(s.duration_s) || from_future(s.utime) ||
+               out_of_order(s.utime)) {
       r = MotorTestResult::kRefusedInvalid;
     } else {
       r = decide(s, now_us, disarmed);

@@ -71,6 +71,11 @@ class Controller {
              const Eigen::Matrix<double, 4, Eigen::Dynamic>& command_effect, double mass_kg,
              const Eigen::Vector3d& inertia, double time_constant_s);
 
+  // The controller of the vehicle model built from `config` (its mass,
+  // inertia and the mean of its motors' up and down time constants).
+  static Controller for_vehicle(const config::Config& config, const Mixer& mixer,
+                                const VehicleModel& vehicle);
+
   // One update of dt seconds. mixer_armed: the mixer's outputs are armed
   // (until then the throttle stays at zero so arming is accepted); on_ground:
   // integrators stay reset. unallocated: the mixer's report of the last

@@ -21,15 +21,16 @@ inline constexpr double kTimeToleranceS = 1e-9;
 inline bool due(double t, double at) { return t + kTimeToleranceS >= at; }
 
 inline constexpr double kMaxPhysicsStepS = 1e-3;
-inline constexpr double kBatteryPeriodS = 0.02;      // battery_t at 50 Hz
-inline constexpr double kMotorStatusPeriodS = 0.1;  // motor_status_t at 10 Hz once a failure is seen
+inline constexpr double kBatteryPeriodS = 0.02;  // battery_t at 50 Hz
+inline constexpr double kMotorStatusPeriodS =
+    0.1;  // motor_status_t at 10 Hz once a failure is seen
 
 class ScenarioClock;
 
 struct SimulationPeriod {
-  double period_s;    // one loop period
-  int substeps;       // physics steps per period
-  double step_s;      // period_s / substeps, at most kMaxPhysicsStepS
+  double period_s;      // one loop period
+  int substeps;         // physics steps per period
+  double step_s;        // period_s / substeps, at most kMaxPhysicsStepS
   std::int64_t cycles;  // periods in a run of duration_s
 
   SimulationPeriod(double loop_rate_hz, double duration_s);
