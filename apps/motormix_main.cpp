@@ -134,10 +134,12 @@ int main(int argc, char** argv) {
                       "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
                       "drive) or a YAML file (default hover)");
   sim_app->add_option("--fail", sim_cmd.fail,
-                      "stop a motor: MOTOR@SECONDS, motor numbered as motormix matrix prints it "
-                      "or named (repeatable)");
+                      "fail a motor: MOTOR@SECONDS[:KIND], motor numbered as motormix matrix "
+                      "prints it or named; KIND stop (default), half_thrust, intermittent, "
+                      "desync or telemetry (repeatable)");
   sim_app->add_flag("--undetected", sim_cmd.undetected,
-                    "never report stopped motors on motor_status (a silent failure)");
+                    "nothing outside motormix reports failed motors on motor_status: only "
+                    "motormix's own detector (failure_detection:) can find them");
   sim_app->add_option("--seed", sim_cmd.seed, "seed of the sensor noise (default 1)");
   sim_app->add_flag("--json", sim_cmd.json, "print only the JSON result");
   sim_app->add_option("--log", sim_cmd.log_path, "write the run as an LCM event log (lockstep)");

@@ -23,8 +23,18 @@ const char* airmode_name(Airmode a) {
                                        : "off";
 }
 
-// "3@6.5" or "FL@6.5": motor number as `motormix matrix` prints it, or name.
-bool parse_failure(const std::string& text, const config::Config& config, sim::MotorFailure& out) {
+// "3@6.5" or "FL@6.5:desync": motor number as `motormix matrix` prints it,
+// or name; the kind of failure after a colon (stop when none).
+bool parse_failure(const std::string& text_in, const config::Config& config,
+                   sim::MotorFailure& out) {
+  std::string text = text_in;
+  out.kind = sim::FailureKind::kStop;
+  if (const auto colon = text.find(':'); colon != std::string::npos) {
+    const auto kind = sim::failure_kind(text.substr(colon + 1));
+    if (!kind) return false;
+    out.kind = *kind;
+    text.resize(colon);
+  }
   const auto at = text.find('@');
   if (at == std::string::npos || at == 0 || at + 1 == text.size()) return false;
   const std::string motor = text.substr(0, at);
@@ -34,6 +44,25 @@ bool parse_failure(const std::string& text, const config::Config& config, sim::M
   out.at_s = seconds;
   out.motor = config.motor_index(motor);
   return out.motor >= 0;
+}
+
+// Each failure: which motor, when, what kind, whether something outside
+// motormix reported it, and what motormix's own detector made of it.
+nlohmann::json failures_json(const std::vector<sim::FailureOutcome>& outcomes,
+                             const config::Config& config, bool undetected) {
+  nlohmann::json failures = nlohmann::json::array();
+  const auto name = [&](int m) { return config.motor_names()[static_cast<std::size_t>(m)]; };
+  for (const sim::FailureOutcome& o : outcomes) {
+    nlohmann::json f = {{"motor", name(o.failure.motor)},
+                        {"at_s", o.failure.at_s},
+                        {"kind", sim::to_string(o.failure.kind)},
+                        {"reported", !undetected && sim::reported_outside(o.failure.kind)}};
+    f["detected_at_s"] = o.detected_at_s >= 0 ? nlohmann::json(o.detected_at_s) : nlohmann::json();
+    f["detected_motor"] = o.detected_motor >= 0 ? nlohmann::json(name(o.detected_motor)) : nlohmann::json();
+    f["detected_by"] = o.detected_at_s >= 0 ? nlohmann::json(to_string(o.detected_by)) : nlohmann::json();
+    failures.push_back(f);
+  }
+  return failures;
 }
 
 nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
@@ -89,8 +118,9 @@ int sim(const SimCommand& cmd) {
   for (const std::string& f : cmd.fail) {
     sim::MotorFailure failure;
     if (!parse_failure(f, *config, failure)) {
-      std::cerr << "motormix sim: --fail " << f << ": expected MOTOR@SECONDS with MOTOR 1.."
-                << config->motors() << " or a motor name\n";
+      std::cerr << "motormix sim: --fail " << f << ": expected MOTOR@SECONDS[:KIND] with MOTOR 1.."
+                << config->motors() << " or a motor name and KIND one of "
+                << sim::kFailureKindNames << "\n";
       return kExitUsage;
     }
     options.failures.push_back(failure);
@@ -117,6 +147,12 @@ int sim(const SimCommand& cmd) {
 
   const bool wheeled = config->thrust_range() == ThrustRange::kBipolar;
   nlohmann::json j;
+  // Live runs do not see motormix's detector: their failures say only when.
+  std::vector<sim::FailureOutcome> outcomes;
+  const sim::ScenarioClock failure_clock(*scenario, *config, options.failures);
+  for (const sim::MotorFailure& f : failure_clock.failures()) {
+    outcomes.push_back({f, -1.0, -1, DetectionSource::kNone});
+  }
   try {
     if (cmd.lcm) {
       sim::LiveOptions live;
@@ -145,6 +181,8 @@ int sim(const SimCommand& cmd) {
           sim::run_lockstep(*config, config::build_mixer(*config), *scenario, options, observer);
       j = to_json(r, wheeled);
       j["mode"] = "lockstep";
+      outcomes = r.failures;
+      j["false_detections"] = r.false_detections;
     }
   } catch (const std::exception& e) {
     std::cerr << "motormix sim: " << e.what() << "\n";
@@ -156,14 +194,7 @@ int sim(const SimCommand& cmd) {
   if (config->strategy == config::Strategy::kPrioritized)
     j["airmode"] = airmode_name(config->airmode);
   j["seed"] = cmd.seed;
-  nlohmann::json failures = nlohmann::json::array();
-  sim::ScenarioClock clock(*scenario, *config, options.failures);
-  for (const auto& [at, motor] : clock.failures()) {
-    failures.push_back({{"motor", config->motor_names()[static_cast<std::size_t>(motor)]},
-                        {"at_s", at},
-                        {"reported", !cmd.undetected}});
-  }
-  j["failures"] = failures;
+  j["failures"] = failures_json(outcomes, *config, cmd.undetected);
   if (!cmd.json) {
     std::cerr << "motormix sim: " << config->name << " (" << config::to_string(config->strategy)
               << "), scenario " << scenario->name << ", " << j["sim_seconds"].get<double>()

@@ -1,6 +1,7 @@
 #include <motormix/config/load_config.hpp>
 
 #include "paparazzi_import.hpp"
+#include "failure_detection_reader.hpp"
 #include "vehicle_physics_reader.hpp"
 #include "config/yaml_reader.hpp"
 
@@ -602,6 +603,8 @@ void read_channels(MapReader channels, Config& config) {
   c.motor_status = channels.text("motor_status", c.motor_status);
   c.battery = channels.text("battery", c.battery);
   c.motor_test = channels.text("motor_test", c.motor_test);
+  c.esc_telemetry = channels.text("esc_telemetry", c.esc_telemetry);
+  c.attitude = channels.text("attitude", c.attitude);
   channels.finish();
   // One channel, one message type: a shared input channel would hand each
   // message to two decoders (one of which rejects it, cycle after cycle),
@@ -612,7 +615,8 @@ void read_channels(MapReader channels, Config& config) {
       {"setpoint", &c.setpoint},         {"pid", &c.pid},
       {"motor_pwm", &c.motor_pwm},       {"status", &c.status},
       {"motor_status", &c.motor_status}, {"battery", &c.battery},
-      {"motor_test", &c.motor_test}};
+      {"motor_test", &c.motor_test},     {"esc_telemetry", &c.esc_telemetry},
+      {"attitude", &c.attitude}};
   for (std::size_t i = 0; i < std::size(named); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       if (*named[i].second == *named[j].second) {
@@ -643,6 +647,7 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
   config.status_rate_hz = root.number("status_rate_hz", 10.0, 0.1, 1000.0);
   if (root.has("battery")) read_battery(root.map("battery"), config);
   read_vehicle_physics(root.map("vehicle"), config);
+  read_failure_detection(root.map("failure_detection"), root.has("failure_detection"), config);
   if (config.status_rate_hz > config.loop_rate_hz) {
     std::ostringstream found;
     found << config.status_rate_hz << " with loop_rate_hz " << config.loop_rate_hz;

@@ -22,6 +22,8 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       spool_up_(seconds_to_us(config.spool_up_s)),
       failures_(config.failed_motors, mixer_.motors()) {
   if (config.battery) battery_.emplace(*config.battery);
+  if (config.failure_detection) detection_.emplace(config);
+  esc_last_utime_.fill(kNever);
   mixer_.disarm(result_.mix);
   record_vehicle_state(0);
 }
@@ -131,6 +133,58 @@ Rejection ControlLoop::on_battery(const BatterySample& sample, std::int64_t now_
   return rejection;
 }
 
+Rejection ControlLoop::on_esc_telemetry(const EscTelemetrySample& sample, std::int64_t now_us,
+                                        std::int64_t wall_us) {
+  if (!reads_esc_telemetry()) return Rejection::kNone;
+  if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
+  const Rejection rejection = check_esc_telemetry(sample, mixer_.motors(), esc_last_utime_);
+  count(rejection);
+  if (rejection != Rejection::kNone) return rejection;
+  ++counters_.esc_telemetry_received;
+  for (int i = 0; i < sample.count; ++i) {
+    const int motor = sample.readings[static_cast<std::size_t>(i)].motor;
+    esc_last_utime_[static_cast<std::size_t>(motor - 1)] = sample.utime;
+  }
+  detection_->on_telemetry(sample, now_us);
+  return rejection;
+}
+
+Rejection ControlLoop::on_attitude(const AttitudeSample& sample, std::int64_t now_us,
+                                   std::int64_t wall_us) {
+  if (!reads_attitude()) return Rejection::kNone;
+  if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
+  const Rejection rejection = check_attitude(sample, attitude_.last_utime());
+  count(rejection);
+  if (rejection != Rejection::kNone) return rejection;
+  ++counters_.attitude_received;
+  attitude_.accept(sample, now_us);
+  detection_->on_attitude(sample, now_us);
+  return rejection;
+}
+
+void ControlLoop::detect(std::int64_t now_us, bool setpoint_fresh) {
+  result_.detection_changed = false;
+  if (!detection_) return;
+  const LoopState state = arming_.state();
+  if (state == LoopState::kDisarmed) {
+    // Declarations stand until disarming; a new flight is judged afresh.
+    if (failures_.detected() != 0 || detection_->detection().source != DetectionSource::kNone) {
+      detection_->reset();
+      failures_.set_detected(0);
+      result_.detection_changed = true;
+    }
+  }
+  const bool allowed = state == LoopState::kArmed &&
+                       spool_up_.ramp(now_us - arming_.armed_since_us()) >= 1.0 &&
+                       !motor_test_.running() && setpoint_fresh &&
+                       setpoint_.sample().throttle >= detection_->min_throttle();
+  const MotorMask before = failures_.detected();
+  const Detection& d = detection_->update(result_.mix.output, failures_.in_force(), allowed, now_us);
+  failures_.set_detected(d.failed);
+  if (failures_.detected() != before) result_.detection_changed = true;
+  result_.detection = d;
+}
+
 void ControlLoop::record_vehicle_state(std::int64_t now_us) {
   result_.failed = failures_.in_force();
   const Mixer::FailureReport& report = failures_.report(mixer_);
@@ -190,7 +244,9 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   if (events.failsafe_entered) ++counters_.failsafe_events;
   if (events.arming_refused) ++counters_.arming_refused;
 
+  detect(now_us, setpoint_fresh);
   record_vehicle_state(now_us);
+  result_.attitude_age_ms = attitude_.age_ms(now_us);
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid.yaw : setpoint.yaw;
   const AxisVector demand(pid.roll, pid.pitch, yaw, setpoint.throttle);
   // The spool-up ramp runs from arming; a failsafe that keeps mixing (hold

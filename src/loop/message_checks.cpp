@@ -1,6 +1,8 @@
 #include "loop/message_checks.hpp"
 
 #include <cmath>
+#include <iterator>
+#include <utility>
 
 namespace motormix::loop {
 
@@ -62,6 +64,78 @@ Rejection check_motor_status(const MotorStatusSample& m, int motors, std::int64_
 Rejection check_battery(const BatterySample& b, std::int64_t last_utime) {
   if (!std::isfinite(b.voltage)) return Rejection::kNonFinite;
   return check_order(b.utime, last_utime);
+}
+
+namespace {
+
+// NaN: not reported, accepted. Infinite: a broken encoder, rejected.
+Rejection check_optional(double v, double lo, double hi) {
+  if (std::isnan(v)) return Rejection::kNone;
+  if (!std::isfinite(v)) return Rejection::kNonFinite;
+  return in(v, lo, hi) ? Rejection::kNone : Rejection::kOutOfRange;
+}
+
+// The documented ranges of esc_telemetry_t, wide enough for any real ESC.
+constexpr double kMaxRpm = 1e6;
+constexpr double kMinCurrentA = -50.0, kMaxCurrentA = 1000.0;
+constexpr double kMaxVoltageV = 100.0;
+constexpr double kMinTemperatureC = -60.0, kMaxTemperatureC = 250.0;
+constexpr double kMaxConsumptionMah = 1e7;
+// A quaternion this far from unit length is not an attitude.
+constexpr double kUnitTolerance = 0.01;
+
+}  // namespace
+
+Rejection check_esc_telemetry(const EscTelemetrySample& t, int motors,
+                              const std::array<std::int64_t, kMaxEscReadings>& last_utime) {
+  if (t.count < 1 || t.count > kMaxEscReadings || t.count > motors) return Rejection::kWrongSize;
+  std::uint32_t seen = 0;
+  Rejection order = Rejection::kNone;
+  for (int i = 0; i < t.count; ++i) {
+    const EscReading& r = t.readings[static_cast<std::size_t>(i)];
+    if (r.motor < 1 || r.motor > motors || ((seen >> r.motor) & 1U) != 0) {
+      return Rejection::kOutOfRange;  // no such motor, or named twice
+    }
+    seen |= 1U << r.motor;
+    const std::pair<double, double> ranges[] = {{0.0, kMaxRpm},
+                                                {0.0, kMaxRpm},
+                                                {kMinCurrentA, kMaxCurrentA},
+                                                {0.0, kMaxVoltageV},
+                                                {kMinTemperatureC, kMaxTemperatureC},
+                                                {0.0, kMaxConsumptionMah}};
+    const double values[] = {r.rpm,       r.erpm,          r.current_a,
+                             r.voltage_v, r.temperature_c, r.consumption_mah};
+    for (std::size_t k = 0; k < std::size(values); ++k) {
+      const Rejection field = check_optional(values[k], ranges[k].first, ranges[k].second);
+      if (field != Rejection::kNone) return field;
+    }
+    if (order == Rejection::kNone) {
+      order = check_order(t.utime, last_utime[static_cast<std::size_t>(r.motor - 1)]);
+    }
+  }
+  return order;
+}
+
+Rejection check_attitude(const AttitudeSample& a, std::int64_t last_utime) {
+  for (double w : a.rates) {
+    if (!std::isfinite(w)) return Rejection::kNonFinite;
+    if (std::abs(w) > kMaxBodyRateRadS) return Rejection::kOutOfRange;
+  }
+  int unknown = 0;
+  double norm_sq = 0.0;
+  for (double c : a.q) {
+    if (std::isnan(c)) {
+      ++unknown;
+    } else if (!std::isfinite(c)) {
+      return Rejection::kNonFinite;
+    }
+    norm_sq += c * c;
+  }
+  if (unknown != 0 && unknown != 4) return Rejection::kNonFinite;  // half a quaternion
+  if (unknown == 0 && std::abs(std::sqrt(norm_sq) - 1.0) > kUnitTolerance) {
+    return Rejection::kOutOfRange;
+  }
+  return check_order(a.utime, last_utime);
 }
 
 }  // namespace motormix::loop

@@ -1,5 +1,7 @@
 #include "sim/lockstep.hpp"
 
+#include "sim/attitude_sensor.hpp"
+#include "sim/esc_telemetry_model.hpp"
 #include "sim/period.hpp"
 
 #include <motormix/angles.hpp>
@@ -24,22 +26,35 @@ ScenarioClock::ScenarioClock(const Scenario& scenario, const config::Config& con
                              const std::vector<MotorFailure>& extra_failures)
     : scenario_(scenario) {
   for (const ScenarioEvent& e : scenario.timeline) {
-    if (e.fail) failures_.emplace_back(e.at_s, *e.fail);
+    if (e.fail) failures_.push_back({*e.fail, e.at_s, e.fail_kind});
   }
-  for (const MotorFailure& f : extra_failures) failures_.emplace_back(f.at_s, f.motor);
-  std::stable_sort(failures_.begin(), failures_.end());
-  for (const auto& f : failures_) {
-    if (f.second < 0 || f.second >= config.motors()) {
-      throw config::ConfigError("motor " + std::to_string(f.second + 1) +
+  for (const MotorFailure& f : extra_failures) failures_.push_back(f);
+  std::stable_sort(failures_.begin(), failures_.end(),
+                   [](const MotorFailure& a, const MotorFailure& b) { return a.at_s < b.at_s; });
+  for (const MotorFailure& f : failures_) {
+    if (f.motor < 0 || f.motor >= config.motors()) {
+      throw config::ConfigError("motor " + std::to_string(f.motor + 1) +
                                 " to fail: the vehicle has motors 1 to " +
                                 std::to_string(config.motors()));
     }
   }
   ref_.armed = false;
   ref_.altitude_m = scenario.altitude_m;
+  health_ = MotorHealth::healthy(config.motors());
 }
 
-MotorMask ScenarioClock::advance(double t) {
+const MotorHealth& ScenarioClock::health(double t) {
+  health_.drive.setOnes();
+  health_.prop.setOnes();
+  health_.telemetry_dead = 0;
+  for (const MotorFailure& f : failures_) {
+    if (f.at_s > t) break;  // as the timeline's events: due once t reaches them
+    health_.apply(f, t);
+  }
+  return health_;
+}
+
+void ScenarioClock::advance(double t) {
   ref_.armed = t >= scenario_.arm_at_s;
   while (next_ < scenario_.timeline.size() && scenario_.timeline[next_].at_s <= t) {
     const ScenarioEvent& e = scenario_.timeline[next_++];
@@ -52,20 +67,48 @@ MotorMask ScenarioClock::advance(double t) {
     if (e.wind_mps) wind_ = *e.wind_mps;
     if (e.gust) gusts_.emplace_back(e.at_s, *e.gust);
   }
-  MotorMask now = 0;
-  while (next_failure_ < failures_.size() && failures_[next_failure_].first <= t) {
-    now |= MotorMask{1} << failures_[next_failure_++].second;
-  }
-  stopped_ |= now;
-  return now;
 }
 
 MotorMask ScenarioClock::detected(double t, double detection_s) const {
   MotorMask mask = 0;
-  for (const auto& [at, motor] : failures_) {
-    if (due(t, at + detection_s)) mask |= MotorMask{1} << motor;
+  for (const MotorFailure& f : failures_) {
+    if (reported_outside(f.kind) && due(t, f.at_s + detection_s)) mask |= MotorMask{1} << f.motor;
   }
   return mask;
+}
+
+DetectionScorer::DetectionScorer(const std::vector<MotorFailure>& failures) {
+  for (const MotorFailure& f : failures) outcomes_.push_back({f, -1.0, -1, DetectionSource::kNone});
+}
+
+void DetectionScorer::add(double t, const loop::CycleResult& cycle) {
+  const MotorMask fresh = cycle.detection.failed & ~seen_;
+  seen_ |= cycle.detection.failed;
+  if (cycle.detection.failed == 0) seen_ = 0;  // disarmed: a new flight
+  for (int m = 0; fresh >> m != 0; ++m) {
+    if (((fresh >> m) & 1U) == 0) continue;
+    // The earliest undetected thrust-losing failure of this motor; else the
+    // earliest undetected one of any motor (named wrong).
+    FailureOutcome* match = nullptr;
+    FailureOutcome* other = nullptr;
+    for (FailureOutcome& o : outcomes_) {
+      if (o.detected_at_s >= 0 || !loses_thrust(o.failure.kind) || o.failure.at_s > t) continue;
+      if (o.failure.motor == m && match == nullptr) match = &o;
+      if (other == nullptr) other = &o;
+    }
+    FailureOutcome* o = match != nullptr ? match : other;
+    if (o != nullptr) {
+      o->detected_at_s = t;
+      o->detected_motor = m;
+      o->detected_by = cycle.detection.source;
+    }
+    if (match == nullptr) ++false_detections_;
+  }
+}
+
+void DetectionScorer::finish(SimResult& r) const {
+  r.failures = outcomes_;
+  r.false_detections = false_detections_;
 }
 
 bool end_of_period(SimResult& r, const VehicleModel& vehicle, std::int64_t k, double t_end) {
@@ -178,6 +221,9 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   Controller controller = Controller::for_vehicle(config, loop.mixer(), vehicle);
   ScenarioClock clock(scenario, config, options.failures);
   Sensors sensors(scenario.noise, options.seed);
+  EscTelemetryModel esc_telemetry(config.motors(), options.seed);
+  AttitudeSensor attitude_sensor(scenario.noise.gyro_rad_s, options.seed);
+  DetectionScorer detections(clock.failures());
 
   const SimulationPeriod periods(
       config.loop_rate_hz, options.duration_s > 0 ? options.duration_s : scenario.duration_s);
@@ -214,6 +260,12 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
       battery = {now, vehicle.battery().terminal_v()};
       loop.on_battery(battery, now, now);
     }
+    const MotorHealth& health = clock.health(t);
+    if (loop.reads_esc_telemetry()) {
+      const loop::EscTelemetrySample& esc = esc_telemetry.sample(t, now, vehicle, health);
+      if (esc.count > 0) loop.on_esc_telemetry(esc, now, now);
+    }
+    if (loop.reads_attitude()) loop.on_attitude(attitude_sensor.sample(vehicle.body(), now), now, now);
     const MotorMask detected =
         options.undetected ? 0 : clock.detected(t, scenario.failure_detection_s);
     const bool status_sent = schedule.motor_status_due(t, detected);
@@ -241,11 +293,13 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     }
 
     scorer.add(t, ref, cmd, vehicle, mixer_armed, cycle.mix.allocation.axis_limited);
+    detections.add(t, cycle);
 
-    periods.integrate(vehicle, cycle.mix.output, cycle.mix.direction, clock.stopped(), clock, t);
+    periods.integrate(vehicle, cycle.mix.output, cycle.mix.direction, health, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) break;
   }
   scorer.finish(r);
+  detections.finish(r);
   r.failsafe_events = loop.counters().failsafe_events;
   r.final_charge = vehicle.battery().charge();
   r.sim_seconds = static_cast<double>(r.cycles) * period;

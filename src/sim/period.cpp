@@ -13,10 +13,10 @@ SimulationPeriod::SimulationPeriod(double loop_rate_hz, double duration_s)
       cycles(static_cast<std::int64_t>(std::floor(duration_s * loop_rate_hz + kTimeToleranceS))) {}
 
 void SimulationPeriod::integrate(VehicleModel& vehicle, const MotorVector& outputs,
-                                 const DirectionVector& direction, MotorMask stopped,
+                                 const DirectionVector& direction, const MotorHealth& health,
                                  const ScenarioClock& clock, double t) const {
   for (int s = 0; s < substeps; ++s) {
-    vehicle.step(outputs, direction, stopped, clock.environment(t + s * step_s), step_s);
+    vehicle.step(outputs, direction, health, clock.environment(t + s * step_s), step_s);
   }
 }
 

@@ -42,6 +42,16 @@ ScenarioEvent read_event(MapReader e, double duration) {
   ev.speed_mps = optional_number(e, "speed_mps", -100.0, 100.0);
   ev.yaw_rate_dps = optional_number(e, "yaw_rate_dps", -3600.0, 3600.0);
   if (const auto m = optional_number(e, "fail", 1, kMaxMotors)) ev.fail = static_cast<int>(*m) - 1;
+  if (e.has("kind")) {
+    const std::string name = e.text("kind", "stop");
+    const auto kind = failure_kind(name);
+    if (!kind || !ev.fail) {
+      config::fail(e.path_of("kind"), "'" + name + "'",
+                   std::string("one of ") + kFailureKindNames + ", beside fail:");
+    }
+    ev.fail_kind = *kind;
+  }
+  e.allow("kind");
   if (e.has("wind_mps")) ev.wind_mps = vector3(e.raw("wind_mps"), e.path_of("wind_mps"), 100.0);
   e.allow("wind_mps");
   if (e.has("gust")) {

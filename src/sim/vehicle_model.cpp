@@ -25,6 +25,7 @@ VehicleModel::VehicleModel(const config::Config& config)
   if (!p_.incomplete.empty()) throw std::invalid_argument(p_.incomplete);
   for (const OutputChannel& ch : config.outputs) modes_.push_back(ch.mode);
   speed_.assign(static_cast<std::size_t>(config.motors()), 0.0);
+  prop_.assign(static_cast<std::size_t>(config.motors()), 1.0);
   mass_.mass_kg = p_.mass_kg;
   mass_.inertia = p_.inertia_kgm2;
   // Force (body) and torque of each rotor per newton of its thrust: along
@@ -102,6 +103,15 @@ Wrench VehicleModel::wrench(const BodyState& s, const Environment& env) const {
 
 void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direction,
                         MotorMask stopped, const Environment& env, double dt) {
+  MotorHealth health = MotorHealth::healthy(motors());
+  for (int i = 0; i < motors(); ++i) {
+    if (((stopped >> i) & 1U) != 0) health.drive[i] = 0.0;
+  }
+  step(outputs, direction, health, env, dt);
+}
+
+void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direction,
+                        const MotorHealth& health, const Environment& env, double dt) {
   if (crashed_) return;
   if (dt != lag_dt_) {
     lag_dt_ = dt;
@@ -113,7 +123,8 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
   for (int i = 0; i < motors(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     double target = 0.0;
-    if (((stopped >> i) & 1U) == 0) {
+    prop_[k] = health.prop[i];
+    if (health.drive[i] > 0.0) {
       const double x = driver_fraction(i, outputs[i], direction[k]);
       if (p_.wheeled) {
         target = x * p_.wheels.max_speed_rad_s * v;
@@ -121,11 +132,12 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
         const double e = p_.thrust_expo;
         target = ((1 - e) * v + e * v * v) * (e * x * x + (1 - e) * x);
       }
+      target *= health.drive[i];
     }
     speed_[k] = lag(speed_[k], target, alpha_up_, alpha_down_);
     // Electrical power grows with thrust^1.5 (momentum theory); a wheel
     // motor's current with its speed.
-    const double s = std::max(speed_[k], 0.0);
+    const double s = std::max(speed_[k] * prop_[k], 0.0);
     const double load =
         p_.wheeled ? std::abs(speed_[k]) / p_.wheels.max_speed_rad_s : s * std::sqrt(s);
     current += battery_.physics().full_throttle_current_a * load;

@@ -4,6 +4,7 @@
 // at start-up by load_config(); nothing downstream re-validates it.
 
 #include <motormix/battery_compensation.hpp>
+#include <motormix/config/failure_detection.hpp>
 #include <motormix/config/vehicle_physics.hpp>
 #include <motormix/geometry.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
@@ -40,6 +41,8 @@ struct Channels {
   std::string motor_status = "MOTOR_STATUS";
   std::string battery = "BATTERY";
   std::string motor_test = "MOTOR_TEST";
+  std::string esc_telemetry = "ESC_TELEMETRY";
+  std::string attitude = "ATTITUDE";
 };
 
 // `motormix motor-test`: a disarmed mixer spins one motor alone on request.
@@ -113,6 +116,8 @@ struct Config {
   PublishMode publish = PublishMode::kTimer;
   Realtime realtime;
   VehiclePhysics vehicle_model;  // the `vehicle:` section: what motormix sim flies
+  // Set when `failure_detection:` is present and enabled.
+  std::optional<FailureDetection> failure_detection;
   std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }

@@ -116,7 +116,9 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   MessageSchedule schedule;
   const auto stale_after = std::chrono::duration<double>(
       std::min(config.inputs.setpoint_timeout_s, config.inputs.pid_timeout_s));
-  const MotorMask all = static_cast<MotorMask>((1U << config.motors()) - 1U);
+  // Without fresh outputs the ESCs stop every motor.
+  MotorHealth all_stopped = MotorHealth::healthy(config.motors());
+  all_stopped.drive.setZero();
 
   SimResult& r = result.sim;
   r.min_battery_v = vehicle.battery().terminal_v();
@@ -188,7 +190,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     periods.integrate(
         vehicle,
         mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
-        mix.direction, fresh ? clock.stopped() : all, clock, t);
+        mix.direction, fresh ? clock.health(t) : all_stopped, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) {
       fill_vehicle_state(state, vehicle, wall_us());  // the crash, for whoever listens
       publish(lcm, kVehicleStateChannel, state);

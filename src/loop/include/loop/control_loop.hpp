@@ -22,6 +22,13 @@
 // - With battery compensation configured, the thrust demand is multiplied by
 //   the gain of the filtered voltage while it is fresh and plausible; a
 //   stale, missing or implausible voltage means gain 1 (no compensation).
+// - With failure_detection configured, the detector (detection_runner.hpp)
+//   judges, at the start of each cycle, the outputs the motors are running
+//   on. It judges only while armed and spooled up, with no motor test, with
+//   a fresh setpoint at or above failure_detection.min_throttle; whatever it
+//   declares joins the failure set at once (this cycle mixes without it)
+//   and stands until the loop disarms. ESC telemetry and attitude messages
+//   are read only when a source uses them.
 // - What a cycle reports is what is true in that cycle: a cycle that does
 //   not mix (disarmed, failsafe with disarmed outputs, motor test) reports
 //   no saturation and nothing unallocated.
@@ -29,6 +36,7 @@
 #include <motormix/config/config.hpp>
 #include "loop/arming.hpp"
 #include "loop/counters.hpp"
+#include "loop/detection_runner.hpp"
 #include "loop/failure_set.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
@@ -68,6 +76,12 @@ struct CycleResult {
   std::array<double, 4> input_age_ms{-1.0, -1.0, -1.0, -1.0};
   bool spooling_up = false;  // armed, outputs ramping up since arming
   double spool_up = 0.0;     // ramp progress 0..1 (1 once done, 0 while not armed)
+  // motormix's own detector: what it declared since arming (also in
+  // `failed`), the latest declaration, silent ESCs; and whether it declared
+  // something new in this cycle (the node then reports it on motor_status).
+  Detection detection;
+  bool detection_changed = false;
+  double attitude_age_ms = -1.0;
   int motor_test = -1;       // motor spinning alone (0-based), -1 when none
   double motor_test_throttle = 0.0;
   bool motor_test_changed = false;            // a test started or ended in this cycle
@@ -90,6 +104,12 @@ class ControlLoop {
   // A motor test request; its answer is also in the next cycle's result.
   MotorTestResult on_motor_test(const MotorTestSample& sample, std::int64_t now_us,
                                 std::int64_t wall_us);
+  // Read only when failure detection uses them (else ignored, kNone).
+  Rejection on_esc_telemetry(const EscTelemetrySample& sample, std::int64_t now_us,
+                             std::int64_t wall_us);
+  Rejection on_attitude(const AttitudeSample& sample, std::int64_t now_us, std::int64_t wall_us);
+  bool reads_esc_telemetry() const { return detection_ && detection_->uses_telemetry(); }
+  bool reads_attitude() const { return detection_ && detection_->uses_rates(); }
   void on_undecodable() { ++counters_.rejected_decode; }
 
   // One control cycle at time now_us. The returned reference stays valid
@@ -109,6 +129,9 @@ class ControlLoop {
   // The cycle result's view of the vehicle: failed motors and how they
   // are handled, battery state and thrust gain, and each input's age.
   void record_vehicle_state(std::int64_t now_us);
+  // The detector's turn, before mixing: judges the outputs of the previous
+  // cycle and adds what it declares to the failure set.
+  void detect(std::int64_t now_us, bool setpoint_fresh);
 
   Mixer mixer_;
   ThrustRange thrust_range_;
@@ -129,6 +152,9 @@ class ControlLoop {
   MotorTestRunner motor_test_;
   SpoolUp spool_up_;
   FailureSet failures_;
+  std::optional<DetectionRunner> detection_;
+  LatestInput<AttitudeSample> attitude_;
+  std::array<std::int64_t, kMaxEscReadings> esc_last_utime_;
 
   CycleResult result_;
   Counters counters_;

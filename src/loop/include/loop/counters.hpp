@@ -24,6 +24,8 @@ struct Counters {
   std::int64_t rejected_size = 0;  // wrong array sizes
   std::int64_t motor_tests_started = 0;
   std::int64_t motor_tests_refused = 0;
+  std::int64_t esc_telemetry_received = 0;
+  std::int64_t attitude_received = 0;
 
   std::int64_t rejected() const {
     return rejected_decode + rejected_nonfinite + rejected_range + rejected_out_of_order +
@@ -47,7 +49,9 @@ struct Counters {
                                       &Counters::battery_received,
                                       &Counters::rejected_size,
                                       &Counters::motor_tests_started,
-                                      &Counters::motor_tests_refused};
+                                      &Counters::motor_tests_refused,
+                                      &Counters::esc_telemetry_received,
+                                      &Counters::attitude_received};
 
   Counters& operator+=(const Counters& other) {
     for (const auto field : kAll) this->*field += other.*field;

@@ -1,9 +1,10 @@
 #pragma once
-// The motors treated as failed, and how the mixer handles that set. Two
-// sources add up: the configuration (mixer.failed_motors, always) and the
+// The motors treated as failed, and how the mixer handles that set. Three
+// sources add up: the configuration (mixer.failed_motors, always), the
 // latest accepted motor_status message, which stands until the next one
 // says otherwise (a failure detector that falls silent does not bring a
-// motor back).
+// motor back), and motormix's own detector, whose declarations stand until
+// the loop disarms.
 
 #include <motormix/mixer.hpp>
 
@@ -17,8 +18,10 @@ class FailureSet {
       : configured_(configured), all_((MotorMask{1} << motors) - 1) {}
 
   void set_reported(MotorMask reported) { reported_ = reported; }
+  void set_detected(MotorMask detected) { detected_ = detected; }
 
-  MotorMask in_force() const { return (configured_ | reported_) & all_; }
+  MotorMask in_force() const { return (configured_ | reported_ | detected_) & all_; }
+  MotorMask detected() const { return detected_ & all_; }
 
   // How `mixer` handles the set in force, looked up again only when the set
   // changes (Mixer::mix looks the set up for itself every cycle).
@@ -35,6 +38,7 @@ class FailureSet {
   MotorMask configured_;
   MotorMask all_;
   MotorMask reported_ = 0;
+  MotorMask detected_ = 0;
   std::optional<MotorMask> report_for_;
   Mixer::FailureReport report_;
 };

@@ -6,6 +6,7 @@
 
 #include <motormix/mixer.hpp>
 
+#include <array>
 #include <cstdint>
 
 namespace motormix::loop {
@@ -31,5 +32,12 @@ Rejection check_pid(const PidSample& p, std::int64_t last_utime);
 Rejection check_motor_status(const MotorStatusSample& m, int motors, std::int64_t last_utime);
 // Only the order: the voltage's plausibility is the battery compensation's.
 Rejection check_battery(const BatterySample& b, std::int64_t last_utime);
+// Order per motor: ESCs report at their own rates, possibly through several
+// publishers. last_utime[i]: the last accepted reading of motor i (kNever if none).
+Rejection check_esc_telemetry(const EscTelemetrySample& t, int motors,
+                              const std::array<std::int64_t, kMaxEscReadings>& last_utime);
+// Largest body rate accepted: twice the 2000 deg/s range of common gyros.
+inline constexpr double kMaxBodyRateRadS = 70.0;
+Rejection check_attitude(const AttitudeSample& a, std::int64_t last_utime);
 
 }  // namespace motormix::loop

@@ -30,16 +30,19 @@ namespace motormix::sim {
 
 inline constexpr std::int64_t kEpochUs = 1700000000000000;  // utime of simulated time 0
 
-struct MotorFailure {
-  int motor = 0;  // 0-based
-  double at_s = 0.0;
-};
-
 struct SimOptions {
   std::vector<MotorFailure> failures;  // on top of the scenario's
   bool undetected = false;             // never report the failures on motor_status
   std::uint64_t seed = 1;
   double duration_s = 0.0;  // > 0: instead of the scenario's
+};
+
+// One failure of a run and what motormix's own detector made of it.
+struct FailureOutcome {
+  MotorFailure failure;
+  double detected_at_s = -1.0;  // when a motor was first declared after it; -1: never
+  int detected_motor = -1;      // which (0-based); not failure.motor: the wrong one
+  DetectionSource detected_by = DetectionSource::kNone;
 };
 
 // The metrics of one run, over the scenario's scored window (armed cycles).
@@ -63,6 +66,10 @@ struct SimResult {
   double final_charge = 0.0;
   std::int64_t cycles = 0;
   std::int64_t failsafe_events = 0;
+  std::vector<FailureOutcome> failures;  // in time order
+  // Motors motormix's detector declared that were working (none of the
+  // run's thrust-losing failures explains them): each stopped a good motor.
+  int false_detections = 0;
   double sim_seconds = 0.0;
   double wall_seconds = 0.0;
 };
@@ -120,28 +127,42 @@ class Scorer {
   std::int64_t scored_ = 0, saturated_ = 0;
 };
 
+// Matches what motormix's detector declares with the failures of the run.
+class DetectionScorer {
+ public:
+  explicit DetectionScorer(const std::vector<MotorFailure>& failures);
+  // A cycle's result at time t.
+  void add(double t, const loop::CycleResult& cycle);
+  void finish(SimResult& r) const;
+
+ private:
+  std::vector<FailureOutcome> outcomes_;
+  MotorMask seen_ = 0;
+  int false_detections_ = 0;
+};
+
 // The scenario's references at time t, and what the events due change.
 class ScenarioClock {
  public:
   ScenarioClock(const Scenario& scenario, const config::Config& config,
                 const std::vector<MotorFailure>& extra_failures);
-  // Applies every event due at t; returns motors that stopped just now.
-  MotorMask advance(double t);
+  // Applies every event due at t.
+  void advance(double t);
   const Reference& reference() const { return ref_; }
-  MotorMask stopped() const { return stopped_; }
+  // What each motor can do at t, after the failures due by then.
+  const MotorHealth& health(double t);
   Environment environment(double t) const;
-  // Stopped motors a failure detector would have reported by t, detection_s
-  // after each stopped.
+  // Failed motors something outside motormix would have reported by t,
+  // detection_s after each failure (motor_health.hpp: reported_outside).
   MotorMask detected(double t, double detection_s) const;
-  const std::vector<std::pair<double, int>>& failures() const { return failures_; }  // (at, motor)
+  const std::vector<MotorFailure>& failures() const { return failures_; }  // sorted by at_s
 
  private:
   const Scenario& scenario_;
-  std::vector<std::pair<double, int>> failures_;
+  std::vector<MotorFailure> failures_;
   std::size_t next_ = 0;
-  std::size_t next_failure_ = 0;
   Reference ref_;
-  MotorMask stopped_ = 0;
+  MotorHealth health_;
   Eigen::Vector3d wind_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<double, Gust>> gusts_;  // (start, gust)
 };

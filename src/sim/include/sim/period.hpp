@@ -5,6 +5,7 @@
 // messages are due (battery at 50 Hz; motor_status at 10 Hz once a failure
 // is reported, and at once when the reported set changes).
 
+#include "sim/motor_health.hpp"
 #include "sim/scenario.hpp"
 #include "sim/vehicle_model.hpp"
 
@@ -39,8 +40,8 @@ struct SimulationPeriod {
   // The vehicle through period k's physics, from time t, with the
   // environment of each substep.
   void integrate(VehicleModel& vehicle, const MotorVector& outputs,
-                 const DirectionVector& direction, MotorMask stopped, const ScenarioClock& clock,
-                 double t) const;
+                 const DirectionVector& direction, const MotorHealth& health,
+                 const ScenarioClock& clock, double t) const;
 };
 
 // When the simulated vehicle's own messages are due.

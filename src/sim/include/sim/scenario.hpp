@@ -16,11 +16,14 @@
 //     - {at: 5, roll_deg: 20}
 //     - {at: 7, roll_deg: 0, yaw_deg: 90}
 //     - {at: 9, fail: 3}                       # motor number as `motormix matrix` prints it
+//     - {at: 9, fail: 2, kind: desync}         # stop (default), half_thrust, intermittent,
+//                                              # desync or telemetry (motor_health.hpp)
 //     - {at: 10, gust: {force_n: [4, 0, 0], torque_nm: [0.2, 0, 0], for_s: 0.5}}
 //     - {at: 11, wind_mps: [3, 0, 0]}
 //     - {at: 2, speed_mps: 0.4, yaw_rate_dps: 90}   # ground vehicles
 
 #include "sim/controller.hpp"
+#include "sim/motor_health.hpp"
 
 #include <motormix/eigen_layout.hpp>
 
@@ -40,6 +43,7 @@ struct ScenarioEvent {
   double at_s = 0.0;
   std::optional<double> roll_deg, pitch_deg, yaw_deg, altitude_m, speed_mps, yaw_rate_dps;
   std::optional<int> fail;  // motor index, 0-based
+  FailureKind fail_kind = FailureKind::kStop;
   std::optional<Eigen::Vector3d> wind_mps;
   std::optional<Gust> gust;
 };

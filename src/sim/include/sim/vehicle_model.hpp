@@ -17,6 +17,7 @@
 // range is clipped, the disarmed value stops the motor.
 
 #include "sim/battery_model.hpp"
+#include "sim/motor_health.hpp"
 #include "sim/rigid_body.hpp"
 
 #include <motormix/config/config.hpp>
@@ -43,7 +44,11 @@ class VehicleModel {
   explicit VehicleModel(const config::Config& config);
 
   // Advances dt seconds with `outputs` (the mixer's output-stage values) and
-  // `direction` held; motors in `stopped` produce nothing (physical failures).
+  // `direction` held; `health` says what each motor can do (physical
+  // failures: motor_health.hpp).
+  void step(const MotorVector& outputs, const DirectionVector& direction, const MotorHealth& health,
+            const Environment& env, double dt);
+  // The same with every motor healthy but those in `stopped`.
   void step(const MotorVector& outputs, const DirectionVector& direction, MotorMask stopped,
             const Environment& env, double dt);
 
@@ -52,9 +57,16 @@ class VehicleModel {
   const BodyState& body() const { return body_; }
   double thrust_n(int i) const {
     const auto k = static_cast<std::size_t>(i);
-    return p_.wheeled ? 0.0 : p_.rotors[k].max_thrust_n * speed_[k];
+    return p_.wheeled ? 0.0 : p_.rotors[k].max_thrust_n * speed_[k] * prop_[k];
   }
+  // Rotors: the thrust fraction the motor's speed gives with a whole prop
+  // (rpm grows as its square root); wheels: rad/s.
   double motor_speed(int i) const { return speed_[static_cast<std::size_t>(i)]; }
+  // Rotors: the thrust fraction it gives now (a damaged prop gives less).
+  double thrust_fraction(int i) const {
+    const auto k = static_cast<std::size_t>(i);
+    return speed_[k] * prop_[k];
+  }
   const BatteryModel& battery() const { return battery_; }
   bool landed() const { return landed_; }
   bool crashed() const { return crashed_; }
@@ -84,6 +96,7 @@ class VehicleModel {
   BodyState body_;
   BatteryModel battery_;
   std::vector<double> speed_;  // rotors: thrust fraction; wheels: rad/s
+  std::vector<double> prop_;   // rotors: thrust per unit speed fraction (1: whole prop)
   double forward_speed_ = 0.0;
   // Rotor i: force and torque per newton (fixed capacity: no allocation per step).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxMotors> per_newton_;

@@ -1,0 +1,186 @@
+#pragma once
+// Finds a motor that stopped producing thrust when nobody reports it. Pure:
+// time is passed in, nothing is allocated after construction, no I/O. Three
+// sources, each on its own or together:
+//
+// - telemetry: each ESC's rpm (or, without rpm, its current) against what
+//   its command should give. rpm grows as the square root of thrust and
+//   current as thrust^1.5; the scale (kv, pack voltage, prop) is not needed:
+//   each motor's ratio is compared with the median ratio of the motors
+//   reporting, so a sagging battery moves them all and triggers nothing.
+//   One ESC going silent while the others keep reporting is a failure too,
+//   unless the rates source runs: then the rates decide (a dead telemetry
+//   wire is not a dead motor, and stopping a working motor is as bad as a
+//   miss).
+// - rates: the angular acceleration the body rates show, times the inertia,
+//   against the torque the commanded thrusts give (each motor's thrust
+//   followed through the motor's lag, minus the rotational drag and the
+//   gyroscopic term w x Iw). A motor that stops leaves a residual of minus
+//   its own torque column times its thrust: the motor whose column the
+//   residual lines up with, by about its thrust, is the one. The scale
+//   (inertia, torque per unit thrust, lag) comes from the vehicle's physics
+//   (the configuration's `vehicle:` section), not learned in flight: a
+//   learned scale needs excitation a hover does not give and drifts with
+//   whatever it is fitted on, and the test below allows a wide error in it
+//   (a fraction of the motor's thrust between min_loss and 1 + the
+//   tolerance).
+// - outputs: for six rotors or more, as the slow last resort: a motor whose
+//   low-passed command sits near full while the median is far below it is
+//   the one the controller keeps asking for thrust it does not get.
+//
+// Every source decides with hysteresis: a suspicion accumulates time while
+// the evidence holds and loses it twice as fast while it does not, and only
+// a suspicion held for the source's persistence is declared. Nothing is
+// judged while the caller says detection is not allowed (disarmed, spooling
+// up, motor test, low throttle), or from a stream that went stale.
+
+#include <motormix/motor_vector.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
+
+#include <array>
+#include <cstdint>
+
+namespace motormix {
+
+enum class DetectionSource : std::uint8_t {
+  kNone = 0,
+  kTelemetry = 1,  // rpm or current implausible for the command
+  kTelemetrySilent = 2,  // the ESC stopped reporting while the others kept on
+  kRates = 3,      // body-rate residual names the motor
+  kOutputs = 4,    // the controller drove the motor to full for long
+};
+
+const char* to_string(DetectionSource source);
+
+// Which sources run (bit per source).
+enum class DetectorSources : std::uint8_t {
+  kTelemetry = 1,
+  kRates = 2,
+  kOutputs = 4,
+};
+
+struct FailureDetectorSettings {
+  int motors = 0;
+  std::uint8_t sources = 0;  // DetectorSources bits
+
+  // Thrust-fraction lag of the motors (first order, up and down).
+  double time_constant_up_s = 0.03;
+  double time_constant_down_s = 0.05;
+  // Below this commanded thrust fraction a motor is not judged by the
+  // telemetry or rates ratios (its rpm is near idle noise).
+  double min_motor_thrust = 0.08;
+
+  // Telemetry.
+  double telemetry_timeout_s = 0.1;   // a reading older than this is stale (silent)
+  double telemetry_persist_s = 0.03;  // a suspicion held this long is declared
+  double rpm_ratio = 0.6;             // rpm below this fraction of the median ratio: suspect
+  double current_ratio = 0.35;        // current below this fraction of the median ratio: suspect
+  int min_reporting = 3;              // motors with fresh telemetry needed for a median
+
+  // Rates.
+  // Torque (N m, body FRD) of each motor at full thrust fraction: column i.
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxMotors> torque_per_thrust;
+  Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Ones();  // principal moments
+  double rotational_drag = 0.0;                            // N m per rad/s
+  double rates_timeout_s = 0.02;  // no rates sample within this: stale
+  double rates_filter_hz = 15.0;  // low-pass on both sides of the residual
+  double rates_persist_s = 0.06;
+  double min_loss = 0.55;      // residual along the column: at least this fraction of the thrust
+  double max_off_axis = 0.45;  // residual across the column: at most this fraction of the along part
+  // A residual smaller than this (N m) is never a failure, whatever it lines
+  // up with: model error and gusts live below it.
+  double min_residual_nm = 0.0;
+
+  // Outputs.
+  double outputs_filter_s = 0.5;
+  double outputs_persist_s = 1.0;
+  double outputs_high = 0.9;     // low-passed command at least this
+  double outputs_margin = 0.35;  // and at least this above the median's
+};
+
+// What the detector has declared, latched until reset().
+struct Detection {
+  MotorMask failed = 0;  // every motor declared, by any source
+  // The latest declaration: which source, which motor (0-based; -1 none), when.
+  DetectionSource source = DetectionSource::kNone;
+  int motor = -1;
+  std::int64_t at_us = 0;
+  // Motors whose telemetry is stale while others report (not declared when
+  // the rates source runs): for the status.
+  MotorMask telemetry_silent = 0;
+};
+
+class FailureDetector {
+ public:
+  explicit FailureDetector(const FailureDetectorSettings& settings);
+
+  const FailureDetectorSettings& settings() const { return s_; }
+  bool uses(DetectorSources source) const {
+    return (s_.sources & static_cast<std::uint8_t>(source)) != 0;
+  }
+
+  // Forgets every suspicion, filter and declaration (on disarming).
+  void reset();
+
+  // One ESC reading, accepted by the caller's checks, arrived at now_us. rpm
+  // mechanical; NaN when the ESC does not report it (likewise current).
+  void on_telemetry(int motor, double rpm, double current_a, std::int64_t now_us);
+  // One body-rates sample (rad/s, FRD), stamped by its publisher (sample_us)
+  // and arrived at now_us: the angular acceleration is taken between
+  // consecutive publisher stamps.
+  void on_rates(const Eigen::Vector3d& rates, std::int64_t sample_us, std::int64_t now_us);
+
+  // One control cycle. `thrust`: each motor's commanded thrust fraction
+  // (0..1) in this cycle; `excluded`: motors already treated as failed;
+  // `allowed`: false while disarmed, spooling up, testing a motor or at low
+  // throttle (filters keep running, suspicions are dropped).
+  const Detection& update(const MotorVector& thrust, MotorMask excluded, bool allowed,
+                          std::int64_t now_us);
+
+  const Detection& detection() const { return detection_; }
+  // For tests and the status: the rates residual (N m), the latest
+  // telemetry ratios against the median, the suspicion times.
+  const Eigen::Vector3d& rates_residual() const { return residual_; }
+  double suspicion_s(DetectionSource source, int motor) const;
+
+ private:
+  void declare(int motor, DetectionSource source, std::int64_t now_us);
+  void judge_telemetry(MotorMask excluded, bool allowed, double dt, std::int64_t now_us);
+  void judge_rates(MotorMask excluded, bool allowed, double dt, std::int64_t now_us);
+  void judge_outputs(const MotorVector& thrust, MotorMask excluded, bool allowed, double dt,
+                     std::int64_t now_us);
+  // Hysteresis: time accumulates while `evidence`, drains twice as fast otherwise.
+  static bool accumulate(double& suspicion, bool evidence, double dt, double persist);
+
+  struct EscState {
+    double rpm = 0.0, current = 0.0;
+    std::int64_t received_us = 0;
+    bool any = false;
+  };
+
+  FailureDetectorSettings s_;
+  Detection detection_;
+  std::array<EscState, kMaxMotors> esc_{};
+  MotorVector lagged_;           // each motor's thrust through the motor lag
+  MotorVector output_filtered_;  // outputs source: low-passed commands
+  std::array<double, kMaxMotors> telemetry_suspicion_{};
+  std::array<double, kMaxMotors> silent_suspicion_{};
+  std::array<double, kMaxMotors> rates_suspicion_{};
+  std::array<double, kMaxMotors> outputs_suspicion_{};
+  // Rates: latest sample, its stamp, the raw angular acceleration it gave.
+  Eigen::Vector3d rates_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_raw_ = Eigen::Vector3d::Zero();
+  std::int64_t rates_sample_us_ = 0;
+  std::int64_t rates_received_us_ = 0;
+  bool rates_any_ = false, accel_any_ = false;
+  Eigen::Vector3d accel_filtered_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque_filtered_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d residual_ = Eigen::Vector3d::Zero();
+  bool filters_primed_ = false;
+  std::int64_t last_update_us_ = 0;
+  bool updated_ = false;
+};
+
+}  // namespace motormix

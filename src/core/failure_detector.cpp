@@ -1,0 +1,300 @@
+#include <motormix/failure_detector.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace motormix {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+// A rates sample further than this after the previous one starts the
+// angular acceleration afresh: a difference across a gap is no derivative.
+constexpr double kMaxRatesGapS = 0.05;
+// Along-the-column fraction above which a residual is more than one motor's
+// whole thrust can explain, even with the scale off by this much.
+constexpr double kMaxLoss = 2.0;
+
+// Median of the first n values (n >= 1), sorting a copy: n <= 16.
+double median(std::array<double, kMaxMotors> v, int n) {
+  std::sort(v.begin(), v.begin() + n);
+  return n % 2 == 1 ? v[static_cast<std::size_t>(n / 2)]
+                    : 0.5 * (v[static_cast<std::size_t>(n / 2 - 1)] +
+                             v[static_cast<std::size_t>(n / 2)]);
+}
+
+double low_pass_alpha(double dt, double time_constant) {
+  return time_constant > 0 ? 1.0 - std::exp(-dt / time_constant) : 1.0;
+}
+
+bool has(MotorMask mask, int i) { return ((mask >> i) & 1U) != 0; }
+
+}  // namespace
+
+const char* to_string(DetectionSource source) {
+  switch (source) {
+    case DetectionSource::kNone:
+      return "none";
+    case DetectionSource::kTelemetry:
+      return "telemetry";
+    case DetectionSource::kTelemetrySilent:
+      return "telemetry_silent";
+    case DetectionSource::kRates:
+      return "rates";
+    case DetectionSource::kOutputs:
+      return "outputs";
+  }
+  return "?";
+}
+
+FailureDetector::FailureDetector(const FailureDetectorSettings& settings) : s_(settings) {
+  lagged_.setZero(s_.motors);
+  output_filtered_.setZero(s_.motors);
+  if (s_.torque_per_thrust.cols() != s_.motors) s_.torque_per_thrust.setZero(3, s_.motors);
+  reset();
+}
+
+void FailureDetector::reset() {
+  detection_ = Detection{};
+  lagged_.setZero(s_.motors);
+  output_filtered_.setZero(s_.motors);
+  telemetry_suspicion_.fill(0.0);
+  silent_suspicion_.fill(0.0);
+  rates_suspicion_.fill(0.0);
+  outputs_suspicion_.fill(0.0);
+  accel_filtered_.setZero();
+  torque_filtered_.setZero();
+  residual_.setZero();
+  filters_primed_ = false;
+  updated_ = false;
+}
+
+void FailureDetector::on_telemetry(int motor, double rpm, double current_a, std::int64_t now_us) {
+  if (motor < 0 || motor >= s_.motors) return;
+  EscState& e = esc_[static_cast<std::size_t>(motor)];
+  e.rpm = rpm;
+  e.current = current_a;
+  e.received_us = now_us;
+  e.any = true;
+}
+
+void FailureDetector::on_rates(const Eigen::Vector3d& rates, std::int64_t sample_us,
+                               std::int64_t now_us) {
+  const double dt = static_cast<double>(sample_us - rates_sample_us_) / 1e6;
+  if (rates_any_ && dt > 0.0 && dt <= kMaxRatesGapS) {
+    accel_raw_ = (rates - rates_) / dt;
+    accel_any_ = true;
+  } else if (!rates_any_ || dt > kMaxRatesGapS) {
+    accel_any_ = false;  // nothing to differentiate against yet
+  }
+  if (dt > 0.0 || !rates_any_) {
+    rates_ = rates;
+    rates_sample_us_ = sample_us;
+  }
+  rates_received_us_ = now_us;
+  rates_any_ = true;
+}
+
+bool FailureDetector::accumulate(double& suspicion, bool evidence, double dt, double persist) {
+  suspicion = evidence ? suspicion + dt : std::max(0.0, suspicion - 2.0 * dt);
+  return evidence && suspicion >= persist;
+}
+
+double FailureDetector::suspicion_s(DetectionSource source, int motor) const {
+  if (motor < 0 || motor >= s_.motors) return 0.0;
+  const auto k = static_cast<std::size_t>(motor);
+  switch (source) {
+    case DetectionSource::kTelemetry:
+      return telemetry_suspicion_[k];
+    case DetectionSource::kTelemetrySilent:
+      return silent_suspicion_[k];
+    case DetectionSource::kRates:
+      return rates_suspicion_[k];
+    case DetectionSource::kOutputs:
+      return outputs_suspicion_[k];
+    case DetectionSource::kNone:
+      break;
+  }
+  return 0.0;
+}
+
+void FailureDetector::declare(int motor, DetectionSource source, std::int64_t now_us) {
+  detection_.failed |= MotorMask{1} << motor;
+  detection_.source = source;
+  detection_.motor = motor;
+  detection_.at_us = now_us;
+  // What the other motors looked like included this one's loss: their
+  // suspicions start again from the vehicle as it now is.
+  telemetry_suspicion_.fill(0.0);
+  silent_suspicion_.fill(0.0);
+  rates_suspicion_.fill(0.0);
+  outputs_suspicion_.fill(0.0);
+}
+
+const Detection& FailureDetector::update(const MotorVector& thrust, MotorMask excluded,
+                                         bool allowed, std::int64_t now_us) {
+  const double dt =
+      updated_ ? std::max(0.0, static_cast<double>(now_us - last_update_us_) / 1e6) : 0.0;
+  updated_ = true;
+  last_update_us_ = now_us;
+  excluded |= detection_.failed;
+
+  const double up = low_pass_alpha(dt, s_.time_constant_up_s);
+  const double down = low_pass_alpha(dt, s_.time_constant_down_s);
+  const int n = std::min<int>(s_.motors, static_cast<int>(thrust.size()));
+  for (int i = 0; i < n; ++i) {
+    const double target = has(excluded, i) ? 0.0 : std::clamp(thrust[i], 0.0, 1.0);
+    lagged_[i] += (target - lagged_[i]) * (target > lagged_[i] ? up : down);
+  }
+
+  if (uses(DetectorSources::kTelemetry)) judge_telemetry(excluded, allowed, dt, now_us);
+  if (uses(DetectorSources::kRates)) judge_rates(excluded, allowed, dt, now_us);
+  if (uses(DetectorSources::kOutputs)) judge_outputs(thrust, excluded, allowed, dt, now_us);
+  return detection_;
+}
+
+void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double dt,
+                                      std::int64_t now_us) {
+  const auto timeout_us = static_cast<std::int64_t>(s_.telemetry_timeout_s * 1e6);
+  // Each judged motor's ratio of rpm (or current) to what its thrust should
+  // give, up to a common scale; kind: 1 rpm, 2 current, 0 not judged.
+  std::array<double, kMaxMotors> ratio{};
+  std::array<std::uint8_t, kMaxMotors> kind{};
+  std::array<double, kMaxMotors> rpm_ratios{}, current_ratios{};
+  int n_rpm = 0, n_current = 0, fresh = 0;
+  for (int i = 0; i < s_.motors; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const EscState& e = esc_[k];
+    if (!e.any || now_us - e.received_us > timeout_us) continue;
+    ++fresh;
+    if (has(excluded, i) || lagged_[i] < s_.min_motor_thrust) continue;
+    if (std::isfinite(e.rpm)) {
+      ratio[k] = e.rpm / std::sqrt(lagged_[i]);
+      kind[k] = 1;
+      rpm_ratios[static_cast<std::size_t>(n_rpm++)] = ratio[k];
+    } else if (std::isfinite(e.current)) {
+      ratio[k] = e.current / (lagged_[i] * std::sqrt(lagged_[i]));
+      kind[k] = 2;
+      current_ratios[static_cast<std::size_t>(n_current++)] = ratio[k];
+    }
+  }
+  const double rpm_median = n_rpm >= s_.min_reporting ? median(rpm_ratios, n_rpm) : 0.0;
+  const double current_median =
+      n_current >= s_.min_reporting ? median(current_ratios, n_current) : 0.0;
+
+  detection_.telemetry_silent = 0;
+  const bool rates_decide = uses(DetectorSources::kRates);
+  for (int i = 0; i < s_.motors; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (has(excluded, i)) continue;
+    const EscState& e = esc_[k];
+    // Silent: it reported before, it no longer does, and most others do.
+    const bool silent = e.any && now_us - e.received_us > timeout_us && 2 * fresh >= s_.motors;
+    if (silent) detection_.telemetry_silent |= MotorMask{1} << i;
+    const bool low = (kind[k] == 1 && rpm_median > 0 && ratio[k] < s_.rpm_ratio * rpm_median) ||
+                     (kind[k] == 2 && current_median > 0 &&
+                      ratio[k] < s_.current_ratio * current_median);
+    if (!allowed) {
+      telemetry_suspicion_[k] = 0.0;
+      silent_suspicion_[k] = 0.0;
+      continue;
+    }
+    if (accumulate(telemetry_suspicion_[k], low, dt, s_.telemetry_persist_s)) {
+      declare(i, DetectionSource::kTelemetry, now_us);
+      return;
+    }
+    if (accumulate(silent_suspicion_[k], silent && !rates_decide, dt, s_.telemetry_persist_s)) {
+      declare(i, DetectionSource::kTelemetrySilent, now_us);
+      return;
+    }
+  }
+}
+
+void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
+                                  std::int64_t now_us) {
+  const auto timeout_us = static_cast<std::int64_t>(s_.rates_timeout_s * 1e6);
+  const bool fresh = rates_any_ && accel_any_ && now_us - rates_received_us_ <= timeout_us;
+  if (!fresh) {
+    filters_primed_ = false;
+    rates_suspicion_.fill(0.0);
+    residual_.setZero();
+    return;
+  }
+  const Eigen::Vector3d& w = rates_;
+  const Eigen::Vector3d iw = s_.inertia_kgm2.cwiseProduct(w);
+  Eigen::Vector3d torque;
+  torque.noalias() = s_.torque_per_thrust * lagged_;
+  torque -= s_.rotational_drag * w + w.cross(iw);
+  if (!filters_primed_) {
+    accel_filtered_ = accel_raw_;
+    torque_filtered_ = torque;
+    filters_primed_ = true;
+  } else {
+    const double a = low_pass_alpha(dt, 1.0 / (kTwoPi * s_.rates_filter_hz));
+    accel_filtered_ += a * (accel_raw_ - accel_filtered_);
+    torque_filtered_ += a * (torque - torque_filtered_);
+  }
+  residual_ = s_.inertia_kgm2.cwiseProduct(accel_filtered_) - torque_filtered_;
+
+  // The motor whose loss explains the residual best, if any does.
+  int best = -1;
+  double best_off = s_.max_off_axis;
+  const double residual_norm = residual_.norm();
+  if (allowed && residual_norm >= s_.min_residual_nm) {
+    for (int i = 0; i < s_.motors; ++i) {
+      if (has(excluded, i) || lagged_[i] < s_.min_motor_thrust) continue;
+      const Eigen::Vector3d loss = s_.torque_per_thrust.col(i) * lagged_[i];
+      const double loss_sq = loss.squaredNorm();
+      if (loss_sq <= 0.0) continue;
+      const double along = -residual_.dot(loss) / loss_sq;
+      if (along < s_.min_loss || along > kMaxLoss) continue;
+      const double off = (residual_ + along * loss).norm() / (along * std::sqrt(loss_sq));
+      if (off <= best_off) {
+        best_off = off;
+        best = i;
+      }
+    }
+  }
+  for (int i = 0; i < s_.motors; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!allowed) {
+      rates_suspicion_[k] = 0.0;
+      continue;
+    }
+    if (accumulate(rates_suspicion_[k], i == best, dt, s_.rates_persist_s)) {
+      declare(i, DetectionSource::kRates, now_us);
+      return;
+    }
+  }
+}
+
+void FailureDetector::judge_outputs(const MotorVector& thrust, MotorMask excluded, bool allowed,
+                                    double dt, std::int64_t now_us) {
+  const double a = low_pass_alpha(dt, s_.outputs_filter_s);
+  std::array<double, kMaxMotors> working{};
+  int n = 0, top = -1;
+  for (int i = 0; i < s_.motors; ++i) {
+    const double target = has(excluded, i) ? 0.0 : std::clamp(thrust[i], 0.0, 1.0);
+    output_filtered_[i] += a * (target - output_filtered_[i]);
+    if (has(excluded, i)) continue;
+    working[static_cast<std::size_t>(n++)] = output_filtered_[i];
+    if (top < 0 || output_filtered_[i] > output_filtered_[top]) top = i;
+  }
+  if (n < 2) return;
+  const double mid = median(working, n);
+  for (int i = 0; i < s_.motors; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!allowed) {
+      outputs_suspicion_[k] = 0.0;
+      continue;
+    }
+    const bool evidence = i == top && output_filtered_[i] >= s_.outputs_high &&
+                          output_filtered_[i] - mid >= s_.outputs_margin;
+    if (accumulate(outputs_suspicion_[k], evidence, dt, s_.outputs_persist_s)) {
+      declare(i, DetectionSource::kOutputs, now_us);
+      return;
+    }
+  }
+}
+
+}  // namespace motormix

@@ -1,0 +1,61 @@
+#include "sim/esc_telemetry_model.hpp"
+
+#include "sim/period.hpp"
+
+#include <cmath>
+#include <iterator>
+#include <limits>
+
+namespace motormix::sim {
+
+namespace {
+// Apart from the sensors' seed, so the two never share a sequence.
+constexpr std::uint64_t kSeedOffset = 0x7E1E3E7E1E3E7ULL;
+}  // namespace
+
+EscTelemetryModel::EscTelemetryModel(int motors, std::uint64_t seed)
+    : gauss_(seed ^ kSeedOffset), uniform_state_(seed * 0x9E3779B97F4A7C15ULL + kSeedOffset) {
+  for (int i = 0; i < motors; ++i) {
+    const auto pick = static_cast<std::size_t>(uniform() * std::size(kEscRatesHz));
+    period_s_.push_back(1.0 / kEscRatesHz[pick]);
+    next_s_.push_back(uniform() * period_s_.back());  // its own phase
+  }
+}
+
+double EscTelemetryModel::uniform() {
+  // splitmix64: a uniform draw without touching the Gaussian's sequence.
+  std::uint64_t z = (uniform_state_ += 0x9E3779B97F4A7C15ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+const loop::EscTelemetrySample& EscTelemetryModel::sample(double t, std::int64_t utime,
+                                                          const VehicleModel& vehicle,
+                                                          const MotorHealth& health) {
+  sample_.utime = utime;
+  sample_.count = 0;
+  const double full_a = vehicle.physics().battery.full_throttle_current_a;
+  for (std::size_t k = 0; k < period_s_.size(); ++k) {
+    if (!due(t, next_s_[k])) continue;
+    while (due(t, next_s_[k])) next_s_[k] += period_s_[k];
+    const int i = static_cast<int>(k);
+    if (((health.telemetry_dead >> i) & 1U) != 0 || uniform() < kFrameLoss) continue;
+    if (sample_.count >= loop::kMaxEscReadings) break;
+    loop::EscReading& r = sample_.readings[static_cast<std::size_t>(sample_.count++)];
+    r.motor = i + 1;
+    const double speed = std::max(vehicle.motor_speed(i), 0.0);
+    r.rpm = std::max(0.0, kFullThrustRpm * std::sqrt(speed) * (1.0 + gauss_(kRpmNoise)));
+    r.erpm = r.rpm * (kSimMotorPoles / 2);
+    const double thrust = std::max(vehicle.thrust_fraction(i), 0.0);
+    r.current_a = full_a * thrust * std::sqrt(thrust) * (1.0 + gauss_(kCurrentNoise)) +
+                  gauss_(kCurrentNoiseA);
+    r.voltage_v = vehicle.battery().terminal_v();
+    r.temperature_c = 40.0;
+    r.consumption_mah = std::numeric_limits<double>::quiet_NaN();
+  }
+  return sample_;
+}
+
+}  // namespace motormix::sim

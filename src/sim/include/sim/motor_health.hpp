@@ -1,0 +1,58 @@
+#pragma once
+// The failures real motors have, as the simulator plays them, and what each
+// motor can do at a given moment because of them.
+//
+//   stop          the motor stops at once (its rotor spins down with the
+//                 motor lag)
+//   half_thrust   the prop loses half its thrust; the motor keeps its speed
+//   intermittent  the motor cuts out for 150 ms in every 500 ms
+//   desync        the motor loses sync and spins down over 200 ms
+//   telemetry     the ESC's telemetry dies; the motor keeps working
+
+#include <motormix/motor_vector.hpp>
+
+#include <optional>
+#include <string>
+
+namespace motormix::sim {
+
+enum class FailureKind { kStop, kHalfThrust, kIntermittent, kDesync, kTelemetry };
+
+const char* to_string(FailureKind kind);
+std::optional<FailureKind> failure_kind(const std::string& name);
+inline constexpr const char* kFailureKindNames = "stop, half_thrust, intermittent, desync, telemetry";
+
+// Whether something outside motormix (an ESC driver, a health monitor) would
+// report it on motor_status: a motor that stops, yes; a weak prop, a motor
+// that comes and goes, a dead telemetry wire, no.
+bool reported_outside(FailureKind kind);
+// Whether the motor stops producing thrust (a detection of it is right).
+bool loses_thrust(FailureKind kind);
+
+struct MotorFailure {
+  int motor = 0;  // 0-based
+  double at_s = 0.0;
+  FailureKind kind = FailureKind::kStop;
+};
+
+inline constexpr double kDesyncSpinDownS = 0.2;
+inline constexpr double kIntermittentPeriodS = 0.5;
+inline constexpr double kIntermittentOffS = 0.15;
+
+// Per motor, at one moment.
+struct MotorHealth {
+  MotorVector drive;  // factor on the speed the ESC drives (0: stopped)
+  MotorVector prop;   // factor on the thrust at a given speed (0.5: half a prop)
+  MotorMask telemetry_dead = 0;
+
+  static MotorHealth healthy(int motors) {
+    MotorHealth h;
+    h.drive.setOnes(motors);
+    h.prop.setOnes(motors);
+    return h;
+  }
+  // The failure's effect at time t (due: t >= at_s).
+  void apply(const MotorFailure& f, double t);
+};
+
+}  // namespace motormix::sim
