@@ -85,6 +85,7 @@ nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
   j["attitude_error_max_deg"] = r.attitude_error_max_deg;
   j["yaw_error_rms_deg"] = r.yaw_error_rms_deg;
   j["altitude_loss_m"] = r.altitude_loss_m;
+  if (!wheeled) j["failure_attitude_error_max_deg"] = r.failure_attitude_error_max_deg;
   j["saturated_fraction"] = r.saturated_fraction;
   j["min_battery_v"] = r.min_battery_v;
   j["final_charge"] = r.final_charge;

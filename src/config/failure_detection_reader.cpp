@@ -102,15 +102,18 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
 
   MapReader rates = section.map("rates");
   const bool uses_rates = (s.sources & bit(DetectorSources::kRates)) != 0;
-  if (uses_rates && enabled) {
-    if (!v.incomplete.empty()) {
-      fail(section.path_of("sources"), "rates, with an incomplete vehicle section",
-           "a complete `vehicle:` section for the rates source (" + v.incomplete + ")");
-    }
-    rates_scale(v, s);
+  if (uses_rates && enabled && !v.incomplete.empty()) {
+    fail(section.path_of("sources"), "rates, with an incomplete vehicle section",
+         "a complete `vehicle:` section for the rates source (" + v.incomplete + ")");
   }
+  if (v.incomplete.empty() && !v.rotors.empty()) rates_scale(v, s);
   s.rates_timeout_s = rates.number("timeout_ms", 20.0, 1.0, 1000.0) / 1e3;
-  s.rates_filter_hz = rates.number("filter_hz", 15.0, 0.5, config.loop_rate_hz / 2.0);
+  s.rates_filter_hz = rates.number("filter_hz", 15.0, 0.5, 100.0);
+  if (s.rates_filter_hz > config.loop_rate_hz / 4.0) {
+    std::ostringstream found;
+    found << s.rates_filter_hz << " with loop_rate_hz " << config.loop_rate_hz;
+    fail(rates.path_of("filter_hz"), found.str(), "at most a quarter of loop_rate_hz");
+  }
   s.rates_persist_s = rates.number("persist_ms", 60.0, 0.0, 10000.0) / 1e3;
   s.min_loss = rates.number("min_loss", 0.55, 0.1, 1.0);
   s.max_off_axis = rates.number("max_off_axis", 0.45, 0.05, 2.0);

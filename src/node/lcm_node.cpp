@@ -86,6 +86,8 @@ class Node {
     pwm_buffer_.resize(static_cast<std::size_t>(pwm_msg_.getEncodedSize()));
     status_msg_.num_motors = n;
     status_buffer_.resize(static_cast<std::size_t>(status_msg_.getEncodedSize()));
+    fill_motor_status_message(motor_status_msg_, 0, n, 0);
+    motor_status_buffer_.resize(static_cast<std::size_t>(motor_status_msg_.getEncodedSize()));
   }
 
   void subscribe() {
@@ -96,6 +98,14 @@ class Node {
         ->setQueueCapacity(kQueueCapacity);
     if (config_.battery) {
       lcm_.subscribe(config_.channels.battery, &Node::on_battery, this)
+          ->setQueueCapacity(kQueueCapacity);
+    }
+    if (loop_.reads_esc_telemetry()) {
+      lcm_.subscribe(config_.channels.esc_telemetry, &Node::on_esc_telemetry, this)
+          ->setQueueCapacity(kQueueCapacity);
+    }
+    if (loop_.reads_attitude()) {
+      lcm_.subscribe(config_.channels.attitude, &Node::on_attitude, this)
           ->setQueueCapacity(kQueueCapacity);
     }
     // Read even when disabled, so a refused request is answered.
@@ -124,10 +134,21 @@ class Node {
       if (r.state == loop::LoopState::kFailsafe) log_ << " (" << to_string(r.reason) << ")";
       log_ << std::endl;
     }
+    if (r.detection_changed && r.detection.failed != 0) {
+      log_ << "motormix: detected motor "
+           << config_.motor_names()[static_cast<std::size_t>(r.detection.motor)]
+           << " failed (" << to_string(r.detection.source) << ")" << std::endl;
+    }
     if (r.failed != logged_failed_) {
       log_failures(r);
       logged_failed_ = r.failed;
     }
+    // What the detector found goes out on motor_status at once, then at
+    // the status rate while it stands (a late listener learns it too), and
+    // once more when disarming clears it.
+    const bool detected_due =
+        r.detection.failed != 0 && (status_every_cycle_ || now_us >= next_status_us_);
+    if (r.detection_changed || detected_due) publish_motor_status(r);
     if (motor_test_answer_due_ && r.motor_test_result != loop::MotorTestResult::kOk) {
       log_ << "motormix: motor test refused: " << to_string(r.motor_test_result) << std::endl;
     }
@@ -265,10 +286,25 @@ class Node {
     if (receive(InputKind::kPid, rbuf)) new_pid_ = true;
   }
   void on_motor_status(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    // Our own motor_status comes back to us over the bus: it is what the
+    // detector already holds, and taken as a report it would outlive the
+    // disarming that clears the detector's declarations.
+    loop::MotorStatusSample sample;
+    if (decode_motor_status(rbuf->data, static_cast<int>(rbuf->data_size), sample) &&
+        std::find(own_status_utimes_.begin(), own_status_utimes_.end(), sample.utime) !=
+            own_status_utimes_.end()) {
+      return;
+    }
     receive(InputKind::kMotorStatus, rbuf);
   }
   void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
     receive(InputKind::kBattery, rbuf);
+  }
+  void on_esc_telemetry(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    receive(InputKind::kEscTelemetry, rbuf);
+  }
+  void on_attitude(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+    receive(InputKind::kAttitude, rbuf);
   }
   void on_motor_test(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
     receive(InputKind::kMotorTest, rbuf);
@@ -280,6 +316,22 @@ class Node {
     const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
     if (len > 0) {
       lcm_.publish(config_.channels.motor_pwm, pwm_buffer_.data(), static_cast<unsigned>(len));
+    }
+  }
+
+  void publish_motor_status(const loop::CycleResult& r) {
+    // A utime of ours never repeats, so the echo filter cannot swallow
+    // another publisher's message for long.
+    std::int64_t utime = wall_us();
+    if (utime <= last_own_status_utime_) utime = last_own_status_utime_ + 1;
+    last_own_status_utime_ = utime;
+    fill_motor_status_message(motor_status_msg_, r.failed, config_.motors(), utime);
+    own_status_utimes_[own_status_next_++ % own_status_utimes_.size()] = utime;
+    const int len = motor_status_msg_.encode(motor_status_buffer_.data(), 0,
+                                             static_cast<int>(motor_status_buffer_.size()));
+    if (len > 0) {
+      lcm_.publish(config_.channels.motor_status, motor_status_buffer_.data(),
+                   static_cast<unsigned>(len));
     }
   }
 
@@ -308,6 +360,12 @@ class Node {
   mixer_status_t status_msg_;
   std::vector<uint8_t> pwm_buffer_;
   std::vector<uint8_t> status_buffer_;
+  motor_status_t motor_status_msg_;
+  std::vector<uint8_t> motor_status_buffer_;
+  // The utimes of the motor_status messages this process published lately.
+  std::array<std::int64_t, 8> own_status_utimes_{};
+  std::size_t own_status_next_ = 0;
+  std::int64_t last_own_status_utime_ = 0;
   std::int64_t next_status_us_ = 0;
   // status_rate_hz equal to loop_rate_hz: a status after every cycle's
   // outputs, whatever the wake-ups' jitter (a due time, now + one period,

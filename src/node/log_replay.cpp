@@ -194,6 +194,12 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     if (channel == config.channels.motor_status) return InputKind::kMotorStatus;
     if (config.battery && channel == config.channels.battery) return InputKind::kBattery;
     if (channel == config.channels.motor_test) return InputKind::kMotorTest;
+    if (config.failure_detection && channel == config.channels.esc_telemetry) {
+      return InputKind::kEscTelemetry;
+    }
+    if (config.failure_detection && channel == config.channels.attitude) {
+      return InputKind::kAttitude;
+    }
     return std::nullopt;
   };
 

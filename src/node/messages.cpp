@@ -84,6 +84,22 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.motor_tests_refused = c.motor_tests_refused;
   s.spooling_up = r.spooling_up;
   s.spool_up = static_cast<float>(r.spool_up);
+  s.detected_motors = static_cast<int32_t>(r.detection.failed);
+  s.detected_by = static_cast<int8_t>(r.detection.source);
+  s.detected_motor = static_cast<int8_t>(r.detection.motor + 1);
+  s.detected_utime = r.detection.source == DetectionSource::kNone ? 0 : r.detection.at_us;
+  s.telemetry_silent = static_cast<int32_t>(r.detection.telemetry_silent);
+  s.esc_telemetry_received = c.esc_telemetry_received;
+  s.attitude_received = c.attitude_received;
+  s.attitude_age_ms = static_cast<float>(r.attitude_age_ms);
+}
+
+void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors,
+                               std::int64_t utime) {
+  msg.utime = utime;
+  msg.num_motors = motors;
+  msg.failed.assign(static_cast<std::size_t>(motors), 0);
+  for (int i = 0; i < motors; ++i) msg.failed[static_cast<std::size_t>(i)] = (failed >> i) & 1U;
 }
 
 namespace {
@@ -137,6 +153,47 @@ bool decode_pid(const void* data, int size, loop::PidSample& out) {
   return true;
 }
 
+namespace {
+// The big-endian int32 at `offset` (an array length), as LCM encodes it.
+std::int32_t length_at(const void* data, int offset) {
+  const auto* b = static_cast<const unsigned char*>(data) + offset;
+  const std::uint32_t raw = (std::uint32_t{b[0]} << 24) | (std::uint32_t{b[1]} << 16) |
+                            (std::uint32_t{b[2]} << 8) | std::uint32_t{b[3]};
+  std::int32_t n = 0;
+  std::memcpy(&n, &raw, sizeof n);
+  return n;
+}
+}  // namespace
+
+bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out) {
+  // fingerprint (8) + utime (8) + count (4), then per reading one int8 and
+  // six floats.
+  constexpr int kHeader = 20, kPerReading = 1 + 6 * 4;
+  if (data == nullptr || size < kHeader) return false;
+  const std::int32_t n = length_at(data, 16);
+  if (n < 0 || n > loop::kMaxEscReadings || size != kHeader + n * kPerReading) return false;
+  esc_telemetry_t msg{};
+  if (!decode_whole(data, size, msg)) return false;
+  out.utime = msg.utime;
+  out.count = msg.count;
+  for (int i = 0; i < msg.count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    out.readings[k] = loop::EscReading{msg.motor[k],     msg.rpm[k],           msg.erpm[k],
+                                       msg.current_a[k], msg.voltage_v[k],     msg.temperature_c[k],
+                                       msg.consumption_mah[k]};
+  }
+  return true;
+}
+
+bool decode_attitude(const void* data, int size, loop::AttitudeSample& out) {
+  attitude_t msg{};
+  if (!decode_whole(data, size, msg)) return false;
+  out.utime = msg.utime;
+  for (std::size_t i = 0; i < 4; ++i) out.q[i] = msg.q[i];
+  for (std::size_t i = 0; i < 3; ++i) out.rates[i] = msg.rates[i];
+  return true;
+}
+
 bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out) {
   motor_test_t msg{};
   if (!decode_whole(data, size, msg)) return false;
@@ -163,6 +220,11 @@ bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, in
       return hand_over(loop::MotorStatusSample{}, decode_motor_status, &loop::ControlLoop::on_motor_status);
     case InputKind::kBattery:
       return hand_over(loop::BatterySample{}, decode_battery, &loop::ControlLoop::on_battery);
+    case InputKind::kEscTelemetry:
+      return hand_over(loop::EscTelemetrySample{}, decode_esc_telemetry,
+                       &loop::ControlLoop::on_esc_telemetry);
+    case InputKind::kAttitude:
+      return hand_over(loop::AttitudeSample{}, decode_attitude, &loop::ControlLoop::on_attitude);
     case InputKind::kMotorTest: {
       loop::MotorTestSample sample;
       if (!decode_motor_test(data, size, sample)) {

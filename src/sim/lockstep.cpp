@@ -163,6 +163,9 @@ void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
     att_sq_ += att * att;
     yaw_sq_ += yaw * yaw;
     att_max_ = std::max(att_max_, att);
+    if (failure_s_ >= 0 && t >= failure_s_ && t <= failure_s_ + kFailureWindowS) {
+      failure_att_max_ = std::max(failure_att_max_, att);
+    }
     // A drop counts once the vehicle has reached the commanded altitude
     // (within kReachedM) since the command last changed: a climb still on
     // its way is not a loss.
@@ -180,6 +183,7 @@ void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
 
 void Scorer::finish(SimResult& r) const {
   r.attitude_error_max_deg = att_max_;
+  r.failure_attitude_error_max_deg = failure_att_max_;
   r.altitude_loss_m = altitude_loss_;
   r.armed_s = static_cast<double>(armed_cycles_) * period_s_;
   r.reached_altitude = ever_reached_;
@@ -233,6 +237,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
   SimResult r;
   r.min_battery_v = vehicle.battery().terminal_v();
   Scorer scorer(scenario, config);
+  if (!clock.failures().empty()) scorer.failure_at(clock.failures().front().at_s);
   bool mixer_armed = false;
   AxisVector unallocated = AxisVector::Zero();
   loop::SetpointSample setpoint;

@@ -104,6 +104,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   ScenarioClock clock(scenario, config, options.sim.failures);
   Sensors sensors(scenario.noise, options.sim.seed);
   Scorer scorer(scenario, config);
+  if (!clock.failures().empty()) scorer.failure_at(clock.failures().front().at_s);
 
   MixerOutputs mix;
   mix.motors = config.motors();

@@ -9,6 +9,8 @@
 #include <motormix/battery_t.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/attitude_t.hpp>
+#include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_status_t.hpp>
 #include <motormix/motor_test_t.hpp>
 #include <motormix/pid_t.hpp>
@@ -45,9 +47,25 @@ bool decode_pid(const void* data, int size, loop::PidSample& out);
 bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out);
 bool decode_battery(const void* data, int size, loop::BatterySample& out);
 bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out);
+// Length checked before decoding, as motor_status: count 1..kMaxEscReadings.
+bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out);
+bool decode_attitude(const void* data, int size, loop::AttitudeSample& out);
+
+// What the detector found, as motor_status_t: every motor in force as
+// failed (configured, reported and detected), so a reader sees one set.
+void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors,
+                               std::int64_t utime);
 
 // The input channels a mixer reads.
-enum class InputKind : std::uint8_t { kSetpoint, kPid, kMotorStatus, kBattery, kMotorTest };
+enum class InputKind : std::uint8_t {
+  kSetpoint,
+  kPid,
+  kMotorStatus,
+  kBattery,
+  kMotorTest,
+  kEscTelemetry,
+  kAttitude
+};
 
 // Decodes one input message of `kind` and hands it to the loop, which counts
 // it if it does not decode or is rejected. True when the loop accepted it.

@@ -37,6 +37,9 @@ struct SimOptions {
   double duration_s = 0.0;  // > 0: instead of the scenario's
 };
 
+// After a failure, how long its attitude transient is watched.
+inline constexpr double kFailureWindowS = 1.0;
+
 // One failure of a run and what motormix's own detector made of it.
 struct FailureOutcome {
   MotorFailure failure;
@@ -54,6 +57,10 @@ struct SimResult {
   double attitude_error_max_deg = 0.0;
   double yaw_error_rms_deg = 0.0;
   double altitude_loss_m = 0.0;         // largest drop below the commanded altitude, once reached
+  // Aircraft: the largest tilt error in the kFailureWindowS (detection and recovery) after the
+  // first failure (what the failure and its handling cost, apart from the
+  // scenario's own steps); 0 without failures.
+  double failure_attitude_error_max_deg = 0.0;
   // A run that never arms or never climbs scores no loss and no error: these
   // say whether it flew at all.
   double armed_s = 0.0;             // simulated time the mixer spent armed, the whole run
@@ -112,9 +119,13 @@ class Scorer {
   void add(double t, const Reference& ref, const ControllerCommand& cmd,
            const VehicleModel& vehicle, bool armed, std::uint8_t axis_limited);
   void finish(SimResult& r) const;
+  // The first failure's time (for failure_attitude_error_max_deg).
+  void failure_at(double t) { failure_s_ = t; }
 
  private:
   double from_s_, to_s_;
+  double failure_s_ = -1.0;
+  double failure_att_max_ = 0.0;
   bool wheeled_;
   AxisMask controlled_;
   double att_sq_ = 0, yaw_sq_ = 0, speed_sq_ = 0, rate_sq_ = 0;

@@ -1,0 +1,227 @@
+// The failure detector inside the control loop: its two inputs checked and
+// counted like every input, read only when a source uses them, detection
+// only while armed, spooled up and above min_throttle, declarations joining
+// the failure set and cleared on disarming; its configuration section.
+
+#include "loop/control_loop.hpp"
+#include "node/messages.hpp"
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace motormix::test {
+namespace {
+
+using loop::AttitudeSample;
+using loop::ControlLoop;
+using loop::EscTelemetrySample;
+using loop::LoopState;
+using loop::PidSample;
+using loop::Rejection;
+using loop::SetpointSample;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+config::Config hexa_config(std::vector<std::string> overrides) {
+  overrides.push_back("inputs.arm_max_throttle=1");
+  overrides.push_back("output.spool_up_s=0");
+  return config::load_config_file(source_path("config/hexa_x.yaml"), overrides);
+}
+
+EscTelemetrySample one_reading(std::int64_t utime, int motor, double rpm) {
+  EscTelemetrySample s;
+  s.utime = utime;
+  s.count = 1;
+  s.readings[0] = {motor, rpm, kNaN, 10.0, 16.0, 40.0, kNaN};
+  return s;
+}
+
+class DetectionLoopTest : public ::testing::Test {
+ protected:
+  config::Config config_ = hexa_config({"failure_detection.sources=[telemetry]"});
+  ControlLoop loop_{config_, config::build_mixer(config_)};
+  std::int64_t utime_ = 1'700'000'000'000'000;
+
+  // One 400 Hz cycle at `now` with every ESC reporting; motor `dead`
+  // (1-based, 0: none) reports zero rpm.
+  const loop::CycleResult& cycle(std::int64_t now, bool armed, double throttle, int dead = 0) {
+    utime_ += 2500;
+    EXPECT_EQ(loop_.on_setpoint(SetpointSample{utime_, throttle, 0.0, armed}, now, kWall),
+              Rejection::kNone);
+    EXPECT_EQ(loop_.on_pid(PidSample{utime_, 0.0, 0.0, 0.0}, now, kWall), Rejection::kNone);
+    for (int m = 1; m <= 6; ++m) {
+      const double rpm = m == dead ? 0.0 : 9000.0;
+      EXPECT_EQ(loop_.on_esc_telemetry(one_reading(utime_, m, rpm), now, kWall), Rejection::kNone);
+    }
+    return loop_.cycle(now);
+  }
+};
+
+TEST_F(DetectionLoopTest, DeclaresOnlyWhileArmedAboveMinThrottle) {
+  std::int64_t now = 0;
+  // Disarmed, then armed at low throttle (on the ground): a dead motor's
+  // telemetry says nothing yet.
+  for (int k = 0; k < 400; ++k, now += 2500) cycle(now, false, 0.0, 3);
+  for (int k = 0; k < 400; ++k, now += 2500) {
+    const auto& r = cycle(now, true, 0.1, 3);
+    ASSERT_EQ(r.state, LoopState::kArmed);
+    EXPECT_EQ(r.detection.failed, 0U);
+  }
+  // Climbing: declared, and in the failure set the mixer uses.
+  bool declared = false;
+  for (int k = 0; k < 400 && !declared; ++k, now += 2500) {
+    const auto& r = cycle(now, true, 0.6, 3);
+    declared = r.detection.failed != 0;
+    if (declared) {
+      EXPECT_TRUE(r.detection_changed);
+      EXPECT_EQ(r.detection.failed, MotorMask{1} << 2);
+      EXPECT_EQ(r.detection.source, DetectionSource::kTelemetry);
+      EXPECT_EQ(r.failed & (MotorMask{1} << 2), MotorMask{1} << 2);
+      EXPECT_EQ(r.mix.command[2], 0.0);  // stopped in this very cycle
+    }
+  }
+  ASSERT_TRUE(declared);
+  // Disarming clears it: the next flight is judged afresh.
+  const auto& r = cycle(now, false, 0.0);
+  EXPECT_EQ(r.state, LoopState::kDisarmed);
+  EXPECT_EQ(r.detection.failed, 0U);
+  EXPECT_EQ(r.failed, 0U);
+  EXPECT_TRUE(r.detection_changed);
+}
+
+TEST_F(DetectionLoopTest, RejectsMalformedTelemetryAndCountsIt) {
+  const std::int64_t now = 0;
+  EscTelemetrySample s = one_reading(utime_, 1, 100.0);
+  const auto check = [&](const EscTelemetrySample& sample, Rejection expected) {
+    EXPECT_EQ(loop_.on_esc_telemetry(sample, now, kWall), expected);
+  };
+  EscTelemetrySample bad = s;
+  bad.count = 0;
+  check(bad, Rejection::kWrongSize);
+  bad.count = 7;  // more readings than motors
+  check(bad, Rejection::kWrongSize);
+  bad = s;
+  bad.readings[0].motor = 7;
+  check(bad, Rejection::kOutOfRange);
+  bad = s;
+  bad.count = 2;
+  bad.readings[1] = bad.readings[0];  // the same motor twice
+  check(bad, Rejection::kOutOfRange);
+  bad = s;
+  bad.readings[0].rpm = kInf;
+  check(bad, Rejection::kNonFinite);
+  bad = s;
+  bad.readings[0].rpm = -5.0;
+  check(bad, Rejection::kOutOfRange);
+  bad = s;
+  bad.readings[0].temperature_c = 900.0;
+  check(bad, Rejection::kOutOfRange);
+  check(s, Rejection::kNone);
+  bad = s;
+  bad.utime -= 1000;  // older than motor 1's last reading
+  check(bad, Rejection::kOutOfOrder);
+  bad = one_reading(utime_ - 1000, 2, 100.0);  // motor 2's first: in order
+  check(bad, Rejection::kNone);
+  bad = one_reading(kWall + 10'000'000, 3, 100.0);
+  check(bad, Rejection::kFromFuture);
+  const loop::Counters& c = loop_.counters();
+  EXPECT_EQ(c.esc_telemetry_received, 2);
+  EXPECT_EQ(c.rejected_size, 2);
+  EXPECT_EQ(c.rejected_range, 4);
+  EXPECT_EQ(c.rejected_nonfinite, 1);
+  EXPECT_EQ(c.rejected_out_of_order, 1);
+  EXPECT_EQ(c.rejected_future, 1);
+}
+
+TEST(DetectionLoop, AttitudeIsReadOnlyForTheRatesSourceAndChecked) {
+  const config::Config without = hexa_config({"failure_detection.sources=[telemetry]"});
+  ControlLoop telemetry_only(without, config::build_mixer(without));
+  EXPECT_FALSE(telemetry_only.reads_attitude());
+  EXPECT_EQ(telemetry_only.on_attitude(AttitudeSample{1, {1, 0, 0, 0}, {0, 0, 0}}, 0, kWall),
+            Rejection::kNone);
+  EXPECT_EQ(telemetry_only.counters().attitude_received, 0);
+
+  const config::Config with = hexa_config({"failure_detection.sources=[rates]"});
+  ControlLoop loop(with, config::build_mixer(with));
+  ASSERT_TRUE(loop.reads_attitude());
+  EXPECT_FALSE(loop.reads_esc_telemetry());
+  std::int64_t utime = 1'700'000'000'000'000;
+  const auto send = [&](std::array<double, 4> q, std::array<double, 3> w) {
+    return loop.on_attitude(AttitudeSample{utime += 1000, q, w}, 0, kWall);
+  };
+  EXPECT_EQ(send({1, 0, 0, 0}, {0.1, -0.2, 0.3}), Rejection::kNone);
+  EXPECT_EQ(send({kNaN, kNaN, kNaN, kNaN}, {0, 0, 0}), Rejection::kNone);  // rates only
+  EXPECT_EQ(send({1, 0, 0, 0}, {kNaN, 0, 0}), Rejection::kNonFinite);
+  EXPECT_EQ(send({1, 0, 0, 0}, {0, 80.0, 0}), Rejection::kOutOfRange);
+  EXPECT_EQ(send({kNaN, 0, 0, 0}, {0, 0, 0}), Rejection::kNonFinite);  // half a quaternion
+  EXPECT_EQ(send({0.9, 0, 0, 0}, {0, 0, 0}), Rejection::kOutOfRange);  // not unit length
+  EXPECT_EQ(loop.on_attitude(AttitudeSample{utime - 5000, {1, 0, 0, 0}, {0, 0, 0}}, 0, kWall),
+            Rejection::kOutOfOrder);
+  EXPECT_EQ(loop.counters().attitude_received, 2);
+}
+
+TEST(DetectionLoop, WithoutTheSectionNothingIsRead) {
+  const config::Config c = config::load_config_file(source_path("config/hexa_x.yaml"));
+  EXPECT_FALSE(c.failure_detection.has_value());
+  ControlLoop loop(c, config::build_mixer(c));
+  EXPECT_FALSE(loop.reads_esc_telemetry());
+  EXPECT_EQ(loop.on_esc_telemetry(one_reading(1, 1, 100.0), 0, kWall), Rejection::kNone);
+  EXPECT_EQ(loop.counters().esc_telemetry_received, 0);
+}
+
+TEST(DetectionConfig, DefaultsPerVehicleAndRejections) {
+  const config::Config hexa = hexa_config({"failure_detection.enabled=true"});
+  ASSERT_TRUE(hexa.failure_detection.has_value());
+  EXPECT_EQ(hexa.failure_detection->detector.sources, 7);  // six rotors: outputs too
+  EXPECT_GT(hexa.failure_detection->detector.min_residual_nm, 0.0);
+  const config::Config quad = config::load_config_file(source_path("config/quad_x.yaml"),
+                                                       {"failure_detection.enabled=true"});
+  EXPECT_EQ(quad.failure_detection->detector.sources, 3);  // telemetry and rates
+  const config::Config off = hexa_config({"failure_detection.enabled=false"});
+  EXPECT_FALSE(off.failure_detection.has_value());
+
+  const auto rejected = [](const std::string& file, const std::string& set,
+                           const std::string& key) {
+    try {
+      config::load_config_file(source_path(file), {set});
+      ADD_FAILURE() << set << " accepted";
+    } catch (const config::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  };
+  rejected("config/quad_x.yaml", "failure_detection.sources=[outputs]", "failure_detection.sources");
+  rejected("config/hexa_x.yaml", "failure_detection.sources=[rpm]", "failure_detection.sources[0]");
+  rejected("config/hexa_x.yaml", "failure_detection.sources=[]", "failure_detection.sources");
+  rejected("config/hexa_x.yaml", "failure_detection.motor_poles=13", "failure_detection.motor_poles");
+  rejected("config/hexa_x.yaml", "failure_detection.telemetry.rpm_ratio=2",
+           "failure_detection.telemetry.rpm_ratio");
+  rejected("config/diff_drive.yaml", "failure_detection.enabled=true", "failure_detection.enabled");
+}
+
+TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {
+  esc_telemetry_t msg{};
+  msg.utime = 5;
+  msg.count = 2;
+  msg.motor = {1, 2};
+  msg.rpm = msg.erpm = msg.current_a = msg.voltage_v = msg.temperature_c = msg.consumption_mah =
+      {1.0F, 2.0F};
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
+  ASSERT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  loop::EscTelemetrySample out;
+  ASSERT_TRUE(node::decode_esc_telemetry(bytes.data(), static_cast<int>(bytes.size()), out));
+  EXPECT_EQ(out.count, 2);
+  EXPECT_EQ(out.readings[1].motor, 2);
+  EXPECT_EQ(out.readings[1].rpm, 2.0);
+  bytes[16] = 0x7F;  // count: two billion
+  EXPECT_FALSE(node::decode_esc_telemetry(bytes.data(), static_cast<int>(bytes.size()), out));
+  bytes.resize(10);
+  EXPECT_FALSE(node::decode_esc_telemetry(bytes.data(), static_cast<int>(bytes.size()), out));
+}
+
+}  // namespace
+}  // namespace motormix::test

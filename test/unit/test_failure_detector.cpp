@@ -1,0 +1,247 @@
+// The failure detector alone, on synthetic vehicles with time passed in:
+// each source finds the motor that stopped and names it, and none of them
+// fires on one bad sample, a sagging battery, a gust, a stale stream or
+// while detection is not allowed.
+
+#include <motormix/failure_detector.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace motormix::test {
+namespace {
+
+constexpr std::int64_t kCycleUs = 2500;  // 400 Hz
+constexpr double kHover = 0.5;
+constexpr double kFullRpm = 10000.0;
+// Detection latency the tests allow beyond each source's own persistence:
+// one motor lag to show the loss, a sample period or two, the filters.
+constexpr double kTelemetrySlackS = 0.08;
+constexpr double kRatesSlackS = 0.12;
+
+std::uint8_t bits(DetectorSources a) { return static_cast<std::uint8_t>(a); }
+
+// A flat hexa X of 2 kg, 0.25 m arms: each rotor's torque at full thrust
+// (15 N), alternating spins.
+FailureDetectorSettings hexa(std::uint8_t sources) {
+  FailureDetectorSettings s;
+  s.motors = 6;
+  s.sources = sources;
+  s.torque_per_thrust.setZero(3, 6);
+  for (int i = 0; i < 6; ++i) {
+    const double a = (30.0 + 60.0 * i) * 3.14159265358979 / 180.0;
+    const Eigen::Vector3d p(0.25 * std::cos(a), 0.25 * std::sin(a), 0.0);
+    const Eigen::Vector3d f(0, 0, -15.0);
+    const double spin = i % 2 == 0 ? 1.0 : -1.0;
+    s.torque_per_thrust.col(i) = p.cross(f) + spin * 0.016 * -f;
+  }
+  s.inertia_kgm2 = Eigen::Vector3d(0.03, 0.03, 0.05);
+  s.rotational_drag = 0.002;
+  s.min_residual_nm = 0.3 * s.torque_per_thrust.col(0).norm() * kHover;
+  return s;
+}
+
+MotorVector hover(int motors) { return MotorVector::Constant(motors, kHover); }
+
+// Feeds each motor's rpm for its actual thrust (sqrt law) to the detector.
+void feed_telemetry(FailureDetector& d, const MotorVector& actual, double scale, std::int64_t t) {
+  for (int i = 0; i < actual.size(); ++i) {
+    d.on_telemetry(i, scale * kFullRpm * std::sqrt(std::max(actual[i], 0.0)), NAN, t);
+  }
+}
+
+TEST(FailureDetector, TelemetryNamesTheMotorThatStopped) {
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  MotorVector actual = hover(6);
+  std::int64_t t = 0;
+  const std::int64_t fail_at = 500'000;
+  for (; t < 2'000'000 && d.detection().failed == 0; t += kCycleUs) {
+    if (t >= fail_at) actual[2] *= std::exp(-kCycleUs / 1e6 / 0.05);  // spins down
+    feed_telemetry(d, actual, 1.0, t);
+    d.update(hover(6), 0, true, t);
+  }
+  ASSERT_EQ(d.detection().failed, MotorMask{1} << 2);
+  EXPECT_EQ(d.detection().motor, 2);
+  EXPECT_EQ(d.detection().source, DetectionSource::kTelemetry);
+  const double latency = static_cast<double>(d.detection().at_us - fail_at) / 1e6;
+  EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
+}
+
+TEST(FailureDetector, OneBadReadingIsNotAFailure) {
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+    feed_telemetry(d, hover(6), 1.0, t);
+    if (t == 400'000) d.on_telemetry(4, 0.0, NAN, t);  // one glitch
+    d.update(hover(6), 0, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+}
+
+TEST(FailureDetector, ASaggingBatteryMovesEveryMotorAndTriggersNothing) {
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (std::int64_t t = 0; t < 3'000'000; t += kCycleUs) {
+    const double scale = 1.0 - 0.4 * static_cast<double>(t) / 3e6;  // rpm down 40 %
+    MotorVector actual = hover(6);
+    for (int i = 0; i < 6; ++i) actual[i] *= 1.0 + noise(rng);
+    feed_telemetry(d, actual, scale, t);
+    d.update(hover(6), 0, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+}
+
+TEST(FailureDetector, NothingIsDeclaredWhileNotAllowed) {
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  MotorVector actual = hover(6);
+  actual[1] = 0.0;
+  for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+    feed_telemetry(d, actual, 1.0, t);
+    d.update(hover(6), 0, false, t);
+    EXPECT_EQ(d.suspicion_s(DetectionSource::kTelemetry, 1), 0.0);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+  // Allowed from here on: the evidence must build up again first.
+  const std::int64_t allowed_at = 1'000'000;
+  for (std::int64_t t = allowed_at; d.detection().failed == 0; t += kCycleUs) {
+    feed_telemetry(d, actual, 1.0, t);
+    d.update(hover(6), 0, true, t);
+  }
+  EXPECT_GE(d.detection().at_us - allowed_at,
+            static_cast<std::int64_t>(d.settings().telemetry_persist_s * 1e6) - kCycleUs);
+}
+
+TEST(FailureDetector, ASilentEscIsAFailureOnlyWithoutTheRatesSource) {
+  for (const bool with_rates : {false, true}) {
+    SCOPED_TRACE(with_rates ? "telemetry and rates" : "telemetry alone");
+    const std::uint8_t sources =
+        bits(DetectorSources::kTelemetry) | (with_rates ? bits(DetectorSources::kRates) : 0);
+    FailureDetector d(hexa(sources));
+    for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+      MotorVector actual = hover(6);
+      for (int i = 0; i < 6; ++i) {
+        if (i != 5 || t < 300'000) d.on_telemetry(i, kFullRpm * std::sqrt(actual[i]), NAN, t);
+      }
+      d.on_rates(Eigen::Vector3d::Zero(), t, t);  // a steady hover
+      d.update(hover(6), 0, true, t);
+    }
+    if (with_rates) {
+      EXPECT_EQ(d.detection().failed, 0U);
+      EXPECT_EQ(d.detection().telemetry_silent, MotorMask{1} << 5);
+    } else {
+      EXPECT_EQ(d.detection().failed, MotorMask{1} << 5);
+      EXPECT_EQ(d.detection().source, DetectionSource::kTelemetrySilent);
+    }
+  }
+}
+
+// The body's rates under the rotors' torque plus `external`, integrated at
+// the cycle rate, fed to the detector as a gyro would.
+class RatesVehicle {
+ public:
+  explicit RatesVehicle(const FailureDetectorSettings& s) : s_(s) {}
+  void step(FailureDetector& d, const MotorVector& actual, const Eigen::Vector3d& external,
+            std::int64_t t) {
+    const Eigen::Vector3d torque = s_.torque_per_thrust * actual - s_.rotational_drag * w_ -
+                                   w_.cross(s_.inertia_kgm2.cwiseProduct(w_)) + external;
+    w_ += torque.cwiseQuotient(s_.inertia_kgm2) * (kCycleUs / 1e6);
+    d.on_rates(w_, t, t);
+  }
+
+ private:
+  FailureDetectorSettings s_;
+  Eigen::Vector3d w_ = Eigen::Vector3d::Zero();
+};
+
+TEST(FailureDetector, RatesNameEveryMotorOfAHexa) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  for (int motor = 0; motor < 6; ++motor) {
+    SCOPED_TRACE(motor);
+    FailureDetector d(s);
+    RatesVehicle body(s);
+    MotorVector actual = hover(6);
+    const std::int64_t fail_at = 500'000;
+    for (std::int64_t t = 0; t < 1'500'000 && d.detection().failed == 0; t += kCycleUs) {
+      if (t >= fail_at) actual[motor] *= std::exp(-kCycleUs / 1e6 / 0.05);
+      body.step(d, actual, Eigen::Vector3d::Zero(), t);
+      d.update(hover(6), 0, true, t);
+    }
+    ASSERT_EQ(d.detection().failed, MotorMask{1} << motor);
+    EXPECT_EQ(d.detection().source, DetectionSource::kRates);
+    EXPECT_LE(static_cast<double>(d.detection().at_us - fail_at) / 1e6,
+              s.rates_persist_s + kRatesSlackS);
+  }
+}
+
+TEST(FailureDetector, RatesIgnoreAGustAndATorqueNoMotorCouldMake) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  FailureDetector d(s);
+  RatesVehicle body(s);
+  for (std::int64_t t = 0; t < 3'000'000; t += kCycleUs) {
+    Eigen::Vector3d external = Eigen::Vector3d::Zero();
+    // A gust below the smallest residual judged, then a large torque about
+    // yaw alone: no single motor's loss points that way.
+    if (t > 500'000 && t < 1'000'000) external = Eigen::Vector3d(0.8, 0.0, 0.0) * s.min_residual_nm;
+    if (t > 1'500'000 && t < 2'500'000) external = Eigen::Vector3d(0.0, 0.0, 2.0);
+    body.step(d, hover(6), external, t);
+    d.update(hover(6), 0, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+}
+
+TEST(FailureDetector, StaleRatesJudgeNothing) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  FailureDetector d(s);
+  RatesVehicle body(s);
+  MotorVector actual = hover(6);
+  // Motor 4 stops at 200 ms; the gyro stream dies 10 ms later, its last
+  // samples already showing the loss. Held, they would name the motor.
+  for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+    if (t >= 200'000) actual[3] = 0.0;
+    if (t < 210'000) body.step(d, actual, Eigen::Vector3d::Zero(), t);
+    d.update(hover(6), 0, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+}
+
+TEST(FailureDetector, OutputsFindTheMotorDrivenToFullForLong) {
+  FailureDetectorSettings s = hexa(bits(DetectorSources::kOutputs));
+  FailureDetector d(s);
+  MotorVector commands = hover(6);
+  commands[4] = 1.0;
+  // Shorter than the persistence: nothing.
+  std::int64_t t = 0;
+  for (; t < 1'200'000; t += kCycleUs) d.update(commands, 0, true, t);
+  for (; t < 1'700'000; t += kCycleUs) d.update(hover(6), 0, true, t);
+  EXPECT_EQ(d.detection().failed, 0U);
+  for (; t < 5'000'000 && d.detection().failed == 0; t += kCycleUs) d.update(commands, 0, true, t);
+  EXPECT_EQ(d.detection().failed, MotorMask{1} << 4);
+  EXPECT_EQ(d.detection().source, DetectionSource::kOutputs);
+}
+
+TEST(FailureDetector, ResetForgetsDeclarations) {
+  FailureDetector d(hexa(bits(DetectorSources::kOutputs)));
+  MotorVector commands = hover(6);
+  commands[0] = 1.0;
+  for (std::int64_t t = 0; t < 5'000'000; t += kCycleUs) d.update(commands, 0, true, t);
+  ASSERT_NE(d.detection().failed, 0U);
+  d.reset();
+  EXPECT_EQ(d.detection().failed, 0U);
+  EXPECT_EQ(d.detection().source, DetectionSource::kNone);
+}
+
+TEST(FailureDetector, MotorsAlreadyFailedAreNotJudgedAgain) {
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  MotorVector actual = hover(6);
+  actual[0] = 0.0;
+  for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+    feed_telemetry(d, actual, 1.0, t);
+    d.update(hover(6), MotorMask{1}, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+}
+
+}  // namespace
+}  // namespace motormix::test
