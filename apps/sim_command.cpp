@@ -184,6 +184,13 @@ int sim(const SimCommand& cmd) {
       j["mode"] = "lockstep";
       outcomes = r.failures;
       j["false_detections"] = r.false_detections;
+      nlohmann::json declared = nlohmann::json::array();
+      for (const sim::SimResult::Declaration& d : r.declarations) {
+        declared.push_back({{"at_s", d.at_s},
+                            {"motor", config->motor_names()[static_cast<std::size_t>(d.motor)]},
+                            {"by", to_string(d.source)}});
+      }
+      j["detections"] = declared;
     }
   } catch (const std::exception& e) {
     std::cerr << "motormix sim: " << e.what() << "\n";

@@ -15,15 +15,22 @@
 // - rates: the angular acceleration the body rates show, times the inertia,
 //   against the torque the commanded thrusts give (each motor's thrust
 //   followed through the motor's lag, minus the rotational drag and the
-//   gyroscopic term w x Iw). A motor that stops leaves a residual of minus
+//   gyroscopic term w x Iw), scaled by what healthy flight shows the model
+//   to be worth (a sagging battery, a different ESC curve: learned over
+//   seconds while manoeuvring, frozen while anything is suspected). A motor
+//   that stops leaves a residual of minus
 //   its own torque column times its thrust: the motor whose column the
 //   residual lines up with, by about its thrust, is the one. The scale
 //   (inertia, torque per unit thrust, lag) comes from the vehicle's physics
-//   (the configuration's `vehicle:` section), not learned in flight: a
-//   learned scale needs excitation a hover does not give and drifts with
-//   whatever it is fitted on, and the test below allows a wide error in it
-//   (a fraction of the motor's thrust between min_loss and 1 + the
-//   tolerance).
+//   (the configuration's `vehicle:` section); only one overall factor is
+//   learned in flight: a whole model learned in flight needs excitation a
+//   hover does not give, and drifts with whatever it was fitted on.
+//   Ambiguity left: with rates alone, an outside torque as large as most of
+//   one motor's torque and lined up with it (a hard gust on one arm) looks
+//   like that motor failing; min_loss and the persistence set how large and
+//   how long it must be. With the telemetry source beside it, a motor whose
+//   ESC reports the speed its command asks for is never declared by the
+//   rates.
 // - outputs: for six rotors or more, as the slow last resort: a motor whose
 //   low-passed command sits near full while the median is far below it is
 //   the one the controller keeps asking for thrust it does not get.
@@ -87,11 +94,13 @@ struct FailureDetectorSettings {
   double rates_timeout_s = 0.02;  // no rates sample within this: stale
   double rates_filter_hz = 15.0;  // low-pass on both sides of the residual
   double rates_persist_s = 0.06;
-  double min_loss = 0.55;      // residual along the column: at least this fraction of the thrust
+  double min_loss = 0.75;      // residual along the column: at least this fraction of the thrust
   double max_off_axis = 0.45;  // residual across the column: at most this fraction of the along part
   // A residual smaller than this (N m) is never a failure, whatever it lines
   // up with: model error and gusts live below it.
   double min_residual_nm = 0.0;
+  // How fast the learned torque scale follows (battery sag, ESC curve).
+  double scale_time_constant_s = 3.0;
 
   // Outputs.
   double outputs_filter_s = 0.5;
@@ -143,6 +152,7 @@ class FailureDetector {
   // For tests and the status: the rates residual (N m), the latest
   // telemetry ratios against the median, the suspicion times.
   const Eigen::Vector3d& rates_residual() const { return residual_; }
+  double torque_scale() const { return scale_; }
   double suspicion_s(DetectionSource source, int motor) const;
 
  private:
@@ -166,6 +176,9 @@ class FailureDetector {
   MotorVector lagged_;           // each motor's thrust through the motor lag
   MotorVector output_filtered_;  // outputs source: low-passed commands
   std::array<double, kMaxMotors> telemetry_suspicion_{};
+  // Fresh telemetry shows the motor spinning as commanded (rates then do
+  // not declare it).
+  std::array<bool, kMaxMotors> telemetry_healthy_{};
   std::array<double, kMaxMotors> silent_suspicion_{};
   std::array<double, kMaxMotors> rates_suspicion_{};
   std::array<double, kMaxMotors> outputs_suspicion_{};
@@ -176,7 +189,10 @@ class FailureDetector {
   std::int64_t rates_received_us_ = 0;
   bool rates_any_ = false, accel_any_ = false;
   Eigen::Vector3d accel_filtered_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d torque_filtered_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotor_torque_filtered_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rest_torque_filtered_ = Eigen::Vector3d::Zero();
+  // Learned torque scale: exponentially forgotten sums of x.y and x.x.
+  double scale_ = 1.0, scale_xy_ = 0.0, scale_xx_ = 0.0;
   Eigen::Vector3d residual_ = Eigen::Vector3d::Zero();
   bool filters_primed_ = false;
   std::int64_t last_update_us_ = 0;

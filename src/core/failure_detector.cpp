@@ -14,6 +14,9 @@ constexpr double kMaxRatesGapS = 0.05;
 // Along-the-column fraction above which a residual is more than one motor's
 // whole thrust can explain, even with the scale off by this much.
 constexpr double kMaxLoss = 2.0;
+// The learned torque scale stays within these: beyond, the vehicle section
+// is wrong, not the battery.
+constexpr double kMinScale = 0.7, kMaxScale = 1.3;
 
 // Median of the first n values (n >= 1), sorting a copy: n <= 16.
 double median(std::array<double, kMaxMotors> v, int n) {
@@ -62,8 +65,14 @@ void FailureDetector::reset() {
   silent_suspicion_.fill(0.0);
   rates_suspicion_.fill(0.0);
   outputs_suspicion_.fill(0.0);
+  telemetry_healthy_.fill(false);
   accel_filtered_.setZero();
-  torque_filtered_.setZero();
+  rotor_torque_filtered_.setZero();
+  rest_torque_filtered_.setZero();
+  // The model's own scale as the prior, worth one time constant of
+  // manoeuvring at the smallest judged torque.
+  scale_ = 1.0;
+  scale_xy_ = scale_xx_ = s_.min_residual_nm * s_.min_residual_nm;
   residual_.setZero();
   filters_primed_ = false;
   updated_ = false;
@@ -183,6 +192,12 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
       n_current >= s_.min_reporting ? median(current_ratios, n_current) : 0.0;
 
   detection_.telemetry_silent = 0;
+  for (int i = 0; i < s_.motors; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    telemetry_healthy_[k] = (kind[k] == 1 && rpm_median > 0 && ratio[k] >= s_.rpm_ratio * rpm_median) ||
+                            (kind[k] == 2 && current_median > 0 &&
+                             ratio[k] >= s_.current_ratio * current_median);
+  }
   const bool rates_decide = uses(DetectorSources::kRates);
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -222,19 +237,48 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
   }
   const Eigen::Vector3d& w = rates_;
   const Eigen::Vector3d iw = s_.inertia_kgm2.cwiseProduct(w);
-  Eigen::Vector3d torque;
-  torque.noalias() = s_.torque_per_thrust * lagged_;
-  torque -= s_.rotational_drag * w + w.cross(iw);
+  Eigen::Vector3d rotors;
+  rotors.noalias() = s_.torque_per_thrust * lagged_;
+  const Eigen::Vector3d rest = -s_.rotational_drag * w - w.cross(iw);
   if (!filters_primed_) {
     accel_filtered_ = accel_raw_;
-    torque_filtered_ = torque;
+    rotor_torque_filtered_ = rotors;
+    rest_torque_filtered_ = rest;
     filters_primed_ = true;
   } else {
     const double a = low_pass_alpha(dt, 1.0 / (kTwoPi * s_.rates_filter_hz));
     accel_filtered_ += a * (accel_raw_ - accel_filtered_);
-    torque_filtered_ += a * (torque - torque_filtered_);
+    rotor_torque_filtered_ += a * (rotors - rotor_torque_filtered_);
+    rest_torque_filtered_ += a * (rest - rest_torque_filtered_);
   }
-  residual_ = s_.inertia_kgm2.cwiseProduct(accel_filtered_) - torque_filtered_;
+  // What the rotors' torque did, measured: inertia times acceleration, less
+  // drag and the gyroscopic term.
+  const Eigen::Vector3d measured =
+      s_.inertia_kgm2.cwiseProduct(accel_filtered_) - rest_torque_filtered_;
+  // The rotors' torque per unit of the modelled one, learned while the
+  // vehicle flies healthy and manoeuvres (battery sag, ESC curve, prop
+  // wear): the modelled torque is scaled by it. Not while anything is
+  // suspected (a failure must not teach it), nor without excitation.
+  const double excitation = rotor_torque_filtered_.squaredNorm();
+  bool suspected = false;
+  for (int i = 0; i < s_.motors; ++i) {
+    suspected = suspected || rates_suspicion_[static_cast<std::size_t>(i)] > 0.0;
+  }
+  // Only what a scale explains teaches it: the residual before this update
+  // must lie along the modelled torque (an outside torque, a gust, mostly
+  // does not until the controller has answered it, and by then it is
+  // suspected or small).
+  const Eigen::Vector3d across =
+      residual_ - (excitation > 0.0 ? residual_.dot(rotor_torque_filtered_) / excitation : 0.0) *
+                      rotor_torque_filtered_;
+  if (allowed && !suspected && excitation >= s_.min_residual_nm * s_.min_residual_nm &&
+      across.norm() < 0.5 * s_.min_residual_nm) {
+    const double forget = low_pass_alpha(dt, s_.scale_time_constant_s);
+    scale_xy_ += forget * (rotor_torque_filtered_.dot(measured) - scale_xy_);
+    scale_xx_ += forget * (excitation - scale_xx_);
+    if (scale_xx_ > 0.0) scale_ = std::clamp(scale_xy_ / scale_xx_, kMinScale, kMaxScale);
+  }
+  residual_ = measured - scale_ * rotor_torque_filtered_;
 
   // The motor whose loss explains the residual best, if any does.
   int best = -1;
@@ -243,6 +287,9 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
   if (allowed && residual_norm >= s_.min_residual_nm) {
     for (int i = 0; i < s_.motors; ++i) {
       if (has(excluded, i) || lagged_[i] < s_.min_motor_thrust) continue;
+      // An ESC reporting the speed its command asks for is spinning: an
+      // outside torque is pushing, not this motor failing.
+      if (telemetry_healthy_[static_cast<std::size_t>(i)]) continue;
       const Eigen::Vector3d loss = s_.torque_per_thrust.col(i) * lagged_[i];
       const double loss_sq = loss.squaredNorm();
       if (loss_sq <= 0.0) continue;

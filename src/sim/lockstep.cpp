@@ -87,6 +87,7 @@ void DetectionScorer::add(double t, const loop::CycleResult& cycle) {
   if (cycle.detection.failed == 0) seen_ = 0;  // disarmed: a new flight
   for (int m = 0; fresh >> m != 0; ++m) {
     if (((fresh >> m) & 1U) == 0) continue;
+    declarations_.push_back({t, m, cycle.detection.source});
     // The earliest undetected thrust-losing failure of this motor; else the
     // earliest undetected one of any motor (named wrong).
     FailureOutcome* match = nullptr;
@@ -109,6 +110,7 @@ void DetectionScorer::add(double t, const loop::CycleResult& cycle) {
 void DetectionScorer::finish(SimResult& r) const {
   r.failures = outcomes_;
   r.false_detections = false_detections_;
+  r.declarations = declarations_;
 }
 
 bool end_of_period(SimResult& r, const VehicleModel& vehicle, std::int64_t k, double t_end) {

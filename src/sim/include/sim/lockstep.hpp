@@ -77,6 +77,13 @@ struct SimResult {
   // Motors motormix's detector declared that were working (none of the
   // run's thrust-losing failures explains them): each stopped a good motor.
   int false_detections = 0;
+  // Every declaration of the detector: when, which motor, by which source.
+  struct Declaration {
+    double at_s = 0.0;
+    int motor = -1;
+    DetectionSource source = DetectionSource::kNone;
+  };
+  std::vector<Declaration> declarations;
   double sim_seconds = 0.0;
   double wall_seconds = 0.0;
 };
@@ -148,6 +155,7 @@ class DetectionScorer {
 
  private:
   std::vector<FailureOutcome> outcomes_;
+  std::vector<SimResult::Declaration> declarations_;
   MotorMask seen_ = 0;
   int false_detections_ = 0;
 };
