@@ -31,9 +31,10 @@
 //   how long it must be. With the telemetry source beside it, a motor whose
 //   ESC reports the speed its command asks for is never declared by the
 //   rates.
-// - outputs: for six rotors or more, as the slow last resort: a motor whose
-//   low-passed command sits near full while the median is far below it is
-//   the one the controller keeps asking for thrust it does not get.
+// - outputs: for six rotors or more, as the slow last resort, and only for
+//   the first failure: a motor whose low-passed command sits near full
+//   while the median is far below it is the one the controller keeps asking
+//   for thrust it does not get. Opt-in: it is slower than a hexa falls.
 //
 // Every source decides with hysteresis: a suspicion accumulates time while
 // the evidence holds and loses it twice as fast while it does not, and only

@@ -20,9 +20,10 @@ constexpr double kMinResidualOfHoverTorque = 0.3;
 
 std::uint8_t bit(DetectorSources s) { return static_cast<std::uint8_t>(s); }
 
-std::uint8_t read_sources(MapReader& section, int rotors) {
-  std::uint8_t fallback = bit(DetectorSources::kTelemetry) | bit(DetectorSources::kRates);
-  if (rotors >= kOutputsMinRotors) fallback |= bit(DetectorSources::kOutputs);
+std::uint8_t read_sources(MapReader& section) {
+  // The outputs source is opt-in: in the simulator it saves no hexa and
+  // declares healthy motors in hard manoeuvres (docs/failure-detection.md).
+  const std::uint8_t fallback = bit(DetectorSources::kTelemetry) | bit(DetectorSources::kRates);
   const YAML::Node node = section.raw("sources");
   if (!node.IsDefined() || node.IsNull()) return fallback;
   const std::string path = section.path_of("sources");
@@ -81,7 +82,7 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   FailureDetection fd;
   FailureDetectorSettings& s = fd.detector;
   s.motors = config.motors();
-  s.sources = read_sources(section, s.motors);
+  s.sources = read_sources(section);
   fd.min_throttle = section.number("min_throttle", 0.25, 0.0, 1.0);
   fd.motor_poles = static_cast<int>(section.number("motor_poles", 14, 2, 100));
   if (fd.motor_poles % 2 != 0) {

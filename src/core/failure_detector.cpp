@@ -318,6 +318,9 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
 void FailureDetector::judge_outputs(const MotorVector& thrust, MotorMask excluded, bool allowed,
                                     double dt, std::int64_t now_us) {
   const double a = low_pass_alpha(dt, s_.outputs_filter_s);
+  // Only the first failure: once a motor is out, the others' commands are
+  // uneven by design and say nothing about a second.
+  allowed = allowed && excluded == 0;
   std::array<double, kMaxMotors> working{};
   int n = 0, top = -1;
   for (int i = 0; i < s_.motors; ++i) {

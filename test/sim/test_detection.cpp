@@ -99,8 +99,7 @@ FalseAlarmTally fly_healthy(const std::string& file) {
   FalseAlarmTally tally;
   for (const char* strategy : {"legacy_budget", "budget", "shift", "clip", "prioritized",
                                "optimal"}) {
-    // Every source this vehicle has by default (outputs too on six rotors
-    // and more).
+    // The default sources (telemetry and rates).
     const config::Config c =
         load(file, {std::string("mixer.strategy=") + strategy, "failure_detection.enabled=true"});
     for (const char* scenario : {"hover", "steps", "flips", "gusts", "battery_sag"}) {
@@ -181,6 +180,7 @@ TEST(DetectedFailures, WhatFlewWithoutTheDetectorFliesWithIt) {
         if (!without.crashed) {
           EXPECT_FALSE(with.crashed) << with.crash_reason;
         }
+        EXPECT_EQ(with.false_detections, 0);
       }
     }
   }

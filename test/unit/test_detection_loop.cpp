@@ -176,7 +176,7 @@ TEST(DetectionLoop, WithoutTheSectionNothingIsRead) {
 TEST(DetectionConfig, DefaultsPerVehicleAndRejections) {
   const config::Config hexa = hexa_config({"failure_detection.enabled=true"});
   ASSERT_TRUE(hexa.failure_detection.has_value());
-  EXPECT_EQ(hexa.failure_detection->detector.sources, 7);  // six rotors: outputs too
+  EXPECT_EQ(hexa.failure_detection->detector.sources, 3);  // telemetry and rates; outputs opt-in
   EXPECT_GT(hexa.failure_detection->detector.min_residual_nm, 0.0);
   const config::Config quad = config::load_config_file(source_path("config/quad_x.yaml"),
                                                        {"failure_detection.enabled=true"});
