@@ -231,7 +231,8 @@ int replay(const ReplayCommand& cmd) {
             << " s (armed time with that axis limited)\n"
             << "failsafe events " << s.failsafe_events << "; rejected inputs " << s.rejected << "\n"
             << "motor failures  " << s.failed_s << " s armed with failed motors, "
-            << s.failure_changes << " changes of the failure set\n"
+            << s.failure_changes << " changes of the failure set, " << s.detections
+            << " declared by the failure detector\n"
             << "battery         " << s.compensated_s << " s compensated, largest thrust gain "
             << std::setprecision(3) << s.max_thrust_gain << std::setprecision(2) << "\n"
             << "log damage      " << s.discontinuities << " time discontinuities ("

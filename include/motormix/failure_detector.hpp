@@ -96,7 +96,7 @@ struct FailureDetectorSettings {
   double rates_filter_hz = 15.0;  // low-pass on both sides of the residual
   double rates_persist_s = 0.06;
   double min_loss = 0.75;      // residual along the column: at least this fraction of the thrust
-  double max_off_axis = 0.45;  // residual across the column: at most this fraction of the along part
+  double max_off_axis = 0.3;  // residual across the column: at most this fraction of the along part
   // A residual smaller than this (N m) is never a failure, whatever it lines
   // up with: model error and gusts live below it.
   double min_residual_nm = 0.0;

@@ -118,7 +118,7 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   s.rates_persist_s = rates.number("persist_ms", 60.0, 0.0, 10000.0) / 1e3;
   s.min_loss = rates.number("min_loss", 0.75, 0.1, 1.0);
   s.scale_time_constant_s = rates.number("scale_time_constant_s", 3.0, 0.1, 1000.0);
-  s.max_off_axis = rates.number("max_off_axis", 0.45, 0.05, 2.0);
+  s.max_off_axis = rates.number("max_off_axis", 0.3, 0.05, 2.0);
   s.min_residual_nm = rates.number("min_residual_nm", s.min_residual_nm, 0.0, 1000.0);
   rates.finish();
 

@@ -149,6 +149,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   };
 
   MotorMask last_failed = config.failed_motors;
+  MotorMask detected_before = 0;
   const auto cycle_at = [&](std::int64_t t) {
     const loop::CycleResult& r = loop->cycle(t);
     fill_pwm_message(pwm, r, t);
@@ -157,6 +158,11 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     if (r.failed != last_failed) {
       ++summary.failure_changes;
       last_failed = r.failed;
+    }
+    if (r.detection_changed) {
+      const MotorMask fresh = r.detection.failed & ~detected_before;
+      for (int m = 0; m < kMaxMotors; ++m) summary.detections += (fresh >> m) & 1U;
+      detected_before = r.detection.failed;
     }
     if (r.mix.armed) {
       const double dt = static_cast<double>(period_us) / 1e6;

@@ -1,5 +1,6 @@
 #include "node/messages.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 namespace motormix::node {
@@ -92,6 +93,35 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.esc_telemetry_received = c.esc_telemetry_received;
   s.attitude_received = c.attitude_received;
   s.attitude_age_ms = static_cast<float>(r.attitude_age_ms);
+}
+
+void fill_esc_telemetry_message(esc_telemetry_t& msg, const loop::EscTelemetrySample& s) {
+  msg.utime = s.utime;
+  msg.count = s.count;
+  const auto n = static_cast<std::size_t>(std::max(s.count, 0));
+  msg.motor.resize(n);
+  msg.rpm.resize(n);
+  msg.erpm.resize(n);
+  msg.current_a.resize(n);
+  msg.voltage_v.resize(n);
+  msg.temperature_c.resize(n);
+  msg.consumption_mah.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const loop::EscReading& r = s.readings[i];
+    msg.motor[i] = static_cast<int8_t>(r.motor);
+    msg.rpm[i] = static_cast<float>(r.rpm);
+    msg.erpm[i] = static_cast<float>(r.erpm);
+    msg.current_a[i] = static_cast<float>(r.current_a);
+    msg.voltage_v[i] = static_cast<float>(r.voltage_v);
+    msg.temperature_c[i] = static_cast<float>(r.temperature_c);
+    msg.consumption_mah[i] = static_cast<float>(r.consumption_mah);
+  }
+}
+
+void fill_attitude_message(attitude_t& msg, const loop::AttitudeSample& s) {
+  msg.utime = s.utime;
+  for (std::size_t i = 0; i < 4; ++i) msg.q[i] = static_cast<float>(s.q[i]);
+  for (std::size_t i = 0; i < 3; ++i) msg.rates[i] = static_cast<float>(s.rates[i]);
 }
 
 void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors,

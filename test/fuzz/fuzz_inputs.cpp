@@ -1,9 +1,10 @@
 // One channel's message decoder and input checks on arbitrary bytes, driving
 // the control loop. Built three times: MOTORMIX_FUZZ_SETPOINT decodes every
 // chunk as a setpoint_t (pid messages are well-formed, from the input too),
-// MOTORMIX_FUZZ_FAILURES decodes chunks alternately as a motor_status_t and a
-// battery_t (with well-formed setpoint and pid from the input, so the loop
-// arms and mixes with failure sets and compensation), otherwise as a pid_t.
+// MOTORMIX_FUZZ_FAILURES decodes chunks in turn as a motor_status_t, a
+// battery_t, an esc_telemetry_t and an attitude_t (with well-formed setpoint
+// and pid from the input, so the loop arms and mixes with failure sets,
+// compensation and the failure detector judging), otherwise as a pid_t.
 // Chunks: one length byte, then that many bytes. After every chunk a control
 // cycle runs 2.5 ms later, and its outputs must be in range.
 
@@ -25,7 +26,8 @@ const motormix::config::Config& fuzz_config() {
       "geometry: {preset: hexa_x}\nmixer: {strategy: prioritized}\n"
       "output: {min: 1000, max: 2000, disarmed: 900, idle: 0.05, slew_per_s: 40000}\n"
       "inputs: {yaw_source: pid, failsafe: hold_last}\n"
-      "battery: {nominal_v: 16.8, max_gain: 2}\n",
+      "battery: {nominal_v: 16.8, max_gain: 2}\n"
+      "failure_detection: {sources: [telemetry, rates, outputs]}\n",
       "fuzz");
   return c;
 }
@@ -67,20 +69,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p.roll = len > 0 ? (msg[0] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #elif defined(MOTORMIX_FUZZ_FAILURES)
-    if (at % 2 == 0) {
-      loop::MotorStatusSample m;
-      if (node::decode_motor_status(msg, static_cast<int>(len), m)) {
-        loop.on_motor_status(m, now, now + wall_offset);
+    const auto deliver = [&](auto sample, auto decode, auto on) {
+      if (decode(msg, static_cast<int>(len), sample)) {
+        (loop.*on)(sample, now, now + wall_offset);
       } else {
         loop.on_undecodable();
       }
-    } else {
-      loop::BatterySample b;
-      if (node::decode_battery(msg, static_cast<int>(len), b)) {
-        loop.on_battery(b, now, now + wall_offset);
-      } else {
-        loop.on_undecodable();
-      }
+    };
+    switch (at % 4) {
+      case 0:
+        deliver(loop::MotorStatusSample{}, node::decode_motor_status,
+                &loop::ControlLoop::on_motor_status);
+        break;
+      case 1:
+        deliver(loop::BatterySample{}, node::decode_battery, &loop::ControlLoop::on_battery);
+        break;
+      case 2:
+        deliver(loop::EscTelemetrySample{}, node::decode_esc_telemetry,
+                &loop::ControlLoop::on_esc_telemetry);
+        break;
+      default:
+        deliver(loop::AttitudeSample{}, node::decode_attitude, &loop::ControlLoop::on_attitude);
+        break;
     }
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
     loop::PidSample p;

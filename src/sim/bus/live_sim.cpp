@@ -2,6 +2,9 @@
 
 #include "node/wall_clock.hpp"
 #include "sim/bus/sim_log.hpp"
+#include "node/messages.hpp"
+#include "sim/attitude_sensor.hpp"
+#include "sim/esc_telemetry_model.hpp"
 #include "sim/period.hpp"
 
 #include <motormix/battery_t.hpp>
@@ -103,6 +106,11 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   Controller controller = Controller::for_vehicle(config, mixer, vehicle);
   ScenarioClock clock(scenario, config, options.sim.failures);
   Sensors sensors(scenario.noise, options.sim.seed);
+  // The vehicle's ESCs and estimator, for motormix's failure detector.
+  EscTelemetryModel esc_telemetry(config.motors(), options.sim.seed);
+  AttitudeSensor attitude_sensor(scenario.noise.gyro_rad_s, options.sim.seed);
+  esc_telemetry_t esc_msg;
+  attitude_t attitude_msg;
   Scorer scorer(scenario, config);
   if (!clock.failures().empty()) scorer.failure_at(clock.failures().front().at_s);
 
@@ -172,6 +180,15 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       b.utime = now;
       b.voltage = static_cast<float>(vehicle.battery().terminal_v());
       publish(lcm, config.channels.battery, b);
+    }
+    if (!wheeled) {
+      const loop::EscTelemetrySample& esc = esc_telemetry.sample(t, now, vehicle, clock.health(t));
+      if (esc.count > 0) {
+        node::fill_esc_telemetry_message(esc_msg, esc);
+        publish(lcm, config.channels.esc_telemetry, esc_msg);
+      }
+      node::fill_attitude_message(attitude_msg, attitude_sensor.sample(vehicle.body(), now));
+      publish(lcm, config.channels.attitude, attitude_msg);
     }
     const MotorMask detected =
         options.sim.undetected ? 0 : clock.detected(t, scenario.failure_detection_s);

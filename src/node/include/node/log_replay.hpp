@@ -36,6 +36,7 @@ struct ReplaySummary {
   std::int64_t failsafe_events = 0;
   double failed_s = 0.0;             // armed time with motors treated as failed
   std::int64_t failure_changes = 0;  // times the failure set in force changed
+  std::int64_t detections = 0;       // motors motormix's own detector declared failed
   double compensated_s = 0.0;        // armed time with battery compensation (gain > 1)
   double max_thrust_gain = 1.0;
   std::int64_t rejected = 0;          // all rejection counters together

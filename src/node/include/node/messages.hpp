@@ -51,6 +51,10 @@ bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out);
 bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out);
 bool decode_attitude(const void* data, int size, loop::AttitudeSample& out);
 
+// The samples as messages, for publishers (the simulator's vehicle).
+void fill_esc_telemetry_message(esc_telemetry_t& msg, const loop::EscTelemetrySample& s);
+void fill_attitude_message(attitude_t& msg, const loop::AttitudeSample& s);
+
 // What the detector found, as motor_status_t: every motor in force as
 // failed (configured, reported and detected), so a reader sees one set.
 void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors,
