@@ -134,6 +134,20 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
     }
     if (!any) s << " none";
   }
+  // motormix's own failure detector, when it has something to say.
+  if (st.detected_motors != 0 || st.telemetry_silent != 0) {
+    s << "\ndetector  ";
+    if (st.detected_motor > 0) {
+      s << motor_name(o, st.detected_motor - 1) << " declared failed by "
+        << to_string(static_cast<DetectionSource>(st.detected_by));
+    }
+    if (st.telemetry_silent != 0) {
+      s << (st.detected_motor > 0 ? "; " : "") << "telemetry silent:";
+      for (int i = 0; i < st.num_motors && i < 32; ++i) {
+        if ((st.telemetry_silent >> i) & 1) s << " " << motor_name(o, i);
+      }
+    }
+  }
   s << "\nauthority";
   for (int a = 0; a < 4; ++a) s << "  " << kAxes[a] << " " << fixed(st.authority[a], 2);
   s << "\n\n";
@@ -180,8 +194,11 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
                                                      : std::to_string(st.kernel_drops))
     << "\n";
   s << "accepted  setpoint " << st.setpoint_received << "   pid " << st.pid_received
-    << "   motor_status " << st.motor_status_received << "   battery " << st.battery_received
-    << "\n";
+    << "   motor_status " << st.motor_status_received << "   battery " << st.battery_received;
+  if (st.esc_telemetry_received > 0 || st.attitude_received > 0) {
+    s << "   esc_telemetry " << st.esc_telemetry_received << "   attitude " << st.attitude_received;
+  }
+  s << "\n";
   s << "rejected  undecodable " << st.rejected_decode << "   non-finite " << st.rejected_nonfinite
     << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "
     << st.rejected_future << "   size " << st.rejected_size << "\n";

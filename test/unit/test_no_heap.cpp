@@ -10,6 +10,7 @@
 
 #include <motormix/budget_allocator.hpp>
 #include <motormix/clip_allocator.hpp>
+#include <motormix/failure_detector.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
 #include <motormix/mixer.hpp>
 #include <motormix/motor_failure.hpp>
@@ -180,6 +181,32 @@ TEST(NoHeap, EveryStrategyMixesWithoutAllocating) {
     g_counting = false;
     EXPECT_EQ(g_allocations.load(), 0);
   }
+}
+
+// The failure detector's per-cycle path: every source judging, a motor
+// failing halfway, without one allocation.
+TEST(NoHeap, TheFailureDetectorJudgesWithoutAllocating) {
+  FailureDetectorSettings settings;
+  settings.motors = 8;
+  settings.sources = 7;  // telemetry, rates, outputs
+  settings.torque_per_thrust = Eigen::Matrix<double, 3, 8>::Random();
+  settings.min_residual_nm = 0.1;
+  FailureDetector detector(settings);
+  MotorVector thrust = MotorVector::Constant(8, 0.5);
+  g_allocations = 0;
+  g_counting = true;
+  for (std::int64_t k = 0; k < 4000; ++k) {
+    const std::int64_t t = k * 2500;
+    for (int i = 0; i < 8; ++i) {
+      detector.on_telemetry(i, i == 3 && k > 2000 ? 0.0 : 9000.0, 10.0, t);
+    }
+    detector.on_rates(Eigen::Vector3d(0.01 * static_cast<double>(k % 7), 0.0, 0.0), t, t);
+    detector.update(thrust, 0, true, t);
+  }
+  detector.reset();
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(detector.detection().failed, 0U);  // reset forgot the declaration
 }
 
 }  // namespace
