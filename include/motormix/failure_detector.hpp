@@ -197,6 +197,11 @@ class FailureDetector {
   Eigen::Vector3d residual_ = Eigen::Vector3d::Zero();
   bool filters_primed_ = false;
   std::int64_t last_update_us_ = 0;
+  // Filter factors for the period alpha_dt_ (see update()).
+  double alpha_dt_ = -1.0;
+  struct {
+    double up = 0, down = 0, rates = 0, scale = 0, outputs = 0;
+  } alpha_;
   bool updated_ = false;
 };
 

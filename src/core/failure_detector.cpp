@@ -18,12 +18,12 @@ constexpr double kMaxLoss = 2.0;
 // is wrong, not the battery.
 constexpr double kMinScale = 0.7, kMaxScale = 1.3;
 
-// Median of the first n values (n >= 1), sorting a copy: n <= 16.
-double median(std::array<double, kMaxMotors> v, int n) {
-  std::sort(v.begin(), v.begin() + n);
-  return n % 2 == 1 ? v[static_cast<std::size_t>(n / 2)]
-                    : 0.5 * (v[static_cast<std::size_t>(n / 2 - 1)] +
-                             v[static_cast<std::size_t>(n / 2)]);
+// Median of the first n values (n >= 1) of a scratch array (reordered).
+double median(std::array<double, kMaxMotors>& v, int n) {
+  const auto mid = v.begin() + n / 2;
+  std::nth_element(v.begin(), mid, v.begin() + n);
+  if (n % 2 == 1) return *mid;
+  return 0.5 * (*mid + *std::max_element(v.begin(), mid));
 }
 
 double low_pass_alpha(double dt, double time_constant) {
@@ -148,8 +148,18 @@ const Detection& FailureDetector::update(const MotorVector& thrust, MotorMask ex
   last_update_us_ = now_us;
   excluded |= detection_.failed;
 
-  const double up = low_pass_alpha(dt, s_.time_constant_up_s);
-  const double down = low_pass_alpha(dt, s_.time_constant_down_s);
+  // The filters' factors, computed again only when the period changes (a
+  // loop's period rarely does: five exponentials a cycle saved).
+  if (dt != alpha_dt_) {
+    alpha_dt_ = dt;
+    alpha_.up = low_pass_alpha(dt, s_.time_constant_up_s);
+    alpha_.down = low_pass_alpha(dt, s_.time_constant_down_s);
+    alpha_.rates = low_pass_alpha(dt, 1.0 / (kTwoPi * s_.rates_filter_hz));
+    alpha_.scale = low_pass_alpha(dt, s_.scale_time_constant_s);
+    alpha_.outputs = low_pass_alpha(dt, s_.outputs_filter_s);
+  }
+  const double up = alpha_.up;
+  const double down = alpha_.down;
   const int n = std::min<int>(s_.motors, static_cast<int>(thrust.size()));
   for (int i = 0; i < n; ++i) {
     const double target = has(excluded, i) ? 0.0 : std::clamp(thrust[i], 0.0, 1.0);
@@ -246,7 +256,7 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
     rest_torque_filtered_ = rest;
     filters_primed_ = true;
   } else {
-    const double a = low_pass_alpha(dt, 1.0 / (kTwoPi * s_.rates_filter_hz));
+    const double a = alpha_.rates;
     accel_filtered_ += a * (accel_raw_ - accel_filtered_);
     rotor_torque_filtered_ += a * (rotors - rotor_torque_filtered_);
     rest_torque_filtered_ += a * (rest - rest_torque_filtered_);
@@ -273,7 +283,7 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
                       rotor_torque_filtered_;
   if (allowed && !suspected && excitation >= s_.min_residual_nm * s_.min_residual_nm &&
       across.norm() < 0.5 * s_.min_residual_nm) {
-    const double forget = low_pass_alpha(dt, s_.scale_time_constant_s);
+    const double forget = alpha_.scale;
     scale_xy_ += forget * (rotor_torque_filtered_.dot(measured) - scale_xy_);
     scale_xx_ += forget * (excitation - scale_xx_);
     if (scale_xx_ > 0.0) scale_ = std::clamp(scale_xy_ / scale_xx_, kMinScale, kMaxScale);
@@ -317,7 +327,7 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
 
 void FailureDetector::judge_outputs(const MotorVector& thrust, MotorMask excluded, bool allowed,
                                     double dt, std::int64_t now_us) {
-  const double a = low_pass_alpha(dt, s_.outputs_filter_s);
+  const double a = alpha_.outputs;
   // Only the first failure: once a motor is out, the others' commands are
   // uneven by design and say nothing about a second.
   allowed = allowed && excluded == 0;
