@@ -59,8 +59,22 @@ int run(const RunCommand& cmd) {
               << (cmd.common.preset.empty() ? cmd.common.config_path
                                             : "of preset " + cmd.common.preset)
               << " is valid: " << config->motors()
-              << " motors, strategy " << config::to_string(config->strategy) << "\n\n"
-              << config::export_matrix(*config, config::MatrixFormat::kTable);
+              << " motors, strategy " << config::to_string(config->strategy) << "\n";
+    if (config->failure_detection) {
+      const FailureDetectorSettings& d = config->failure_detection->detector;
+      std::cout << "failure detection:";
+      if ((d.sources & static_cast<std::uint8_t>(DetectorSources::kTelemetry)) != 0) {
+        std::cout << " telemetry (" << config->channels.esc_telemetry << ")";
+      }
+      if ((d.sources & static_cast<std::uint8_t>(DetectorSources::kRates)) != 0) {
+        std::cout << " rates (" << config->channels.attitude << ")";
+      }
+      if ((d.sources & static_cast<std::uint8_t>(DetectorSources::kOutputs)) != 0) {
+        std::cout << " outputs";
+      }
+      std::cout << "\n";
+    }
+    std::cout << "\n" << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
   }
   node::RunOptions options;
