@@ -105,7 +105,15 @@ struct Case {
   std::string scenario;
   int failed_motor = -1;  // motor_out: 0-based
   bool undetected = false;
+  // Detected mode: never reported, found by motormix's own detector from
+  // these sources ("telemetry", "rates", "both", "outputs"); empty: off.
+  std::string detect;
 };
+
+// failure_detection.sources for a detected mode.
+std::string detection_sources(const std::string& detect) {
+  return detect == "both" ? "[telemetry, rates]" : "[" + detect + "]";
+}
 
 struct Cell {
   const Column* column;
@@ -119,13 +127,18 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
   std::string label = cell.c.scenario;
   if (cell.c.failed_motor >= 0) {
     label += " m" + std::to_string(cell.c.failed_motor + 1) +
-             (cell.c.undetected ? " undetected" : " reported");
+             (!cell.c.detect.empty() ? " detected " + cell.c.detect
+              : cell.c.undetected    ? " undetected"
+                                     : " reported");
   }
   out["scenario"] = label;
+  std::vector<std::string> overrides = cell.column->overrides;
+  if (!cell.c.detect.empty()) {
+    overrides.push_back("failure_detection.sources=" + detection_sources(cell.c.detect));
+  }
   config::Config config;
   try {
-    config = config::load_config_file(source + "/config/" + cell.c.vehicle + ".yaml",
-                                      cell.column->overrides);
+    config = config::load_config_file(source + "/config/" + cell.c.vehicle + ".yaml", overrides);
   } catch (const config::ConfigError& e) {
     out["skipped"] = e.what();
     // Expected only where motormix refuses by design: the budget strategies
@@ -157,6 +170,9 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
   double wall = 0, sim_s = 0;
   double armed_fraction = 1.0;  // the least over the seeds
   bool reached = true;          // on every seed
+  // Detected mode: the slowest detection and the seeds missed or named wrong.
+  double detected_ms = 0.0;
+  int missed = 0, named_wrong = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
     options.seed = static_cast<std::uint64_t>(seed);
     Mixer mixer =
@@ -166,6 +182,15 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
     sim_s += r.sim_seconds;
     armed_fraction = std::min(armed_fraction, r.sim_seconds > 0 ? r.armed_s / r.sim_seconds : 0.0);
     reached = reached && r.reached_altitude;
+    if (!cell.c.detect.empty() && !r.failures.empty()) {
+      const FailureOutcome& f = r.failures.front();
+      if (f.detected_at_s < 0) {
+        ++missed;
+      } else {
+        detected_ms = std::max(detected_ms, (f.detected_at_s - f.failure.at_s) * 1e3);
+        if (f.detected_motor != f.failure.motor) ++named_wrong;
+      }
+    }
     if (r.crashed && !worst.crashed) {
       worst.crashed = true;
       worst.crash_reason = r.crash_reason;
@@ -193,6 +218,11 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
     out["speed_error_rms_mps"] = worst.speed_error_rms_mps;
     out["yaw_rate_error_rms_dps"] = worst.yaw_rate_error_rms_dps;
   }
+  if (!cell.c.detect.empty()) {
+    out["detected_ms"] = detected_ms;
+    out["detection_missed"] = missed;
+    out["named_wrong"] = named_wrong;
+  }
   out["armed_fraction"] = armed_fraction;
   if (!wheeled) out["reached_altitude"] = reached;
   out["seeds"] = seeds;
@@ -201,18 +231,27 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
   return out;
 }
 
-std::vector<Case> cases(const std::string& source, const std::vector<std::string>& vehicles) {
+// with_detected: also the detected modes (the scorecard's tables; --check
+// leaves them to detection_sim_tests, which checks the detector's targets).
+std::vector<Case> cases(const std::string& source, const std::vector<std::string>& vehicles,
+                        bool with_detected) {
   std::vector<Case> out;
   for (const std::string& v : vehicles) {
     const config::Config c = config::load_config_file(source + "/config/" + v + ".yaml");
     if (c.thrust_range() == ThrustRange::kBipolar) {
-      out.push_back({v, "drive"});
+      out.push_back({v, "drive", -1, false, ""});
       continue;
     }
-    for (const char* s : {"hover", "steps", "flips", "battery_sag", "gusts"}) out.push_back({v, s});
+    for (const char* s : {"hover", "steps", "flips", "battery_sag", "gusts"}) out.push_back({v, s, -1, false, ""});
     for (int m = 0; m < c.motors(); ++m) {
-      out.push_back({v, "motor_out", m, false});
-      out.push_back({v, "motor_out", m, true});
+      out.push_back({v, "motor_out", m, false, ""});
+      out.push_back({v, "motor_out", m, true, ""});
+    }
+    if (!with_detected) continue;
+    for (const char* detect : {"telemetry", "rates", "both", "outputs"}) {
+      // The outputs source needs six rotors (the configuration refuses it on fewer).
+      if (std::string(detect) == "outputs" && c.motors() < 6) continue;
+      for (int m = 0; m < c.motors(); ++m) out.push_back({v, "motor_out", m, true, detect});
     }
   }
   return out;
@@ -319,7 +358,7 @@ int main(int argc, char** argv) {
   }
   const std::vector<Column> cols = columns();
   std::vector<Cell> cells;
-  for (const Case& c : cases(source, vehicles)) {
+  for (const Case& c : cases(source, vehicles, !check)) {
     for (const Column& col : cols) cells.push_back({&col, c});
   }
   std::atomic<std::size_t> next{0};
