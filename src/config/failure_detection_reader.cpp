@@ -109,8 +109,10 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   }
   if (v.incomplete.empty() && !v.rotors.empty()) rates_scale(v, s);
   s.rates_timeout_s = rates.number("timeout_ms", 20.0, 1.0, 1000.0) / 1e3;
-  s.rates_filter_hz = rates.number("filter_hz", 15.0, 0.5, 100.0);
-  if (s.rates_filter_hz > config.loop_rate_hz / 4.0) {
+  // 15 Hz, or a quarter of the loop rate on slower loops.
+  s.rates_filter_hz =
+      rates.number("filter_hz", std::min(15.0, config.loop_rate_hz / 4.0), 0.5, 100.0);
+  if (enabled && s.rates_filter_hz > config.loop_rate_hz / 4.0) {
     std::ostringstream found;
     found << s.rates_filter_hz << " with loop_rate_hz " << config.loop_rate_hz;
     fail(rates.path_of("filter_hz"), found.str(), "at most a quarter of loop_rate_hz");

@@ -202,6 +202,21 @@ TEST(DetectionConfig, DefaultsPerVehicleAndRejections) {
   rejected("config/diff_drive.yaml", "failure_detection.enabled=true", "failure_detection.enabled");
 }
 
+TEST(DetectionConfig, ASlowLoopLoadsWithOrWithoutDetection) {
+  // Without the section nothing of it is checked; with it, the rates
+  // filter's default follows the loop rate down.
+  const config::Config without = config::load_config_file(source_path("config/hexa_x.yaml"),
+                                                          {"loop_rate_hz=50"});
+  EXPECT_FALSE(without.failure_detection.has_value());
+  const config::Config with = config::load_config_file(
+      source_path("config/hexa_x.yaml"), {"loop_rate_hz=50", "failure_detection.enabled=true"});
+  ASSERT_TRUE(with.failure_detection.has_value());
+  EXPECT_EQ(with.failure_detection->detector.rates_filter_hz, 12.5);
+  EXPECT_THROW(config::load_config_file(source_path("config/hexa_x.yaml"),
+                                        {"loop_rate_hz=50", "failure_detection.rates.filter_hz=20"}),
+               config::ConfigError);  // above a quarter of the loop rate
+}
+
 TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {
   esc_telemetry_t msg{};
   msg.utime = 5;
