@@ -65,6 +65,19 @@ nlohmann::json failures_json(const std::vector<sim::FailureOutcome>& outcomes,
   return failures;
 }
 
+// What motormix's own detector declared: working motors stopped, and every
+// declaration (live: as its status reported them).
+void add_detections(nlohmann::json& j, const sim::SimResult& r, const config::Config& config) {
+  j["false_detections"] = r.false_detections;
+  nlohmann::json declared = nlohmann::json::array();
+  for (const sim::SimResult::Declaration& d : r.declarations) {
+    declared.push_back({{"at_s", d.at_s},
+                        {"motor", config.motor_names()[static_cast<std::size_t>(d.motor)]},
+                        {"by", to_string(d.source)}});
+  }
+  j["detections"] = declared;
+}
+
 nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
   nlohmann::json j;
   j["crashed"] = r.crashed;
@@ -148,7 +161,8 @@ int sim(const SimCommand& cmd) {
 
   const bool wheeled = config->thrust_range() == ThrustRange::kBipolar;
   nlohmann::json j;
-  // Live runs do not see motormix's detector: their failures say only when.
+  // The run's failures and what the detector made of them (filled by the
+  // run; as flown if it throws).
   std::vector<sim::FailureOutcome> outcomes;
   const sim::ScenarioClock failure_clock(*scenario, *config, options.failures);
   for (const sim::MotorFailure& f : failure_clock.failures()) {
@@ -167,6 +181,8 @@ int sim(const SimCommand& cmd) {
       j["pwm_received"] = result.pwm_received;
       j["pwm_rejected"] = result.pwm_rejected;
       j["statuses_received"] = result.statuses_received;
+      add_detections(j, result.sim, *config);
+      outcomes = result.sim.failures;
     } else {
       std::optional<sim::SimLogWriter> log;
       if (!cmd.log_path.empty()) {
@@ -182,15 +198,8 @@ int sim(const SimCommand& cmd) {
           sim::run_lockstep(*config, config::build_mixer(*config), *scenario, options, observer);
       j = to_json(r, wheeled);
       j["mode"] = "lockstep";
+      add_detections(j, r, *config);
       outcomes = r.failures;
-      j["false_detections"] = r.false_detections;
-      nlohmann::json declared = nlohmann::json::array();
-      for (const sim::SimResult::Declaration& d : r.declarations) {
-        declared.push_back({{"at_s", d.at_s},
-                            {"motor", config->motor_names()[static_cast<std::size_t>(d.motor)]},
-                            {"by", to_string(d.source)}});
-      }
-      j["detections"] = declared;
     }
   } catch (const std::exception& e) {
     std::cerr << "motormix sim: " << e.what() << "\n";

@@ -342,6 +342,7 @@ class Node {
     timing.wake_latency_us = wake_stats_.take();
     timing.overruns = overruns_;
     timing.kernel_drops = drops_.latest();
+    timing.wall_minus_loop_clock_us = wall_us() - monotonic_us();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
                         wall_us());
     const int len =

@@ -88,7 +88,9 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.detected_motors = static_cast<int32_t>(r.detection.failed);
   s.detected_by = static_cast<int8_t>(r.detection.source);
   s.detected_motor = static_cast<int8_t>(r.detection.motor + 1);
-  s.detected_utime = r.detection.source == DetectionSource::kNone ? 0 : r.detection.at_us;
+  s.detected_utime = r.detection.source == DetectionSource::kNone
+                         ? 0
+                         : r.detection.at_us + timing.wall_minus_loop_clock_us;
   s.telemetry_silent = static_cast<int32_t>(r.detection.telemetry_silent);
   s.esc_telemetry_received = c.esc_telemetry_received;
   s.attitude_received = c.attitude_received;

@@ -81,13 +81,13 @@ DetectionScorer::DetectionScorer(const std::vector<MotorFailure>& failures) {
   for (const MotorFailure& f : failures) outcomes_.push_back({f, -1.0, -1, DetectionSource::kNone});
 }
 
-void DetectionScorer::add(double t, const loop::CycleResult& cycle) {
-  const MotorMask fresh = cycle.detection.failed & ~seen_;
-  seen_ |= cycle.detection.failed;
-  if (cycle.detection.failed == 0) seen_ = 0;  // disarmed: a new flight
+void DetectionScorer::add(double t, MotorMask declared, DetectionSource source) {
+  const MotorMask fresh = declared & ~seen_;
+  seen_ |= declared;
+  if (declared == 0) seen_ = 0;  // disarmed: a new flight
   for (int m = 0; fresh >> m != 0; ++m) {
     if (((fresh >> m) & 1U) == 0) continue;
-    declarations_.push_back({t, m, cycle.detection.source});
+    declarations_.push_back({t, m, source});
     // The earliest undetected thrust-losing failure of this motor; else the
     // earliest undetected one of any motor (named wrong).
     FailureOutcome* match = nullptr;
@@ -101,7 +101,7 @@ void DetectionScorer::add(double t, const loop::CycleResult& cycle) {
     if (o != nullptr) {
       o->detected_at_s = t;
       o->detected_motor = m;
-      o->detected_by = cycle.detection.source;
+      o->detected_by = source;
     }
     if (match == nullptr) ++false_detections_;
   }

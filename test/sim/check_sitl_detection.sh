@@ -3,7 +3,9 @@
 # scripts/private-bus): `motormix run` with failure_detection on, beside
 # `motormix sim --lcm` whose hexa loses m2 at 11 s with nobody reporting it.
 # The simulated vehicle publishes ESC telemetry and attitude. Passes when
-# the mixer logged the detection of m2 and the hexa did not crash.
+# the mixer logged the detection of m2, its status named m2 to the sim (the
+# JSON's failure entry), no working motor was declared and the hexa did not
+# crash.
 #   check_sitl_detection.sh MOTORMIX CONFIG
 set -eu
 mm=$1
@@ -22,6 +24,8 @@ kill "$mixer" 2>/dev/null || true
 wait "$mixer" || true
 cat "$tmp/sim.json"
 if [ "$code" -ne 0 ] || ! grep -q '"crashed":false' "$tmp/sim.json" ||
+  ! grep -q '"detected_motor":"m2"' "$tmp/sim.json" ||
+  ! grep -q '"false_detections":0' "$tmp/sim.json" ||
   ! grep -q 'detected motor m2 failed' "$tmp/run.log"; then
   echo "FAILED (exit $code)"
   cat "$tmp/run.log"

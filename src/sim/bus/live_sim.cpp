@@ -43,6 +43,10 @@ struct MixerOutputs {
   std::uint8_t axis_limited = 0;
   AxisVector unallocated = AxisVector::Zero();
   std::int64_t statuses = 0;
+  // What motormix's own detector has declared, from its status.
+  MotorMask detected = 0;
+  DetectionSource detected_by = DetectionSource::kNone;
+  std::int64_t detected_utime = 0;  // motormix's wall clock, microseconds
 
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     motor_pwm_t msg;
@@ -79,6 +83,9 @@ struct MixerOutputs {
       if (msg.axis_limited[a]) axis_limited |= static_cast<std::uint8_t>(1U << a);
       unallocated[a] = std::isfinite(msg.unallocated[a]) ? msg.unallocated[a] : 0.0;
     }
+    detected = static_cast<MotorMask>(msg.detected_motors);
+    detected_by = static_cast<DetectionSource>(msg.detected_by);
+    detected_utime = msg.detected_utime;
     ++statuses;
   }
 };
@@ -113,6 +120,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   attitude_t attitude_msg;
   Scorer scorer(scenario, config);
   if (!clock.failures().empty()) scorer.failure_at(clock.failures().front().at_s);
+  DetectionScorer detections(clock.failures());
 
   MixerOutputs mix;
   mix.motors = config.motors();
@@ -205,6 +213,11 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     const bool fresh = mix.any && Clock::now() - mix.received <= stale_after;
     const bool armed = fresh && mix.armed;
     scorer.add(t, ref, cmd, vehicle, armed, mix.axis_limited);
+    // A declaration at the mixer's stamp, in simulated time (both clocks
+    // run in real time here).
+    const double declared_t =
+        mix.detected_utime > 0 ? t + static_cast<double>(mix.detected_utime - now) / 1e6 : t;
+    detections.add(std::min(t, declared_t), mix.detected, mix.detected_by);
     periods.integrate(
         vehicle,
         mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
@@ -216,6 +229,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     }
   }
   scorer.finish(r);
+  detections.finish(r);
   r.final_charge = vehicle.battery().charge();
   r.sim_seconds = static_cast<double>(r.cycles) * period;
   r.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();

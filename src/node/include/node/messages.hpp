@@ -27,6 +27,10 @@ struct LoopTiming {
   std::array<float, 4> wake_latency_us{};  // min, mean, max, p99
   std::int64_t overruns = 0;
   std::int64_t kernel_drops = -1;  // own_udp_socket_drops(); -1: unknown
+  // This host's wall clock minus the clock the loop was cycled on (the node
+  // cycles on the monotonic clock; replay and simulation on utimes: 0), so
+  // times the loop recorded (a detection's) are reported as utimes.
+  std::int64_t wall_minus_loop_clock_us = 0;
 };
 
 // Sizes the variable-length fields for `motors` outputs.

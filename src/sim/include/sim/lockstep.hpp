@@ -150,7 +150,13 @@ class DetectionScorer {
  public:
   explicit DetectionScorer(const std::vector<MotorFailure>& failures);
   // A cycle's result at time t.
-  void add(double t, const loop::CycleResult& cycle);
+  void add(double t, const loop::CycleResult& cycle) {
+    add(t, cycle.detection.failed, cycle.detection.source);
+  }
+  // What the detector has declared by time t (0 after disarming), and the
+  // source of its latest declaration: from a cycle, or from the mixer's
+  // status over the bus.
+  void add(double t, MotorMask declared, DetectionSource source);
   void finish(SimResult& r) const;
 
  private:
