@@ -48,12 +48,11 @@ double one_cycle(ControlLoop& loop, std::int64_t k) {
   esc.utime = now;
   esc.count = 8;
   for (int i = 0; i < 8; ++i) {
-    esc.readings[static_cast<std::size_t>(i)] = {i + 1, 9000.0 + 10.0 * i, NAN, 8.0, 15.5,
-                                                  40.0, NAN};
+    esc.readings[static_cast<std::size_t>(i)] = {i + 1, 9000.0 + 10.0 * i, NAN, 8.0, 15.5, 40.0,
+                                                 NAN};
   }
   loop.on_esc_telemetry(esc, now, now);
-  loop.on_attitude(AttitudeSample{now, {1, 0, 0, 0}, {0.01 * std::sin(phase), 0.0, 0.0}}, now,
-                   now);
+  loop.on_attitude(AttitudeSample{now, {1, 0, 0, 0}, {0.01 * std::sin(phase), 0.0, 0.0}}, now, now);
   const auto start = std::chrono::steady_clock::now();
   const auto& r = loop.cycle(now);
   const auto end = std::chrono::steady_clock::now();
@@ -82,8 +81,9 @@ int main(int argc, char** argv) {
   with.push_back("failure_detection.sources=[telemetry, rates, outputs]");
   const motormix::config::Config c_off = motormix::config::load_config_file(config_path, common);
   const motormix::config::Config c_on = motormix::config::load_config_file(config_path, with);
-  std::printf("| pass | cycles | without detector p50 / p99 ns | with detector p50 / p99 ns "
-              "| added p50 / p99 ns | declared |\n|---|---|---|---|---|---|\n");
+  std::printf(
+      "| pass | cycles | without detector p50 / p99 ns | with detector p50 / p99 ns "
+      "| added p50 / p99 ns | declared |\n|---|---|---|---|---|---|\n");
   for (int pass = 1; pass <= passes; ++pass) {
     ControlLoop off(c_off, motormix::config::build_mixer(c_off));
     ControlLoop on(c_on, motormix::config::build_mixer(c_on));

@@ -54,10 +54,10 @@ namespace motormix {
 
 enum class DetectionSource : std::uint8_t {
   kNone = 0,
-  kTelemetry = 1,  // rpm or current implausible for the command
+  kTelemetry = 1,        // rpm or current implausible for the command
   kTelemetrySilent = 2,  // the ESC stopped reporting while the others kept on
-  kRates = 3,      // body-rate residual names the motor
-  kOutputs = 4,    // the controller drove the motor to full for long
+  kRates = 3,            // body-rate residual names the motor
+  kOutputs = 4,          // the controller drove the motor to full for long
 };
 
 const char* to_string(DetectionSource source);
@@ -92,10 +92,10 @@ struct FailureDetectorSettings {
   Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxMotors> torque_per_thrust;
   Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Ones();  // principal moments
   double rotational_drag = 0.0;                            // N m per rad/s
-  double rates_timeout_s = 0.02;  // no rates sample within this: stale
-  double rates_filter_hz = 15.0;  // low-pass on both sides of the residual
+  double rates_timeout_s = 0.02;                           // no rates sample within this: stale
+  double rates_filter_hz = 15.0;                           // low-pass on both sides of the residual
   double rates_persist_s = 0.06;
-  double min_loss = 0.75;      // residual along the column: at least this fraction of the thrust
+  double min_loss = 0.75;     // residual along the column: at least this fraction of the thrust
   double max_off_axis = 0.3;  // residual across the column: at most this fraction of the along part
   // A residual smaller than this (N m) is never a failure, whatever it lines
   // up with: model error and gusts live below it.
@@ -150,8 +150,8 @@ class FailureDetector {
                           std::int64_t now_us);
 
   const Detection& detection() const { return detection_; }
-  // For tests and the status: the rates residual (N m), the latest
-  // telemetry ratios against the median, the suspicion times.
+  // For tests and diagnostics: the rates residual (N m), the learned torque
+  // scale, each source's suspicion time per motor.
   const Eigen::Vector3d& rates_residual() const { return residual_; }
   double torque_scale() const { return scale_; }
   double suspicion_s(DetectionSource source, int motor) const;

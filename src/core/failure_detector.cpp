@@ -204,9 +204,9 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   detection_.telemetry_silent = 0;
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
-    telemetry_healthy_[k] = (kind[k] == 1 && rpm_median > 0 && ratio[k] >= s_.rpm_ratio * rpm_median) ||
-                            (kind[k] == 2 && current_median > 0 &&
-                             ratio[k] >= s_.current_ratio * current_median);
+    telemetry_healthy_[k] =
+        (kind[k] == 1 && rpm_median > 0 && ratio[k] >= s_.rpm_ratio * rpm_median) ||
+        (kind[k] == 2 && current_median > 0 && ratio[k] >= s_.current_ratio * current_median);
   }
   const bool rates_decide = uses(DetectorSources::kRates);
   for (int i = 0; i < s_.motors; ++i) {
@@ -216,9 +216,9 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     // Silent: it reported before, it no longer does, and most others do.
     const bool silent = e.any && now_us - e.received_us > timeout_us && 2 * fresh >= s_.motors;
     if (silent) detection_.telemetry_silent |= MotorMask{1} << i;
-    const bool low = (kind[k] == 1 && rpm_median > 0 && ratio[k] < s_.rpm_ratio * rpm_median) ||
-                     (kind[k] == 2 && current_median > 0 &&
-                      ratio[k] < s_.current_ratio * current_median);
+    const bool low =
+        (kind[k] == 1 && rpm_median > 0 && ratio[k] < s_.rpm_ratio * rpm_median) ||
+        (kind[k] == 2 && current_median > 0 && ratio[k] < s_.current_ratio * current_median);
     if (!allowed) {
       telemetry_suspicion_[k] = 0.0;
       silent_suspicion_[k] = 0.0;

@@ -61,8 +61,8 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
           for (int motor = 0; motor < c.motors(); ++motor) {
             for (int seed = 1; seed <= kTargetSeeds; ++seed) {
               std::ostringstream where;
-              where << file << " " << strategy << " " << source.name << " " << fc.scenario
-                    << " m" << motor + 1 << " seed " << seed;
+              where << file << " " << strategy << " " << source.name << " " << fc.scenario << " m"
+                    << motor + 1 << " seed " << seed;
               SCOPED_TRACE(where.str());
               SimOptions o;
               o.seed = static_cast<std::uint64_t>(seed);
@@ -97,8 +97,8 @@ struct FalseAlarmTally {
 
 FalseAlarmTally fly_healthy(const std::string& file) {
   FalseAlarmTally tally;
-  for (const char* strategy : {"legacy_budget", "budget", "shift", "clip", "prioritized",
-                               "optimal"}) {
+  for (const char* strategy :
+       {"legacy_budget", "budget", "shift", "clip", "prioritized", "optimal"}) {
     // The default sources (telemetry and rates).
     const config::Config c =
         load(file, {std::string("mixer.strategy=") + strategy, "failure_detection.enabled=true"});
@@ -124,9 +124,8 @@ FalseAlarmTally fly_healthy(const std::string& file) {
 
 TEST(DetectedFailures, NoFalseAlarmInAnHourOfHealthyFlightPerVehicle) {
   const std::vector<std::string> vehicles = {
-      "quad_x.yaml",    "quad_plus.yaml", "team_quad.yaml",    "hexa_x.yaml", "hexa_plus.yaml",
-      "h_hexa.yaml",    "y6.yaml",        "octo_x.yaml",       "octo_plus.yaml",
-      "octo_coax_x8.yaml"};
+      "quad_x.yaml", "quad_plus.yaml", "team_quad.yaml", "hexa_x.yaml",    "hexa_plus.yaml",
+      "h_hexa.yaml", "y6.yaml",        "octo_x.yaml",    "octo_plus.yaml", "octo_coax_x8.yaml"};
   // Two vehicles at a time: the machines have two cores.
   std::vector<FalseAlarmTally> tallies(vehicles.size());
   for (std::size_t i = 0; i < vehicles.size(); i += 2) {

@@ -193,10 +193,12 @@ TEST(DetectionConfig, DefaultsPerVehicleAndRejections) {
       EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
     }
   };
-  rejected("config/quad_x.yaml", "failure_detection.sources=[outputs]", "failure_detection.sources");
+  rejected("config/quad_x.yaml", "failure_detection.sources=[outputs]",
+           "failure_detection.sources");
   rejected("config/hexa_x.yaml", "failure_detection.sources=[rpm]", "failure_detection.sources[0]");
   rejected("config/hexa_x.yaml", "failure_detection.sources=[]", "failure_detection.sources");
-  rejected("config/hexa_x.yaml", "failure_detection.motor_poles=13", "failure_detection.motor_poles");
+  rejected("config/hexa_x.yaml", "failure_detection.motor_poles=13",
+           "failure_detection.motor_poles");
   rejected("config/hexa_x.yaml", "failure_detection.telemetry.rpm_ratio=2",
            "failure_detection.telemetry.rpm_ratio");
   rejected("config/diff_drive.yaml", "failure_detection.enabled=true", "failure_detection.enabled");
@@ -205,16 +207,17 @@ TEST(DetectionConfig, DefaultsPerVehicleAndRejections) {
 TEST(DetectionConfig, ASlowLoopLoadsWithOrWithoutDetection) {
   // Without the section nothing of it is checked; with it, the rates
   // filter's default follows the loop rate down.
-  const config::Config without = config::load_config_file(source_path("config/hexa_x.yaml"),
-                                                          {"loop_rate_hz=50"});
+  const config::Config without =
+      config::load_config_file(source_path("config/hexa_x.yaml"), {"loop_rate_hz=50"});
   EXPECT_FALSE(without.failure_detection.has_value());
   const config::Config with = config::load_config_file(
       source_path("config/hexa_x.yaml"), {"loop_rate_hz=50", "failure_detection.enabled=true"});
   ASSERT_TRUE(with.failure_detection.has_value());
   EXPECT_EQ(with.failure_detection->detector.rates_filter_hz, 12.5);
-  EXPECT_THROW(config::load_config_file(source_path("config/hexa_x.yaml"),
-                                        {"loop_rate_hz=50", "failure_detection.rates.filter_hz=20"}),
-               config::ConfigError);  // above a quarter of the loop rate
+  EXPECT_THROW(
+      config::load_config_file(source_path("config/hexa_x.yaml"),
+                               {"loop_rate_hz=50", "failure_detection.rates.filter_hz=20"}),
+      config::ConfigError);  // above a quarter of the loop rate
 }
 
 TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {
@@ -222,8 +225,8 @@ TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {
   msg.utime = 5;
   msg.count = 2;
   msg.motor = {1, 2};
-  msg.rpm = msg.erpm = msg.current_a = msg.voltage_v = msg.temperature_c = msg.consumption_mah =
-      {1.0F, 2.0F};
+  msg.rpm = msg.erpm = msg.current_a = msg.voltage_v = msg.temperature_c =
+      msg.consumption_mah = {1.0F, 2.0F};
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
   ASSERT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
             static_cast<int>(bytes.size()));

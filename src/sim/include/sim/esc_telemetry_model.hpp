@@ -32,8 +32,8 @@ class EscTelemetryModel {
  public:
   EscTelemetryModel(int motors, std::uint64_t seed);
   // The readings due at t (count 0: none).
-  const loop::EscTelemetrySample& sample(double t, std::int64_t utime,
-                                         const VehicleModel& vehicle, const MotorHealth& health);
+  const loop::EscTelemetrySample& sample(double t, std::int64_t utime, const VehicleModel& vehicle,
+                                         const MotorHealth& health);
 
  private:
   double uniform();  // [0, 1)

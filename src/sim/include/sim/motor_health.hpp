@@ -20,7 +20,8 @@ enum class FailureKind { kStop, kHalfThrust, kIntermittent, kDesync, kTelemetry 
 
 const char* to_string(FailureKind kind);
 std::optional<FailureKind> failure_kind(const std::string& name);
-inline constexpr const char* kFailureKindNames = "stop, half_thrust, intermittent, desync, telemetry";
+inline constexpr const char* kFailureKindNames =
+    "stop, half_thrust, intermittent, desync, telemetry";
 
 // Whether something outside motormix (an ESC driver, a health monitor) would
 // report it on motor_status: a motor that stops, yes; a weak prop, a motor
