@@ -55,6 +55,9 @@ class OutputStage {
              double dt_s, bool previous_armed, MotorMask stopped = 0) const;
   void disarmed(MotorVector& output, DirectionVector& direction) const;
 
+  // The thrust model: thrust fraction k x^2 + (1 - k) x of output fraction
+  // x (0..1), for factor k (also what a simulated or monitored ESC gives).
+  static double thrust_of(double x, double factor) { return factor * x * x + (1.0 - factor) * x; }
   // The thrust model inverted: output fraction that produces `thrust` (0..1).
   static double linearize(double thrust, double factor);
 

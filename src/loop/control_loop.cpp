@@ -162,7 +162,7 @@ Rejection ControlLoop::on_attitude(const AttitudeSample& sample, std::int64_t no
   return rejection;
 }
 
-void ControlLoop::detect(std::int64_t now_us, bool setpoint_fresh) {
+void ControlLoop::detect(std::int64_t now_us, bool setpoint_fresh, double ramp) {
   result_.detection_changed = false;
   if (!detection_) return;
   const LoopState state = arming_.state();
@@ -174,12 +174,11 @@ void ControlLoop::detect(std::int64_t now_us, bool setpoint_fresh) {
       result_.detection_changed = true;
     }
   }
-  const bool allowed = state == LoopState::kArmed &&
-                       spool_up_.ramp(now_us - arming_.armed_since_us()) >= 1.0 &&
-                       !motor_test_.running() && setpoint_fresh &&
-                       setpoint_.sample().throttle >= detection_->min_throttle();
+  const bool allowed = state == LoopState::kArmed && ramp >= 1.0 && !motor_test_.running() &&
+                       setpoint_fresh && setpoint_.sample().throttle >= detection_->min_throttle();
   const MotorMask before = failures_.detected();
-  const Detection& d = detection_->update(result_.mix.output, failures_.in_force(), allowed, now_us);
+  const Detection& d =
+      detection_->update(result_.mix.output, failures_.in_force(), allowed, now_us);
   failures_.set_detected(d.failed);
   if (failures_.detected() != before) result_.detection_changed = true;
   result_.detection = d;
@@ -244,14 +243,14 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   if (events.failsafe_entered) ++counters_.failsafe_events;
   if (events.arming_refused) ++counters_.arming_refused;
 
-  detect(now_us, setpoint_fresh);
+  // The spool-up ramp runs from arming; a failsafe that keeps mixing (hold
+  // the last inputs, idle) keeps it, so no output jumps up on the way down.
+  const double ramp = spool_up_.ramp(now_us - arming_.armed_since_us());
+  detect(now_us, setpoint_fresh, ramp);
   record_vehicle_state(now_us);
   result_.attitude_age_ms = attitude_.age_ms(now_us);
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid.yaw : setpoint.yaw;
   const AxisVector demand(pid.roll, pid.pitch, yaw, setpoint.throttle);
-  // The spool-up ramp runs from arming; a failsafe that keeps mixing (hold
-  // the last inputs, idle) keeps it, so no output jumps up on the way down.
-  const double ramp = spool_up_.ramp(now_us - arming_.armed_since_us());
   const LoopState state = arming_.state();
   result_.spooling_up = state == LoopState::kArmed && ramp < 1.0;
   result_.spool_up = state == LoopState::kArmed ? ramp : 0.0;

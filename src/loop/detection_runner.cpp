@@ -45,7 +45,7 @@ const Detection& DetectionRunner::update(const MotorVector& outputs, MotorMask e
         i < outputs.size()
             ? std::clamp((outputs[i] - esc_min_[k]) / (esc_max_[k] - esc_min_[k]), 0.0, 1.0)
             : 0.0;
-    thrust_[i] = expo_ * x * x + (1.0 - expo_) * x;
+    thrust_[i] = OutputStage::thrust_of(x, expo_);
   }
   return detector_.update(thrust_, excluded, allowed, now_us);
 }

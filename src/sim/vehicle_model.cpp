@@ -130,7 +130,7 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
         target = x * p_.wheels.max_speed_rad_s * v;
       } else {
         const double e = p_.thrust_expo;
-        target = ((1 - e) * v + e * v * v) * (e * x * x + (1 - e) * x);
+        target = ((1 - e) * v + e * v * v) * OutputStage::thrust_of(x, e);
       }
       target *= health.drive[i];
     }

@@ -130,8 +130,9 @@ class ControlLoop {
   // are handled, battery state and thrust gain, and each input's age.
   void record_vehicle_state(std::int64_t now_us);
   // The detector's turn, before mixing: judges the outputs of the previous
-  // cycle and adds what it declares to the failure set.
-  void detect(std::int64_t now_us, bool setpoint_fresh);
+  // cycle and adds what it declares to the failure set. ramp: spool-up
+  // progress (1 once spooled up).
+  void detect(std::int64_t now_us, bool setpoint_fresh, double ramp);
 
   Mixer mixer_;
   ThrustRange thrust_range_;
