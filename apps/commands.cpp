@@ -74,6 +74,7 @@ int run(const RunCommand& cmd) {
       }
       std::cout << "\n";
     }
+    if (!config->motor_loss_summary().empty()) std::cout << config->motor_loss_summary() << "\n";
     std::cout << "\n" << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
   }

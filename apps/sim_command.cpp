@@ -78,6 +78,25 @@ void add_detections(nlohmann::json& j, const sim::SimResult& r, const config::Co
   j["detections"] = declared;
 }
 
+// A quad that lost one motor: the spin and thrusts it settled at before
+// touchdown, next to the relaxed-hover equilibrium of the same vehicle.
+void add_spin(nlohmann::json& j, const sim::SimResult& r, const config::Config& config,
+              const std::vector<sim::FailureOutcome>& outcomes) {
+  if (!config.motor_loss || outcomes.empty() || r.settled_thrust_n.empty()) return;
+  const int failed = outcomes.front().failure.motor;
+  const SpinEquilibrium eq = solve_spin_equilibrium(
+      config.motor_loss->model, failed, config.motor_loss->settings.spin_rate_rad_s);
+  nlohmann::json thrust = nlohmann::json::array();
+  for (int i = 0, w = 0; i < config.motors(); ++i) {
+    thrust.push_back(i == failed ? 0.0 : eq.thrust_n[w++]);
+  }
+  j["spin"] = {{"settled", {{"rate_rad_s", r.settled_spin_rate_rad_s},
+                            {"thrust_n", r.settled_thrust_n}}},
+               {"equilibrium", {{"rate_rad_s", eq.rates.norm()},
+                                {"thrust_n", thrust},
+                                {"axis_tilt_deg", eq.axis_tilt_deg}}}};
+}
+
 nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
   nlohmann::json j;
   j["crashed"] = r.crashed;
@@ -99,6 +118,14 @@ nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
   j["yaw_error_rms_deg"] = r.yaw_error_rms_deg;
   j["altitude_loss_m"] = r.altitude_loss_m;
   if (!wheeled) j["failure_attitude_error_max_deg"] = r.failure_attitude_error_max_deg;
+  if (!wheeled) {
+    const auto or_null = [](double v) { return v >= 0 ? nlohmann::json(v) : nlohmann::json(); };
+    j["touchdown_speed_mps"] = or_null(r.touchdown_speed_mps);
+    j["touchdown_time_s"] = or_null(r.touchdown_time_s);
+    j["drift_m"] = r.drift_m;
+    j["max_spin_rate_rad_s"] = r.max_spin_rate_rad_s;
+    j["max_thrust_axis_tilt_deg"] = r.max_thrust_axis_tilt_deg;
+  }
   j["saturated_fraction"] = r.saturated_fraction;
   j["min_battery_v"] = r.min_battery_v;
   j["final_charge"] = r.final_charge;
@@ -182,6 +209,7 @@ int sim(const SimCommand& cmd) {
       j["pwm_rejected"] = result.pwm_rejected;
       j["statuses_received"] = result.statuses_received;
       add_detections(j, result.sim, *config);
+      add_spin(j, result.sim, *config, result.sim.failures);
       outcomes = result.sim.failures;
     } else {
       std::optional<sim::SimLogWriter> log;
@@ -199,6 +227,7 @@ int sim(const SimCommand& cmd) {
       j = to_json(r, wheeled);
       j["mode"] = "lockstep";
       add_detections(j, r, *config);
+      add_spin(j, r, *config, r.failures);
       outcomes = r.failures;
     }
   } catch (const std::exception& e) {

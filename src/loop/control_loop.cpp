@@ -23,6 +23,7 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       failures_(config.failed_motors, mixer_.motors()) {
   if (config.battery) battery_.emplace(*config.battery);
   if (config.failure_detection) detection_.emplace(config);
+  if (config.motor_loss) landing_.emplace(config);
   esc_last_utime_.fill(kNever);
   mixer_.disarm(result_.mix);
   record_vehicle_state(0);
@@ -158,7 +159,7 @@ Rejection ControlLoop::on_attitude(const AttitudeSample& sample, std::int64_t no
   if (rejection != Rejection::kNone) return rejection;
   ++counters_.attitude_received;
   attitude_.accept(sample, now_us);
-  detection_->on_attitude(sample, now_us);
+  if (detection_ && detection_->uses_rates()) detection_->on_attitude(sample, now_us);
   return rejection;
 }
 
@@ -182,6 +183,31 @@ void ControlLoop::detect(std::int64_t now_us, bool setpoint_fresh, double ramp) 
   failures_.set_detected(d.failed);
   if (failures_.detected() != before) result_.detection_changed = true;
   result_.detection = d;
+}
+
+void ControlLoop::land(std::int64_t now_us, double ramp) {
+  result_.landing_changed = false;
+  if (!landing_) return;
+  const LandingReport before = landing_->report();
+  const LoopState state = arming_.state();
+  if (state == LoopState::kDisarmed) {
+    landing_->disarmed();
+  } else {
+    if (previous_state_ == LoopState::kDisarmed) landing_->armed();
+    LandingRunner::Inputs in;
+    in.flying = ramp >= 1.0 && !motor_test_.running();
+    in.failed = result_.failed;
+    in.attitude = &attitude_;
+    in.throttle = setpoint_.sample().throttle;
+    if (landing_->cycle(in, now_us, mixer_.output_stage(), result_.mix) &&
+        landing_->report().state == LandingState::kLanded) {
+      arming_.disarm();
+      mixer_.disarm(result_.mix);
+    }
+  }
+  const LandingReport& after = landing_->report();
+  result_.landing = after;
+  result_.landing_changed = after.state != before.state || after.motor != before.motor;
 }
 
 void ControlLoop::record_vehicle_state(std::int64_t now_us) {
@@ -265,6 +291,8 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   } else {
     mixer_.disarm(result_.mix);
   }
+  land(now_us, ramp);
+  previous_state_ = arming_.state();
   // A motor test runs only while disarmed, until its end time.
   motor_test_.expire(now_us, arming_.state() == LoopState::kDisarmed);
   if (motor_test_.running()) motor_test_.spin(mixer_, result_.mix);

@@ -135,6 +135,18 @@ Rejection check_attitude(const AttitudeSample& a, std::int64_t last_utime) {
   if (unknown == 0 && std::abs(std::sqrt(norm_sq) - 1.0) > kUnitTolerance) {
     return Rejection::kOutOfRange;
   }
+  // Velocity: all three known or all NaN, and no faster than any multirotor flies.
+  int unknown_v = 0;
+  for (double v : a.velocity) {
+    if (std::isnan(v)) {
+      ++unknown_v;
+    } else if (!std::isfinite(v)) {
+      return Rejection::kNonFinite;
+    } else if (std::abs(v) > kMaxVelocityMps) {
+      return Rejection::kOutOfRange;
+    }
+  }
+  if (unknown_v != 0 && unknown_v != 3) return Rejection::kNonFinite;
   return check_order(a.utime, last_utime);
 }
 

@@ -139,6 +139,7 @@ class Node {
            << config_.motor_names()[static_cast<std::size_t>(r.detection.motor)]
            << " failed (" << to_string(r.detection.source) << ")" << std::endl;
     }
+    if (r.landing_changed) log_landing(r);
     if (r.failed != logged_failed_) {
       log_failures(r);
       logged_failed_ = r.failed;
@@ -169,6 +170,30 @@ class Node {
       publish_status(r);
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
       warn_about_rejections(now_us);
+    }
+  }
+
+  void log_landing(const loop::CycleResult& r) {
+    const auto name = [&](int m) {
+      return m >= 0 ? config_.motor_names()[static_cast<std::size_t>(m)] : std::string("?");
+    };
+    switch (r.landing.state) {
+      case loop::LandingState::kDescending:
+        log_ << "motormix: motor " << name(r.landing.motor)
+             << " failed: yaw given up, landing spinning on the other three" << std::endl;
+        break;
+      case loop::LandingState::kLanded:
+        log_ << "motormix: spin landing touched down: disarmed (arm again only after a "
+                "disarmed setpoint)"
+             << std::endl;
+        break;
+      case loop::LandingState::kNoAttitude:
+        log_ << "motormix: motor " << name(r.landing.motor) << " failed and no fresh attitude on "
+             << config_.channels.attitude << ": no spin landing, mixing as before" << std::endl;
+        break;
+      case loop::LandingState::kOff:
+        log_ << "motormix: spin landing ended" << std::endl;
+        break;
     }
   }
 
@@ -401,8 +426,9 @@ void log_summary(const config::Config& config, const std::string& url, std::ostr
       << to_string(config.inputs.yaw_source) << "\n"
       << "motormix: outputs '" << config.channels.motor_pwm << "' at " << config.loop_rate_hz
       << " Hz, status '" << config.channels.status << "' at " << config.status_rate_hz
-      << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'\n"
-      << config::export_matrix(config, config::MatrixFormat::kTable) << std::flush;
+      << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'\n";
+  if (!config.motor_loss_summary().empty()) log << "motormix: " << config.motor_loss_summary() << "\n";
+  log << config::export_matrix(config, config::MatrixFormat::kTable) << std::flush;
 }
 
 }  // namespace

@@ -95,6 +95,10 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.esc_telemetry_received = c.esc_telemetry_received;
   s.attitude_received = c.attitude_received;
   s.attitude_age_ms = static_cast<float>(r.attitude_age_ms);
+  s.landing_state = static_cast<int8_t>(r.landing.state);
+  s.landing_motor = static_cast<int8_t>(r.landing.motor + 1);
+  s.spin_rate = static_cast<float>(r.landing.spin_rate_rad_s);
+  s.spin_axis_error_deg = static_cast<float>(r.landing.axis_error_deg);
 }
 
 void fill_esc_telemetry_message(esc_telemetry_t& msg, const loop::EscTelemetrySample& s) {
@@ -124,6 +128,7 @@ void fill_attitude_message(attitude_t& msg, const loop::AttitudeSample& s) {
   msg.utime = s.utime;
   for (std::size_t i = 0; i < 4; ++i) msg.q[i] = static_cast<float>(s.q[i]);
   for (std::size_t i = 0; i < 3; ++i) msg.rates[i] = static_cast<float>(s.rates[i]);
+  for (std::size_t i = 0; i < 3; ++i) msg.velocity[i] = static_cast<float>(s.velocity[i]);
 }
 
 void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors,
@@ -223,6 +228,7 @@ bool decode_attitude(const void* data, int size, loop::AttitudeSample& out) {
   out.utime = msg.utime;
   for (std::size_t i = 0; i < 4; ++i) out.q[i] = msg.q[i];
   for (std::size_t i = 0; i < 3; ++i) out.rates[i] = msg.rates[i];
+  for (std::size_t i = 0; i < 3; ++i) out.velocity[i] = msg.velocity[i];
   return true;
 }
 

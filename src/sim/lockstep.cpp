@@ -142,9 +142,44 @@ Scorer::Scorer(const Scenario& scenario, const config::Config& config)
       controlled_(config.geometry.controlled),
       period_s_(1.0 / config.loop_rate_hz) {}
 
+void Scorer::add_flight(double t, const VehicleModel& vehicle) {
+  const BodyState& b = vehicle.body();
+  const Eigen::Vector2d here(b.position.x(), b.position.y());
+  if (!drift_from_set_ && failure_s_ >= 0 && t >= failure_s_) {
+    drift_from_ = here;
+    drift_from_set_ = true;
+  }
+  const bool landed = vehicle.landed();
+  if (touchdown_s_ < 0) drift_to_ = here;
+  if (landed && !was_landed_ && vehicle.taken_off() && touchdown_s_ < 0) {
+    touchdown_s_ = t;
+    touchdown_speed_ = vehicle.touchdown_speed();
+  }
+  was_landed_ = landed;
+  if (!landed && vehicle.taken_off()) {
+    max_rate_ = std::max(max_rate_, b.rates.norm());
+    max_tilt_ = std::max(max_tilt_, tilt(b.attitude) / kRadPerDeg);
+  }
+  if (failure_s_ >= 0 && t >= failure_s_ && touchdown_s_ < 0 && !landed) {
+    Settle s;
+    s.t = t;
+    s.rate = b.rates.norm();
+    for (int i = 0; i < vehicle.motors(); ++i) s.thrust.push_back(vehicle.thrust_n(i));
+    settle_.push_back(std::move(s));
+    while (settle_begin_ < settle_.size() && settle_[settle_begin_].t < t - kSettleWindowS) {
+      ++settle_begin_;
+    }
+    if (settle_begin_ > 4096) {  // long runs: keep only the window
+      settle_.erase(settle_.begin(), settle_.begin() + static_cast<std::ptrdiff_t>(settle_begin_));
+      settle_begin_ = 0;
+    }
+  }
+}
+
 void Scorer::add(double t, const Reference& ref, const ControllerCommand& cmd,
                  const VehicleModel& vehicle, bool armed, std::uint8_t axis_limited) {
   if (armed) ++armed_cycles_;
+  if (!wheeled_) add_flight(t, vehicle);
   if (!wheeled_ && ref.altitude_m > 0 &&
       std::abs(ref.altitude_m + vehicle.body().position.z()) < kReachedM) {
     ever_reached_ = true;
@@ -190,6 +225,20 @@ void Scorer::finish(SimResult& r) const {
   r.armed_s = static_cast<double>(armed_cycles_) * period_s_;
   r.reached_altitude = ever_reached_;
   r.altitude_error_max_m = altitude_error_max_;
+  r.touchdown_speed_mps = touchdown_speed_;
+  r.touchdown_time_s = touchdown_s_;
+  r.drift_m = (drift_to_ - drift_from_).norm();
+  r.max_spin_rate_rad_s = max_rate_;
+  r.max_thrust_axis_tilt_deg = max_tilt_;
+  if (settle_begin_ < settle_.size()) {
+    const auto n = static_cast<double>(settle_.size() - settle_begin_);
+    r.settled_thrust_n.assign(settle_.back().thrust.size(), 0.0);
+    for (std::size_t k = settle_begin_; k < settle_.size(); ++k) {
+      r.settled_spin_rate_rad_s += settle_[k].rate / n;
+      for (std::size_t i = 0; i < r.settled_thrust_n.size(); ++i)
+        r.settled_thrust_n[i] += settle_[k].thrust[i] / n;
+    }
+  }
   if (scored_ == 0) return;
   const auto n = static_cast<double>(scored_);
   r.attitude_error_rms_deg = std::sqrt(att_sq_ / n);

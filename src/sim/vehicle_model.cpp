@@ -162,6 +162,7 @@ void VehicleModel::step_aircraft(const Environment& env, double dt) {
   if (!taken_off_ && body_.position.z() < -kTakenOffAltitudeM) taken_off_ = true;
   if (body_.position.z() >= 0.0) {
     const double impact = body_.velocity.z();
+    if (taken_off_) touchdown_speed_ = impact;
     if (taken_off_ && impact > kCrashSpeedMps) {
       std::ostringstream why;
       why.precision(3);

@@ -5,6 +5,7 @@
 
 #include <motormix/battery_compensation.hpp>
 #include <motormix/config/failure_detection.hpp>
+#include <motormix/config/motor_loss.hpp>
 #include <motormix/config/vehicle_physics.hpp>
 #include <motormix/geometry.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
@@ -118,6 +119,10 @@ struct Config {
   VehiclePhysics vehicle_model;  // the `vehicle:` section: what motormix sim flies
   // Set when `failure_detection:` is present and enabled.
   std::optional<FailureDetection> failure_detection;
+  // Set when a four-rotor aircraft lands spinning after losing a motor
+  // (`motor_loss:`); otherwise motor_loss_off says why not.
+  std::optional<MotorLoss> motor_loss;
+  std::string motor_loss_off;
   std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }
@@ -127,6 +132,10 @@ struct Config {
   int motor_index(const std::string& text) const;
   ThrustRange thrust_range() const { return geometry.thrust_range; }
   std::string description() const;
+  // One line on what a failed motor makes the mixer do: the spin landing
+  // and the attitude channel it needs, or why there is none. Empty for
+  // vehicles that keep flying on the motors left (six rotors or more).
+  std::string motor_loss_summary() const;
 };
 
 const char* to_string(Strategy strategy);

@@ -44,6 +44,13 @@ class Arming {
   };
   Events update(const Inputs& in, std::int64_t now_us);
 
+  // Disarms at once (the spin landing touched down); arming again needs a
+  // setpoint with armed false first.
+  void disarm() {
+    state_ = LoopState::kDisarmed;
+    reason_ = FailsafeReason::kNone;
+    arm_permitted_ = false;
+  }
   // A failsafe for a reason found outside update() (an invalid demand).
   void enter_failsafe(FailsafeReason reason, std::int64_t now_us);
 

@@ -29,6 +29,12 @@
 //   declares joins the failure set at once (this cycle mixes without it)
 //   and stands until the loop disarms. ESC telemetry and attitude messages
 //   are read only when a source uses them.
+// - With motor_loss configured (a quad), one failed motor while armed and
+//   spooled up hands the outputs to the spin landing (landing_runner.hpp)
+//   for as long as a fresh attitude arrives; it keeps flying through a
+//   failsafe that would otherwise keep mixing or disarm (the commands it
+//   would miss are ones it no longer follows), ends when the setpoint
+//   disarms, and disarms the loop itself once landed.
 // - What a cycle reports is what is true in that cycle: a cycle that does
 //   not mix (disarmed, failsafe with disarmed outputs, motor test) reports
 //   no saturation and nothing unallocated.
@@ -38,6 +44,7 @@
 #include "loop/counters.hpp"
 #include "loop/detection_runner.hpp"
 #include "loop/failure_set.hpp"
+#include "loop/landing_runner.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
 #include "loop/loop_state.hpp"
@@ -82,6 +89,8 @@ struct CycleResult {
   Detection detection;
   bool detection_changed = false;
   double attitude_age_ms = -1.0;
+  LandingReport landing;  // the spin landing (motor_loss)
+  bool landing_changed = false;
   int motor_test = -1;       // motor spinning alone (0-based), -1 when none
   double motor_test_throttle = 0.0;
   bool motor_test_changed = false;            // a test started or ended in this cycle
@@ -109,7 +118,9 @@ class ControlLoop {
                              std::int64_t wall_us);
   Rejection on_attitude(const AttitudeSample& sample, std::int64_t now_us, std::int64_t wall_us);
   bool reads_esc_telemetry() const { return detection_ && detection_->uses_telemetry(); }
-  bool reads_attitude() const { return detection_ && detection_->uses_rates(); }
+  bool reads_attitude() const {
+    return (detection_ && detection_->uses_rates()) || landing_.has_value();
+  }
   void on_undecodable() { ++counters_.rejected_decode; }
 
   // One control cycle at time now_us. The returned reference stays valid
@@ -133,6 +144,8 @@ class ControlLoop {
   // cycle and adds what it declares to the failure set. ramp: spool-up
   // progress (1 once spooled up).
   void detect(std::int64_t now_us, bool setpoint_fresh, double ramp);
+  // The spin landing's turn, after mixing: may replace the outputs, or disarm.
+  void land(std::int64_t now_us, double ramp);
 
   Mixer mixer_;
   ThrustRange thrust_range_;
@@ -154,6 +167,8 @@ class ControlLoop {
   SpoolUp spool_up_;
   FailureSet failures_;
   std::optional<DetectionRunner> detection_;
+  std::optional<LandingRunner> landing_;
+  LoopState previous_state_ = LoopState::kDisarmed;  // the state the previous cycle ended in
   LatestInput<AttitudeSample> attitude_;
   std::array<std::int64_t, kMaxEscReadings> esc_last_utime_;
 

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 namespace motormix::loop {
 
@@ -59,9 +60,12 @@ struct EscTelemetrySample {
 };
 
 struct AttitudeSample {
+  static constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
   std::int64_t utime = 0;
   std::array<double, 4> q{1.0, 0.0, 0.0, 0.0};  // w, x, y, z; all NaN: attitude unknown
   std::array<double, 3> rates{};                 // rad/s, body FRD
+  // m/s NED; all NaN: unknown (the spin landing then follows the throttle).
+  std::array<double, 3> velocity{kUnknown, kUnknown, kUnknown};
 };
 
 }  // namespace motormix::loop

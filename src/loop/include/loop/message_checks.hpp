@@ -38,6 +38,8 @@ Rejection check_esc_telemetry(const EscTelemetrySample& t, int motors,
                               const std::array<std::int64_t, kMaxEscReadings>& last_utime);
 // Largest body rate accepted: twice the 2000 deg/s range of common gyros.
 inline constexpr double kMaxBodyRateRadS = 70.0;
+// The largest velocity component an attitude message may carry (m/s).
+inline constexpr double kMaxVelocityMps = 150.0;
 Rejection check_attitude(const AttitudeSample& a, std::int64_t last_utime);
 
 }  // namespace motormix::loop

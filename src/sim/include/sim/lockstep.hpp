@@ -39,6 +39,9 @@ struct SimOptions {
 
 // After a failure, how long its attitude transient is watched.
 inline constexpr double kFailureWindowS = 1.0;
+// The spin and thrusts a spin landing settles at: averaged over this long
+// before touchdown.
+inline constexpr double kSettleWindowS = 2.0;
 
 // One failure of a run and what motormix's own detector made of it.
 struct FailureOutcome {
@@ -66,6 +69,21 @@ struct SimResult {
   double armed_s = 0.0;             // simulated time the mixer spent armed, the whole run
   bool reached_altitude = false;    // aircraft: came within 0.1 m of a commanded altitude
   double altitude_error_max_m = 0.0;  // aircraft: largest |commanded - flown| altitude, scored window
+  // Aircraft, the whole run: the first touchdown after flying (vertical
+  // speed, down positive, and when; -1 if none), how far from where the
+  // first failure happened (or the start) it came down (horizontal; the end
+  // position without a touchdown), and the largest body rate and thrust-axis
+  // tilt while flying.
+  double touchdown_speed_mps = -1.0;
+  double touchdown_time_s = -1.0;
+  double drift_m = 0.0;
+  double max_spin_rate_rad_s = 0.0;
+  double max_thrust_axis_tilt_deg = 0.0;
+  // Over the kSettleWindowS before touchdown (or the end), once a failure
+  // happened: the mean body rate and each motor's mean thrust (N), for the
+  // comparison with the relaxed-hover equilibrium (empty without a failure).
+  double settled_spin_rate_rad_s = 0.0;
+  std::vector<double> settled_thrust_n;
   double saturated_fraction = 0.0;      // cycles with some axis not fully delivered
   double speed_error_rms_mps = 0.0;     // ground vehicles
   double yaw_rate_error_rms_dps = 0.0;  // ground vehicles
@@ -130,6 +148,12 @@ class Scorer {
   void failure_at(double t) { failure_s_ = t; }
 
  private:
+  // Touchdown, drift, largest rate and tilt, settled spin (every cycle).
+  void add_flight(double t, const VehicleModel& vehicle);
+  struct Settle {
+    double t = 0.0, rate = 0.0;
+    std::vector<double> thrust;
+  };
   double from_s_, to_s_;
   double failure_s_ = -1.0;
   double failure_att_max_ = 0.0;
@@ -143,6 +167,12 @@ class Scorer {
   double commanded_altitude_ = -1.0;
   bool reached_ = false;
   std::int64_t scored_ = 0, saturated_ = 0;
+  double touchdown_speed_ = -1.0, touchdown_s_ = -1.0, max_rate_ = 0.0, max_tilt_ = 0.0;
+  Eigen::Vector2d drift_from_ = Eigen::Vector2d::Zero(), drift_to_ = Eigen::Vector2d::Zero();
+  bool drift_from_set_ = false;
+  bool was_landed_ = true;
+  std::vector<Settle> settle_;  // per cycle since the failure, trimmed to the window
+  std::size_t settle_begin_ = 0;
 };
 
 // Matches what motormix's detector declares with the failures of the run.

@@ -12,6 +12,9 @@
 
 namespace motormix::sim {
 
+// The range of the simulated gyros (the common +-2000 deg/s).
+inline constexpr double kGyroRangeRadS = 2000.0 * kRadPerDeg;
+
 // What the controller sees: the state with the scenario's sensor noise.
 class Sensors {
  public:
@@ -28,6 +31,9 @@ class Sensors {
                        .normalized();
     }
     m.rates += draws(noise_.gyro_rad_s);
+    // The gyro reads no further than its range (a spinning vehicle can
+    // reach it).
+    m.rates = m.rates.cwiseMax(-kGyroRangeRadS).cwiseMin(kGyroRangeRadS);
     m.position.z() += gauss_(noise_.altitude_m);
     m.velocity.z() += gauss_(noise_.altitude_m);
     return m;

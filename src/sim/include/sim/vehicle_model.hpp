@@ -69,6 +69,10 @@ class VehicleModel {
   }
   const BatteryModel& battery() const { return battery_; }
   bool landed() const { return landed_; }
+  // The vertical speed of the latest touchdown after having flown (m/s,
+  // down positive); -1 before any.
+  double touchdown_speed() const { return touchdown_speed_; }
+  bool taken_off() const { return taken_off_; }
   bool crashed() const { return crashed_; }
   const std::string& crash_reason() const { return crash_reason_; }
   double forward_speed() const { return forward_speed_; }  // wheels, m/s
@@ -106,6 +110,7 @@ class VehicleModel {
   bool landed_ = true;
   bool taken_off_ = false;
   bool crashed_ = false;
+  double touchdown_speed_ = -1.0;
   std::string crash_reason_;
 };
 

@@ -1,0 +1,156 @@
+#pragma once
+// A quadrotor that has lost one motor can still come down alive if it gives
+// up yaw: the three motors left keep the total thrust and the two torques
+// that tilt the body, the yaw torque they leave over spins the body up until
+// the yaw drag balances it, and the vehicle flies a "relaxed hover" about a
+// spin axis a few degrees off its thrust axis (Mueller & D'Andrea, ICRA
+// 2014; IJRR 2016). This header is that emergency controller. Pure: time is
+// passed in, nothing is allocated after construction, no I/O.
+//
+// - The equilibrium (solve_spin_equilibrium): the body rates and the three
+//   thrusts at which the rotor torques balance the gyroscopic and drag
+//   torques, the thrust along the spin axis carries the weight, the two
+//   motors beside the dead one share equally, and the spin rate is the one
+//   configured. Solved once, at start-up, for each motor that could fail.
+// - The controller (SpinningDescent::update), every cycle:
+//   * reduced attitude: the direction the spin axis should point (straight
+//     up, tilted at most max_tilt to brake the horizontal velocity) is
+//     brought onto the equilibrium axis by asking for body rates across it;
+//     the rate about the axis is left alone (yaw is given up);
+//   * the torque across the axis comes from nonlinear dynamic inversion:
+//     I * rate error * gain + w x Iw + drag, the last two being exactly what
+//     holds the equilibrium. The feedback part rotates with the body at the
+//     spin rate, so it is led by the motors' time constant (the first-order
+//     lag inverted for a vector turning at that rate);
+//   * the collective thrust flies the configured descent rate from the
+//     vertical velocity (proportional-integral, tilt compensated); without
+//     a velocity it follows the setpoint's throttle;
+//   * allocation: three motors, three demands (thrust and the two tilting
+//     torques), solved exactly; what does not fit is taken from the torques
+//     before the thrust;
+//   * landing: once the descent has been flown and the vertical speed stays
+//     near zero, the controller says so (the loop then disarms).
+
+#include <motormix/motor_vector.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+namespace motormix {
+
+inline constexpr double kStandardGravity = 9.80665;
+
+// The vehicle as the controller needs it (SI units, body FRD).
+struct SpinningDescentModel {
+  double mass_kg = 0.0;
+  Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Ones();  // principal moments
+  double rotational_drag = 0.0;                            // N m per rad/s, each axis
+  double time_constant_s = 0.04;                           // motor lag (mean of up and down)
+  // Per rotor: force direction (unit), torque per newton of thrust (arm x
+  // axis plus the drag torque against its spin), thrust at full command.
+  std::array<Eigen::Vector3d, 4> axis{};
+  std::array<Eigen::Vector3d, 4> torque_per_newton{};
+  std::array<double, 4> max_thrust_n{};
+  std::array<double, 4> min_thrust_n{};  // what the idle command gives
+};
+
+struct SpinningDescentSettings {
+  double spin_rate_rad_s = 20.0;   // equilibrium spin rate (magnitude of the body rates)
+  double descent_rate_mps = 1.0;   // vertical speed flown down
+  double max_tilt_deg = 8.0;       // largest tilt of the spin axis asked to brake drift
+  double attitude_gain = 10.0;     // 1/s: spin-axis error to rate across it
+  double rate_gain = 30.0;        // 1/s: rate error to angular acceleration
+  double velocity_gain = 1.5;      // 1/s: vertical speed error to acceleration
+  double velocity_integral = 0.6;  // 1/s^2
+  double drift_gain = 0.4;         // 1/s: horizontal velocity to acceleration asked against it
+  double landed_after_s = 0.5;     // vertical speed near zero this long: landed
+};
+
+// The relaxed hover with motor `failed` stopped.
+struct SpinEquilibrium {
+  bool found = false;
+  std::string why;  // when not found: what could not be met
+  int failed = -1;
+  std::array<int, 3> working{};         // the other motors, in index order
+  Eigen::Vector3d rates = Eigen::Vector3d::Zero();   // rad/s, body
+  Eigen::Vector3d thrust_n = Eigen::Vector3d::Zero();  // of working[0..2]
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();  // the spin axis, pointing up (body)
+  double axis_tilt_deg = 0.0;  // between the spin axis and the thrust axis
+};
+
+// Solves the equilibrium by Newton's method (start-up only).
+SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& model, int failed,
+                                       double spin_rate_rad_s);
+
+enum class DescentPhase : std::uint8_t {
+  kOff = 0,         // not running
+  kDescending = 1,  // spinning, coming down
+  kLanded = 2,      // on the ground: the loop disarms
+};
+
+const char* to_string(DescentPhase phase);
+
+struct DescentInput {
+  Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  // body FRD -> NED
+  Eigen::Vector3d rates = Eigen::Vector3d::Zero();                // rad/s, body
+  Eigen::Vector3d velocity = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());      // m/s NED; NaN: unknown
+  double throttle = 0.0;  // the setpoint's, 0..1: the collective when the velocity is unknown
+};
+
+struct DescentCommand {
+  DescentPhase phase = DescentPhase::kOff;
+  // Thrust fraction (0..1) per motor; the dead one 0.
+  MotorVector thrust_fraction;
+  Eigen::Vector3d thrust_n = Eigen::Vector3d::Zero();  // of the working motors
+  double spin_rate_rad_s = 0.0;                      // |rates| measured
+  double axis_error_deg = 0.0;  // between the spin axis and where it should point
+  bool saturated = false;       // a torque demand did not fit
+};
+
+class SpinningDescent {
+ public:
+  // The equilibria must have been found for every motor (see
+  // solve_spin_equilibrium; the config layer checks it at start-up).
+  SpinningDescent(const SpinningDescentModel& model, const SpinningDescentSettings& settings);
+
+  const SpinEquilibrium& equilibrium(int failed) const {
+    return equilibria_[static_cast<std::size_t>(failed)];
+  }
+  const SpinningDescentSettings& settings() const { return s_; }
+
+  // Takes over with motor `failed` (0-based) stopped.
+  void start(int failed, std::int64_t now_us);
+  void stop();
+  bool running() const { return cmd_.phase != DescentPhase::kOff; }
+  int failed() const { return failed_; }
+
+  // One cycle at now_us.
+  const DescentCommand& update(const DescentInput& in, std::int64_t now_us);
+  const DescentCommand& command() const { return cmd_; }
+
+ private:
+  double collective(const DescentInput& in, const Eigen::Vector3d& up_body, double dt);
+  // The working motors' thrusts closest to demand (thrust, torque x, y).
+  Eigen::Vector3d allocate(const SpinEquilibrium& eq, const Eigen::Vector3d& demand) const;
+
+  SpinningDescentModel m_;
+  SpinningDescentSettings s_;
+  std::array<SpinEquilibrium, 4> equilibria_{};
+  // Per failed motor: [thrust; tau_x; tau_y] of the working motors per newton, and its inverse.
+  std::array<Eigen::Matrix3d, 4> allocation_{};
+  std::array<Eigen::Matrix3d, 4> allocation_inverse_{};
+  double thrust_weight_ = 1.0;
+  int failed_ = -1;
+  std::int64_t last_us_ = 0;
+  double velocity_integral_ = 0.0;
+  double up_force_ = 0.0;  // the collective's vertical force asked for (N)
+  double still_s_ = 0.0;
+  DescentCommand cmd_;
+};
+
+}  // namespace motormix

@@ -1,0 +1,109 @@
+// The `motor_loss:` section (documented in docs/motor-loss-landing.md).
+
+#include "motor_loss_reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace motormix::config {
+
+namespace {
+
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+// The equilibrium spin may use at most this share of the gyro's range: the
+// transient after the failure and gusts swing the rates above it.
+constexpr double kSpinShareOfGyroRange = 0.7;
+
+// Why the vehicle cannot land spinning, or "" when it can.
+std::string unsupported(const Config& config) {
+  const VehiclePhysics& v = config.vehicle_model;
+  if (config.thrust_range() == ThrustRange::kBipolar) return "a ground vehicle has no spin landing";
+  if (config.motors() != 4) {
+    return "spin landing is for four rotors; this vehicle has " + std::to_string(config.motors()) +
+           " (more rotors keep flying on the ones left)";
+  }
+  if (!v.incomplete.empty()) return v.incomplete;
+  for (const RotorPhysics& r : v.rotors) {
+    if (r.axis.z() > -0.9) return "spin landing needs rotors that push up (axis near [0, 0, -1])";
+  }
+  for (const OutputChannel& ch : config.outputs) {
+    if (ch.mode != OutputMode::kUnipolar) return "spin landing needs unipolar ESC outputs";
+  }
+  return "";
+}
+
+SpinningDescentModel model_of(const Config& config) {
+  const VehiclePhysics& v = config.vehicle_model;
+  SpinningDescentModel m;
+  m.mass_kg = v.mass_kg;
+  m.inertia_kgm2 = v.inertia_kgm2;
+  m.rotational_drag = v.drag_rotational_nm_per_radps;
+  m.time_constant_s = 0.5 * (v.time_constant_up_s + v.time_constant_down_s);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const RotorPhysics& r = v.rotors[i];
+    m.axis[i] = r.axis;
+    m.torque_per_newton[i] =
+        r.position_m.cross(r.axis) + static_cast<double>(r.spin) * r.torque_ratio_m * -r.axis;
+    m.max_thrust_n[i] = r.max_thrust_n;
+    m.min_thrust_n[i] = r.max_thrust_n * config.outputs[i].idle;
+  }
+  return m;
+}
+
+}  // namespace
+
+void read_motor_loss(MapReader section, Config& config) {
+  const std::string mode = section.choice("mode", "auto", {"auto", "spin_landing", "off"});
+  MotorLoss ml;
+  SpinningDescentSettings& s = ml.settings;
+  ml.gyro_range_rad_s = section.number("gyro_range_dps", 2000.0, 100.0, 10000.0) * kRadPerDeg;
+  s.spin_rate_rad_s = section.number("spin_rate_rad_s", 20.0, 3.0, 100.0);
+  s.descent_rate_mps = section.number("descent_rate_mps", 1.0, 0.2, 3.0);
+  s.max_tilt_deg = section.number("max_tilt_deg", 8.0, 0.0, 20.0);
+  ml.attitude_timeout_s = section.number("attitude_timeout_ms", 50.0, 5.0, 1000.0) / 1e3;
+  if (s.spin_rate_rad_s > kSpinShareOfGyroRange * ml.gyro_range_rad_s) {
+    std::ostringstream found, allowed;
+    found << s.spin_rate_rad_s << " with gyro_range_dps " << ml.gyro_range_rad_s / kRadPerDeg;
+    allowed << "at most " << kSpinShareOfGyroRange * 100
+            << " % of the gyro's range (the transient swings above the equilibrium)";
+    fail(section.path_of("spin_rate_rad_s"), found.str(), allowed.str());
+  }
+  section.finish();
+  config.motor_loss.reset();
+  config.motor_loss_off = "";
+  if (mode == "off") {
+    config.motor_loss_off = "motor_loss.mode is off";
+    return;
+  }
+  std::string why = unsupported(config);
+  if (why.empty()) {
+    ml.model = model_of(config);
+    for (int failed = 0; failed < 4 && why.empty(); ++failed) {
+      const SpinEquilibrium eq = solve_spin_equilibrium(ml.model, failed, s.spin_rate_rad_s);
+      if (!eq.found) why = eq.why;
+    }
+  }
+  if (!why.empty()) {
+    if (mode == "spin_landing") fail(section.path_of("mode"), "spin_landing", "auto or off: " + why);
+    config.motor_loss_off = why;
+    return;
+  }
+  config.motor_loss = ml;
+}
+
+std::string Config::motor_loss_summary() const {
+  if (motor_loss) {
+    std::ostringstream s;
+    s << "motor loss: spin landing (" << motor_loss->settings.spin_rate_rad_s << " rad/s, down at "
+      << motor_loss->settings.descent_rate_mps << " m/s); needs attitude_t on " << channels.attitude
+      << " (with velocity, or it follows the throttle); without a fresh one it mixes as before";
+    return s.str();
+  }
+  if (motors() == 4 && thrust_range() != ThrustRange::kBipolar) {
+    return "motor loss: no spin landing (" + motor_loss_off + ")";
+  }
+  return "";
+}
+
+}  // namespace motormix::config

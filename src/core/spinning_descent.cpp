@@ -1,0 +1,376 @@
+#include <motormix/spinning_descent.hpp>
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace motormix {
+
+namespace {
+
+constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+constexpr int kNewtonIterations = 100;
+constexpr double kNewtonTolerance = 1e-10;
+// Largest share of a motor's thrust the equilibrium may use: the rest is
+// what the controller has to tilt the spin axis with.
+constexpr double kEquilibriumHeadroom = 0.92;
+// Below this vertical speed (fraction of the descent rate) the vehicle is
+// not moving; landed when that lasts while the thrust asked for is below
+// this share of the weight.
+constexpr double kStillFraction = 0.25;
+constexpr double kLandedThrustShare = 0.8;
+constexpr double kMaxDtS = 0.05;
+constexpr double kThrustWeight = 0.3;
+constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees  // a longer gap is taken as this (a stalled process)
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+Eigen::Vector2d planar(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
+
+struct Layout {
+  std::array<int, 3> working{};
+  int opposite = 0;                 // index into working: the motor across from the dead one
+  std::array<int, 2> neighbours{};  // indices into working: the two beside it
+};
+
+Layout layout(const SpinningDescentModel& m, int failed) {
+  Layout l;
+  int n = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (k != failed) l.working[static_cast<std::size_t>(n++)] = k;
+  }
+  // The torque per newton across the thrust axis is the arm turned by 90
+  // degrees, so distances between those are distances between the rotors.
+  const Eigen::Vector2d dead = planar(m.torque_per_newton[static_cast<std::size_t>(failed)]);
+  double far = -1.0;
+  for (int j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(l.working[static_cast<std::size_t>(j)]);
+    const double d = (planar(m.torque_per_newton[k]) - dead).norm();
+    if (d > far) {
+      far = d;
+      l.opposite = j;
+    }
+  }
+  int b = 0;
+  for (int j = 0; j < 3; ++j) {
+    if (j != l.opposite) l.neighbours[static_cast<std::size_t>(b++)] = j;
+  }
+  return l;
+}
+
+// Force and torque of the working motors' thrusts f (body).
+Eigen::Vector3d force_of(const SpinningDescentModel& m, const Layout& l, const Eigen::Vector3d& f) {
+  Eigen::Vector3d F = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < 3; ++j) F += m.axis[static_cast<std::size_t>(l.working[j])] * f[static_cast<Eigen::Index>(j)];
+  return F;
+}
+
+Eigen::Vector3d torque_of(const SpinningDescentModel& m, const Layout& l,
+                          const Eigen::Vector3d& f) {
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < 3; ++j)
+    t += m.torque_per_newton[static_cast<std::size_t>(l.working[j])] *
+         f[static_cast<Eigen::Index>(j)];
+  return t;
+}
+
+// What the rotors must supply to hold body rates w: w x Iw + drag.
+Eigen::Vector3d holding_torque(const SpinningDescentModel& m, const Eigen::Vector3d& w) {
+  return w.cross(m.inertia_kgm2.cwiseProduct(w)) + m.rotational_drag * w;
+}
+
+// The spin axis, pointing the way the thrust pushes.
+Eigen::Vector3d up_axis(const Eigen::Vector3d& w, const Eigen::Vector3d& force) {
+  const double norm = w.norm();
+  if (norm <= 0.0) return -Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d n = w / norm;
+  return n.dot(force) >= 0.0 ? n : Eigen::Vector3d(-n);
+}
+
+Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin,
+                  const Vector6d& x) {
+  const Eigen::Vector3d f = x.head<3>();
+  const Eigen::Vector3d w = x.tail<3>();
+  const Eigen::Vector3d F = force_of(m, l, f);
+  Vector6d r;
+  r.head<3>() = torque_of(m, l, f) - holding_torque(m, w);
+  r[3] = (up_axis(w, F).dot(F) - m.mass_kg * kStandardGravity) / (m.mass_kg * kStandardGravity);
+  r[4] = (w.norm() - spin) / spin;
+  r[5] = (f[l.neighbours[0]] - f[l.neighbours[1]]) / (m.mass_kg * kStandardGravity);
+  return r;
+}
+
+}  // namespace
+
+const char* to_string(DescentPhase phase) {
+  switch (phase) {
+    case DescentPhase::kOff:
+      return "off";
+    case DescentPhase::kDescending:
+      return "descending";
+    case DescentPhase::kLanded:
+      return "landed";
+  }
+  return "off";
+}
+
+SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed,
+                                       double spin_rate) {
+  SpinEquilibrium eq;
+  eq.failed = failed;
+  const Layout l = layout(m, failed);
+  eq.working = l.working;
+  const double weight = m.mass_kg * kStandardGravity;
+  // Start level, spinning the way the two neighbours' drag turns the body.
+  Vector6d x;
+  x.head<3>().setConstant(weight / 3.0);
+  double yaw = 0.0;
+  for (int b : l.neighbours)
+    yaw += m.torque_per_newton[static_cast<std::size_t>(l.working[static_cast<std::size_t>(b)])].z();
+  x.tail<3>() = Eigen::Vector3d(0.0, 0.0, yaw >= 0.0 ? spin_rate : -spin_rate);
+  Vector6d r = residual(m, l, spin_rate, x);
+  for (int it = 0; it < kNewtonIterations && r.norm() > kNewtonTolerance; ++it) {
+    Matrix6d jac;
+    for (int c = 0; c < 6; ++c) {
+      Vector6d xh = x;
+      const double h = 1e-7 * std::max(1.0, std::abs(x[c]));
+      xh[c] += h;
+      jac.col(c) = (residual(m, l, spin_rate, xh) - r) / h;
+    }
+    const Vector6d step = jac.fullPivLu().solve(-r);
+    double scale = 1.0;
+    Vector6d next = x + step;
+    Vector6d rn = residual(m, l, spin_rate, next);
+    for (int half = 0; half < 30 && !(rn.norm() < r.norm()); ++half) {
+      scale /= 2.0;
+      next = x + scale * step;
+      rn = residual(m, l, spin_rate, next);
+    }
+    if (!(rn.norm() < r.norm())) break;
+    x = next;
+    r = rn;
+  }
+  std::ostringstream why;
+  if (!(r.norm() <= 1e-8)) {
+    why << "no relaxed hover at " << spin_rate << " rad/s with motor " << failed + 1
+        << " stopped (the equations did not converge)";
+    eq.why = why.str();
+    return eq;
+  }
+  eq.thrust_n = x.head<3>();
+  eq.rates = x.tail<3>();
+  const Eigen::Vector3d F = force_of(m, l, eq.thrust_n);
+  eq.up = up_axis(eq.rates, F);
+  eq.axis_tilt_deg = std::acos(std::clamp(eq.up.dot(F.normalized()), -1.0, 1.0)) * kDegPerRad;
+  for (std::size_t j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(l.working[j]);
+    const double f = eq.thrust_n[static_cast<Eigen::Index>(j)];
+    if (f > kEquilibriumHeadroom * m.max_thrust_n[k] || f < m.min_thrust_n[k]) {
+      why.precision(3);
+      why << "with motor " << failed + 1 << " stopped, spinning at " << spin_rate
+          << " rad/s needs motor " << k + 1 << " at " << f << " N, outside "
+          << m.min_thrust_n[k] << ".." << kEquilibriumHeadroom * m.max_thrust_n[k]
+          << " N (its idle to " << kEquilibriumHeadroom * 100 << " % of its thrust)";
+      eq.why = why.str();
+      return eq;
+    }
+  }
+  eq.found = true;
+  return eq;
+}
+
+Eigen::Vector3d SpinningDescent::allocate(const SpinEquilibrium& eq,
+                                          const Eigen::Vector3d& demand) const {
+  const auto fk = static_cast<std::size_t>(eq.failed);
+  const Eigen::Matrix3d& a = allocation_[fk];
+  Eigen::Vector3d lo, hi;
+  for (Eigen::Index j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+    lo[j] = m_.min_thrust_n[k];
+    hi[j] = m_.max_thrust_n[k];
+  }
+  const Eigen::Vector3d exact = allocation_inverse_[fk] * demand;
+  if ((exact.array() >= lo.array()).all() && (exact.array() <= hi.array()).all()) return exact;
+  // Weighted least squares on the box: every pattern of motors held at a
+  // bound, the others solved freely; the best one inside the box is the
+  // optimum (the problem is convex, and the optimum has some such pattern).
+  const Eigen::Vector3d w(thrust_weight_, 1.0, 1.0);
+  const Eigen::Matrix3d wa = w.asDiagonal() * a;
+  const Eigen::Vector3d wd = w.cwiseProduct(demand);
+  Eigen::Vector3d best = exact.cwiseMax(lo).cwiseMin(hi);
+  double best_cost = (wa * best - wd).squaredNorm();
+  for (int pattern = 0; pattern < 27; ++pattern) {
+    Eigen::Vector3d f;
+    std::array<int, 3> state{pattern % 3, (pattern / 3) % 3, pattern / 9};  // 0 free, 1 lo, 2 hi
+    int free = 0;
+    for (Eigen::Index j = 0; j < 3; ++j) {
+      const int st = state[static_cast<std::size_t>(j)];
+      f[j] = st == 1 ? lo[j] : st == 2 ? hi[j] : 0.0;
+      if (st == 0) ++free;
+    }
+    if (free > 0) {
+      Eigen::Matrix3d cols = Eigen::Matrix3d::Zero();
+      for (Eigen::Index j = 0; j < 3; ++j) {
+        if (state[static_cast<std::size_t>(j)] == 0) cols.col(j) = wa.col(j);
+      }
+      const Eigen::Vector3d rhs = wd - wa * f;
+      // Least-norm solution for the free motors (the others' columns are zero).
+      const Eigen::Vector3d x = cols.completeOrthogonalDecomposition().solve(rhs);
+      for (Eigen::Index j = 0; j < 3; ++j) {
+        if (state[static_cast<std::size_t>(j)] == 0) f[j] = x[j];
+      }
+    }
+    if ((f.array() < lo.array() - 1e-9).any() || (f.array() > hi.array() + 1e-9).any()) continue;
+    const double cost = (wa * f - wd).squaredNorm();
+    if (cost < best_cost) {
+      best_cost = cost;
+      best = f;
+    }
+  }
+  return best;
+}
+
+SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
+                                 const SpinningDescentSettings& settings)
+    : m_(model), s_(settings) {
+  for (int failed = 0; failed < 4; ++failed) {
+    const auto k = static_cast<std::size_t>(failed);
+    equilibria_[k] = solve_spin_equilibrium(m_, failed, s_.spin_rate_rad_s);
+    Eigen::Matrix3d a;
+    for (Eigen::Index j = 0; j < 3; ++j) {
+      const auto motor = static_cast<std::size_t>(equilibria_[k].working[static_cast<std::size_t>(j)]);
+      a(0, j) = -m_.axis[motor].z();
+      a(1, j) = m_.torque_per_newton[motor].x();
+      a(2, j) = m_.torque_per_newton[motor].y();
+    }
+    allocation_[k] = a;
+    allocation_inverse_[k] = a.inverse();
+  }
+  cmd_.thrust_fraction.setZero(4);
+  // Thrust counts for this much of a torque error of its newton times the
+  // mean arm: height can be lost for a moment, the attitude cannot.
+  double arm = 0.0;
+  for (const Eigen::Vector3d& t : m_.torque_per_newton) arm += planar(t).norm() / 4.0;
+  thrust_weight_ = kThrustWeight * arm;
+}
+
+void SpinningDescent::start(int failed, std::int64_t now_us) {
+  failed_ = failed;
+  last_us_ = now_us;
+  velocity_integral_ = 0.0;
+  up_force_ = 0.0;
+  still_s_ = 0.0;
+  cmd_ = DescentCommand{};
+  cmd_.thrust_fraction.setZero(4);
+  cmd_.phase = DescentPhase::kDescending;
+}
+
+void SpinningDescent::stop() {
+  failed_ = -1;
+  cmd_.phase = DescentPhase::kOff;
+  cmd_.thrust_fraction.setZero(4);
+}
+
+double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d& up_body,
+                                   double dt) {
+  const double weight = m_.mass_kg * kStandardGravity;
+  double up_force = 0.0;
+  if (std::isfinite(in.velocity.z())) {
+    const double error = in.velocity.z() - s_.descent_rate_mps;  // NED: positive is too fast down
+    // The integral learns the thrust model's error while upright only.
+    if (-up_body.z() > kMinTiltCompensationCos) {
+      velocity_integral_ =
+          std::clamp(velocity_integral_ + s_.velocity_integral * error * dt,
+                     -0.4 * kStandardGravity, 0.4 * kStandardGravity);
+    }
+    up_force = m_.mass_kg * (kStandardGravity + s_.velocity_gain * error + velocity_integral_);
+    up_force = std::clamp(up_force, 0.3 * weight, 1.6 * weight);
+    up_force_ = up_force;
+  } else {
+    double full = 0.0;
+    for (double t : m_.max_thrust_n) full += t;
+    up_force = std::clamp(in.throttle, 0.0, 1.0) * full;
+    up_force_ = up_force;
+  }
+  // The thrust axis is body -z; only its upward part carries the weight.
+  // Far from upright more thrust buys little and takes the differential
+  // the neighbours need to right the vehicle.
+  const double cos_tilt = std::max(-up_body.z(), kMinTiltCompensationCos);
+  return up_force / cos_tilt;
+}
+
+const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64_t now_us) {
+  if (failed_ < 0 || cmd_.phase != DescentPhase::kDescending) return cmd_;
+  const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, kMaxDtS);
+  last_us_ = now_us;
+  const auto fk = static_cast<std::size_t>(failed_);
+  const SpinEquilibrium& eq = equilibria_[fk];
+  const Eigen::Matrix3d rot = in.attitude.normalized().toRotationMatrix();  // body -> NED
+  const Eigen::Vector3d& w = in.rates;
+  cmd_.spin_rate_rad_s = w.norm();
+
+  // Where the spin axis should point: up, tilted against the horizontal
+  // velocity (at most max_tilt).
+  Eigen::Vector3d thrust_world(0.0, 0.0, -kStandardGravity);
+  if (in.velocity.allFinite()) {
+    Eigen::Vector2d brake = -s_.drift_gain * Eigen::Vector2d(in.velocity.x(), in.velocity.y());
+    const double most = kStandardGravity * std::tan(s_.max_tilt_deg / kDegPerRad);
+    if (brake.norm() > most) brake *= most / brake.norm();
+    thrust_world.head<2>() = brake;
+  }
+  const Eigen::Vector3d desired = rot.transpose() * thrust_world.normalized();  // body
+  const Eigen::Vector3d& axis = eq.up;
+  cmd_.axis_error_deg = std::acos(std::clamp(axis.dot(desired), -1.0, 1.0)) * kDegPerRad;
+
+  // Reduced attitude: rates across the axis turn it toward `desired`; the
+  // rate about it is whatever it is.
+  const Eigen::Vector3d rates_wanted = s_.attitude_gain * axis.cross(desired) + w.dot(axis) * axis;
+  Eigen::Vector3d accel = s_.rate_gain * (rates_wanted - w);
+  accel -= accel.dot(axis) * axis;
+  Eigen::Vector3d feedback = m_.inertia_kgm2.cwiseProduct(accel);
+  // The feedback turns with the body at the spin rate: lead it by the motor
+  // lag, (1 + T s) for a vector turning at -spin about the axis.
+  const double spin = w.dot(axis);
+  feedback -= m_.time_constant_s * spin * axis.cross(feedback);
+  const Eigen::Vector3d hold = holding_torque(m_, w);
+
+  const Eigen::Vector3d up_body = rot.transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
+  const double thrust = collective(in, up_body, dt);
+
+  // Three motors, three demands: the thrusts closest to them within each
+  // motor's range (least squares, thrust weighted below the torques: the
+  // vehicle can lose some height, not its attitude).
+  const Eigen::Vector3d demand(thrust, hold.x() + feedback.x(), hold.y() + feedback.y());
+  Eigen::Vector3d f = allocate(eq, demand);
+  const Eigen::Vector3d got = allocation_[fk] * f;
+  cmd_.saturated = (got - demand).cwiseAbs().maxCoeff() > 1e-6;
+
+  // Landing: no vertical motion for landed_after_s while the velocity loop
+  // asks for well under the weight (in the air that much less thrust would
+  // have the vehicle moving down within a fraction of that time).
+  if (std::isfinite(in.velocity.z())) {
+    const bool still = std::abs(in.velocity.z()) < kStillFraction * s_.descent_rate_mps &&
+                       up_force_ < kLandedThrustShare * m_.mass_kg * kStandardGravity;
+    still_s_ = still ? still_s_ + dt : 0.0;
+    if (still_s_ >= s_.landed_after_s) {
+      cmd_.phase = DescentPhase::kLanded;
+      f.setZero();
+    }
+  }
+  cmd_.thrust_fraction.setZero(4);
+  for (Eigen::Index j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+    f[j] = cmd_.phase == DescentPhase::kLanded
+               ? 0.0
+               : std::clamp(f[j], m_.min_thrust_n[k], m_.max_thrust_n[k]);
+    cmd_.thrust_fraction[static_cast<Eigen::Index>(k)] = f[j] / m_.max_thrust_n[k];
+  }
+  cmd_.thrust_n = f;
+  return cmd_;
+}
+
+}  // namespace motormix

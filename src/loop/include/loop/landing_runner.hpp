@@ -1,0 +1,72 @@
+#pragma once
+// The spin landing inside the control loop (config `motor_loss:`): when a
+// four-rotor aircraft has exactly one failed motor, is armed and spooled up,
+// and a fresh attitude is at hand, the core's SpinningDescent takes over the
+// outputs: the controller's roll, pitch and yaw are no longer followed; with
+// a velocity in the attitude message its throttle is not either (the
+// configured descent rate is flown), without one the throttle is the
+// collective. Each cycle it turns the three thrusts into output-stage values
+// through the vehicle's ESC curve and range (`vehicle:` section), the dead
+// motor at its disarmed value. It lets go (and the loop mixes as before)
+// when the attitude goes stale, when another motor fails as well, or when
+// the loop disarms; once it reports the vehicle landed, the loop disarms.
+
+#include "loop/input_samples.hpp"
+#include "loop/latest_input.hpp"
+
+#include <motormix/config/config.hpp>
+#include <motormix/mixer.hpp>
+#include <motormix/spinning_descent.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace motormix::loop {
+
+// What the status reports of the spin landing (mixer_status_t LANDING_*).
+enum class LandingState : std::int8_t {
+  kOff = 0,          // nothing to do (or not configured)
+  kDescending = 1,   // spinning, coming down on three motors
+  kLanded = 2,       // touched down and disarmed (until the next arming)
+  kNoAttitude = 3,   // one motor failed, but no fresh attitude: mixing as before
+};
+
+const char* to_string(LandingState state);
+
+struct LandingReport {
+  LandingState state = LandingState::kOff;
+  int motor = -1;  // the failed motor it lands without (0-based), -1 when off
+  double spin_rate_rad_s = 0.0;
+  double axis_error_deg = 0.0;  // spin axis from where it should point
+};
+
+class LandingRunner {
+ public:
+  // config.motor_loss must be set.
+  explicit LandingRunner(const config::Config& config);
+
+  struct Inputs {
+    bool flying = false;   // armed (or in a failsafe that still drives the motors), spooled up
+    MotorMask failed = 0;  // the failure set in force
+    const LatestInput<AttitudeSample>* attitude = nullptr;
+    double throttle = 0.0;  // the setpoint's
+  };
+  // One cycle. Returns true when it drives the outputs: `out` then holds
+  // them. report().state == kLanded asks the loop to disarm.
+  bool cycle(const Inputs& in, std::int64_t now_us, const OutputStage& stage, MixerOutput& out);
+  // The loop disarmed: a landing in progress ends; "landed" is kept for the
+  // status until the next arming.
+  void disarmed();
+  void armed();
+  const LandingReport& report() const { return report_; }
+  const SpinningDescent& descent() const { return descent_; }
+
+ private:
+  SpinningDescent descent_;
+  std::int64_t attitude_timeout_us_;
+  double expo_;
+  std::vector<double> esc_min_, esc_max_;
+  LandingReport report_;
+};
+
+}  // namespace motormix::loop
