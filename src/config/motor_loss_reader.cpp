@@ -46,7 +46,10 @@ SpinningDescentModel model_of(const Config& config) {
     m.torque_per_newton[i] =
         r.position_m.cross(r.axis) + static_cast<double>(r.spin) * r.torque_ratio_m * -r.axis;
     m.max_thrust_n[i] = r.max_thrust_n;
-    m.min_thrust_n[i] = r.max_thrust_n * config.outputs[i].idle;
+    // The ESC's floor, not the idle: in the first half second the motor across
+    // from the dead one must stop pushing the vehicle over (its idle thrust
+    // alone tips a default quad), and a brief stop is the lesser risk.
+    m.min_thrust_n[i] = 0.0;
   }
   return m;
 }

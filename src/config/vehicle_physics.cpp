@@ -241,6 +241,17 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
   v.time_constant_up_s = vehicle.number("time_constant_up_s", v.time_constant_up_s, 1e-4, 5.0);
   v.time_constant_down_s =
       vehicle.number("time_constant_down_s", v.time_constant_down_s, 1e-4, 5.0);
+  if (!v.wheeled) {
+    v.rotor_inertia_kgm2 = vehicle.number("rotor_inertia_kgm2", 0.0, 0.0, 10.0);
+    v.max_rotor_speed_rad_s =
+        vehicle.number("max_rotor_speed_rad_s", v.max_rotor_speed_rad_s, 1.0, 1e5);
+  } else {
+    for (const char* key : {"rotor_inertia_kgm2", "max_rotor_speed_rad_s"}) {
+      if (vehicle.has(key))
+        fail(vehicle.path_of(key), "a rotor setting on a ground vehicle", "wheel settings");
+      vehicle.raw(key);
+    }
+  }
   MapReader drag = vehicle.map("drag");
   v.drag_linear_n_per_mps = drag.number("linear", kLinearDragPerKg * v.mass_kg, 0.0, 1e4);
   v.drag_rotational_nm_per_radps = drag.number("rotational", kRotationalDrag, 0.0, 1e3);

@@ -24,6 +24,8 @@ constexpr double kStillFraction = 0.25;
 constexpr double kLandedThrustShare = 0.8;
 constexpr double kMaxDtS = 0.05;
 constexpr double kThrustWeight = 0.3;
+constexpr double kMaxRateRadS = 100.0;  // beyond any gyro: clipped
+constexpr double kMaxSpeedMps = 200.0;  // beyond: taken as unknown
 constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees  // a longer gap is taken as this (a stalled process)
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
@@ -279,7 +281,7 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
                                    double dt) {
   const double weight = m_.mass_kg * kStandardGravity;
   double up_force = 0.0;
-  if (std::isfinite(in.velocity.z())) {
+  if (std::isfinite(in.velocity.z()) && std::abs(in.velocity.z()) < kMaxSpeedMps) {
     const double error = in.velocity.z() - s_.descent_rate_mps;  // NED: positive is too fast down
     // The integral learns the thrust model's error while upright only.
     if (-up_body.z() > kMinTiltCompensationCos) {
@@ -293,7 +295,7 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
   } else {
     double full = 0.0;
     for (double t : m_.max_thrust_n) full += t;
-    up_force = std::clamp(in.throttle, 0.0, 1.0) * full;
+    up_force = (std::isfinite(in.throttle) ? std::clamp(in.throttle, 0.0, 1.0) : 0.0) * full;
     up_force_ = up_force;
   }
   // The thrust axis is body -z; only its upward part carries the weight.
@@ -307,16 +309,21 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   if (failed_ < 0 || cmd_.phase != DescentPhase::kDescending) return cmd_;
   const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, kMaxDtS);
   last_us_ = now_us;
+  // The loop's checks keep non-finite inputs out; should one arrive anyway,
+  // the previous command stands (it is inside the motors' range).
+  if (!in.attitude.coeffs().allFinite() || in.attitude.norm() < 0.5 || !in.rates.allFinite()) {
+    return cmd_;
+  }
   const auto fk = static_cast<std::size_t>(failed_);
   const SpinEquilibrium& eq = equilibria_[fk];
   const Eigen::Matrix3d rot = in.attitude.normalized().toRotationMatrix();  // body -> NED
-  const Eigen::Vector3d& w = in.rates;
+  const Eigen::Vector3d w = in.rates.cwiseMax(-kMaxRateRadS).cwiseMin(kMaxRateRadS);
   cmd_.spin_rate_rad_s = w.norm();
 
   // Where the spin axis should point: up, tilted against the horizontal
   // velocity (at most max_tilt).
   Eigen::Vector3d thrust_world(0.0, 0.0, -kStandardGravity);
-  if (in.velocity.allFinite()) {
+  if (in.velocity.allFinite() && in.velocity.cwiseAbs().maxCoeff() < kMaxSpeedMps) {
     Eigen::Vector2d brake = -s_.drift_gain * Eigen::Vector2d(in.velocity.x(), in.velocity.y());
     const double most = kStandardGravity * std::tan(s_.max_tilt_deg / kDegPerRad);
     if (brake.norm() > most) brake *= most / brake.norm();
@@ -364,7 +371,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   cmd_.thrust_fraction.setZero(4);
   for (Eigen::Index j = 0; j < 3; ++j) {
     const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
-    f[j] = cmd_.phase == DescentPhase::kLanded
+    f[j] = cmd_.phase == DescentPhase::kLanded || !std::isfinite(f[j])
                ? 0.0
                : std::clamp(f[j], m_.min_thrust_n[k], m_.max_thrust_n[k]);
     cmd_.thrust_fraction[static_cast<Eigen::Index>(k)] = f[j] / m_.max_thrust_n[k];

@@ -91,13 +91,24 @@ void VehicleModel::sum_rotors() {
   w.noalias() = per_newton_ * thrust;
   rotor_force_ = w.head<3>();
   rotor_torque_ = w.tail<3>();
+  rotor_momentum_.setZero();
+  if (p_.rotor_inertia_kgm2 > 0.0) {
+    for (std::size_t i = 0; i < p_.rotors.size(); ++i) {
+      // A counter-clockwise rotor (seen from above) spins about its thrust
+      // axis; its speed grows as the square root of its thrust fraction.
+      const config::RotorPhysics& r = p_.rotors[i];
+      const double speed = p_.max_rotor_speed_rad_s * std::sqrt(std::max(speed_[i], 0.0));
+      rotor_momentum_ += static_cast<double>(r.spin) * p_.rotor_inertia_kgm2 * speed * r.axis;
+    }
+  }
 }
 
 Wrench VehicleModel::wrench(const BodyState& s, const Environment& env) const {
   Wrench w;
   w.force_world = s.attitude * rotor_force_ + Eigen::Vector3d(0, 0, mass_.mass_kg * kGravity) -
                   p_.drag_linear_n_per_mps * (s.velocity - env.wind_ned) + env.force_world;
-  w.torque_body = rotor_torque_ - p_.drag_rotational_nm_per_radps * s.rates + env.torque_body;
+  w.torque_body = rotor_torque_ - p_.drag_rotational_nm_per_radps * s.rates + env.torque_body -
+                  s.rates.cross(rotor_momentum_);
   return w;
 }
 

@@ -60,6 +60,12 @@ struct VehiclePhysics {
   double thrust_expo = 0.3;
   double drag_linear_n_per_mps = 0.0;         // force against the air-relative velocity
   double drag_rotational_nm_per_radps = 0.0;  // torque against the body rates
+  // Each rotor's spinning inertia (prop and motor bell, kg m^2) and its
+  // speed at full thrust (rad/s; the speed grows as the square root of the
+  // thrust): their angular momentum gives the gyroscopic torque -w x h. 0
+  // (the default) leaves it out, as motormix before it did.
+  double rotor_inertia_kgm2 = 0.0;
+  double max_rotor_speed_rad_s = 750.0;
   BatteryPhysics battery;
   // Empty when the physics is complete; otherwise why the vehicle cannot be
   // simulated (e.g. a mixing table with no `vehicle.rotors`).

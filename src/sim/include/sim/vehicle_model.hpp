@@ -6,7 +6,9 @@
 //   to a thrust fraction through the physical curve e x^2 + (1 - e) x,
 //   scaled with the pack voltage as (1 - e) v + e v^2 of v = V / V_ref; the
 //   rotor follows with a first-order lag (separate up and down time
-//   constants), pushes along its axis and drags against its spin; a 6-DOF
+//   constants), pushes along its axis and drags against its spin (and, with
+//   vehicle.rotor_inertia_kgm2 set, its angular momentum turns the body
+//   gyroscopically, -w x h); a 6-DOF
 //   rigid body (rigid_body.hpp) with linear and rotational drag, gravity, a
 //   flat ground at z = 0 and crash detection;
 // - ground vehicles: each wheel's driver maps centered PWM or duty plus
@@ -106,6 +108,7 @@ class VehicleModel {
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxMotors> per_newton_;
   Eigen::Vector3d rotor_force_ = Eigen::Vector3d::Zero();   // body
   Eigen::Vector3d rotor_torque_ = Eigen::Vector3d::Zero();  // body
+  Eigen::Vector3d rotor_momentum_ = Eigen::Vector3d::Zero();  // body, N m s (gyroscopic)
   double lag_dt_ = 0.0, alpha_up_ = 0.0, alpha_down_ = 0.0;
   bool landed_ = true;
   bool taken_off_ = false;

