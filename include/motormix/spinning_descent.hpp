@@ -56,7 +56,15 @@ struct SpinningDescentModel {
   std::array<Eigen::Vector3d, 4> axis{};
   std::array<Eigen::Vector3d, 4> torque_per_newton{};
   std::array<double, 4> max_thrust_n{};
-  std::array<double, 4> min_thrust_n{};  // what the idle command gives
+  std::array<double, 4> min_thrust_n{};  // the least the controller asks of a motor
+  // The rotors' own angular momentum: each rotor spins about its axis
+  // (spin +1: counter-clockwise seen from above, about +axis) at
+  // max_rotor_speed_rad_s * sqrt(thrust / max thrust), with this inertia.
+  // With one motor stopped it no longer cancels, and its gyroscopic torque
+  // -w x h is as large as the body's own during the spin-up.
+  std::array<double, 4> spin{};
+  double rotor_inertia_kgm2 = 0.0;
+  double max_rotor_speed_rad_s = 0.0;
 };
 
 struct SpinningDescentSettings {
@@ -123,8 +131,9 @@ class SpinningDescent {
   }
   const SpinningDescentSettings& settings() const { return s_; }
 
-  // Takes over with motor `failed` (0-based) stopped.
-  void start(int failed, std::int64_t now_us);
+  // Takes over with motor `failed` (0-based) stopped; `thrust_fraction`:
+  // what each motor was asked for last (for the rotors' momentum).
+  void start(int failed, std::int64_t now_us, const MotorVector& thrust_fraction);
   void stop();
   bool running() const { return cmd_.phase != DescentPhase::kOff; }
   int failed() const { return failed_; }
@@ -149,6 +158,7 @@ class SpinningDescent {
   std::int64_t last_us_ = 0;
   double velocity_integral_ = 0.0;
   double up_force_ = 0.0;  // the collective's vertical force asked for (N)
+  Eigen::Vector3d lagged_n_ = Eigen::Vector3d::Zero();  // working motors' thrust through the lag
   double still_s_ = 0.0;
   DescentCommand cmd_;
 };

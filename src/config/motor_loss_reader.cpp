@@ -50,7 +50,10 @@ SpinningDescentModel model_of(const Config& config) {
     // from the dead one must stop pushing the vehicle over (its idle thrust
     // alone tips a default quad), and a brief stop is the lesser risk.
     m.min_thrust_n[i] = 0.0;
+    m.spin[i] = static_cast<double>(r.spin);
   }
+  m.rotor_inertia_kgm2 = v.rotor_inertia_kgm2;
+  m.max_rotor_speed_rad_s = v.max_rotor_speed_rad_s;
   return m;
 }
 

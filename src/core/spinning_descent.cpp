@@ -80,9 +80,23 @@ Eigen::Vector3d torque_of(const SpinningDescentModel& m, const Layout& l,
   return t;
 }
 
-// What the rotors must supply to hold body rates w: w x Iw + drag.
-Eigen::Vector3d holding_torque(const SpinningDescentModel& m, const Eigen::Vector3d& w) {
-  return w.cross(m.inertia_kgm2.cwiseProduct(w)) + m.rotational_drag * w;
+// The rotors' angular momentum with the working motors at thrusts f.
+Eigen::Vector3d rotor_momentum(const SpinningDescentModel& m, const std::array<int, 3>& working,
+                               const Eigen::Vector3d& f) {
+  Eigen::Vector3d h = Eigen::Vector3d::Zero();
+  if (m.rotor_inertia_kgm2 <= 0.0) return h;
+  for (std::size_t j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(working[j]);
+    const double share = std::max(f[static_cast<Eigen::Index>(j)], 0.0) / m.max_thrust_n[k];
+    h += m.spin[k] * m.rotor_inertia_kgm2 * m.max_rotor_speed_rad_s * std::sqrt(share) * m.axis[k];
+  }
+  return h;
+}
+
+// What the rotors must supply to hold body rates w: w x (Iw + h) + drag.
+Eigen::Vector3d holding_torque(const SpinningDescentModel& m, const Eigen::Vector3d& w,
+                               const Eigen::Vector3d& h) {
+  return w.cross(m.inertia_kgm2.cwiseProduct(w) + h) + m.rotational_drag * w;
 }
 
 // The spin axis, pointing the way the thrust pushes.
@@ -99,7 +113,7 @@ Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin,
   const Eigen::Vector3d w = x.tail<3>();
   const Eigen::Vector3d F = force_of(m, l, f);
   Vector6d r;
-  r.head<3>() = torque_of(m, l, f) - holding_torque(m, w);
+  r.head<3>() = torque_of(m, l, f) - holding_torque(m, w, rotor_momentum(m, l.working, f));
   r[3] = (up_axis(w, F).dot(F) - m.mass_kg * kStandardGravity) / (m.mass_kg * kStandardGravity);
   r[4] = (w.norm() - spin) / spin;
   r[5] = (f[l.neighbours[0]] - f[l.neighbours[1]]) / (m.mass_kg * kStandardGravity);
@@ -260,8 +274,16 @@ SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
   thrust_weight_ = kThrustWeight * arm;
 }
 
-void SpinningDescent::start(int failed, std::int64_t now_us) {
+void SpinningDescent::start(int failed, std::int64_t now_us, const MotorVector& thrust_fraction) {
   failed_ = failed;
+  const SpinEquilibrium& eq = equilibria_[static_cast<std::size_t>(failed)];
+  for (Eigen::Index j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+    const double x = static_cast<Eigen::Index>(k) < thrust_fraction.size()
+                         ? thrust_fraction[static_cast<Eigen::Index>(k)]
+                         : 0.0;
+    lagged_n_[j] = std::isfinite(x) ? std::clamp(x, 0.0, 1.0) * m_.max_thrust_n[k] : 0.0;
+  }
   last_us_ = now_us;
   velocity_integral_ = 0.0;
   up_force_ = 0.0;
@@ -343,7 +365,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   // lag, (1 + T s) for a vector turning at -spin about the axis.
   const double spin = w.dot(axis);
   feedback -= m_.time_constant_s * spin * axis.cross(feedback);
-  const Eigen::Vector3d hold = holding_torque(m_, w);
+  const Eigen::Vector3d hold = holding_torque(m_, w, rotor_momentum(m_, eq.working, lagged_n_));
 
   const Eigen::Vector3d up_body = rot.transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
   const double thrust = collective(in, up_body, dt);
@@ -377,6 +399,9 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
     cmd_.thrust_fraction[static_cast<Eigen::Index>(k)] = f[j] / m_.max_thrust_n[k];
   }
   cmd_.thrust_n = f;
+  // The motors follow with their lag: what they give next cycle.
+  const double alpha = 1.0 - std::exp(-dt / std::max(m_.time_constant_s, 1e-3));
+  lagged_n_ += alpha * (f - lagged_n_);
   return cmd_;
 }
 

@@ -62,7 +62,7 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
     }
     return false;
   }
-  if (!descent_.running()) descent_.start(motor, now_us);
+  if (!descent_.running()) descent_.start(motor, now_us, out.command);
   const AttitudeSample& a = in.attitude->sample();
   DescentInput d;
   if (std::isfinite(a.q[0])) {

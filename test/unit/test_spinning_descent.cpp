@@ -135,6 +135,17 @@ class SpinningDescentTest : public ::testing::Test {
   config::Config config_ = spin_quad("quad_x");
   SpinningDescent descent_{config_.motor_loss->model, config_.motor_loss->settings};
 
+  // Each motor's thrust fraction at the equilibrium (the dead one 0).
+  MotorVector equilibrium_fractions(int failed) const {
+    const SpinEquilibrium& eq = descent_.equilibrium(failed);
+    MotorVector x = MotorVector::Zero(4);
+    for (int j = 0; j < 3; ++j) {
+      const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+      x[static_cast<Eigen::Index>(k)] = eq.thrust_n[j] / config_.motor_loss->model.max_thrust_n[k];
+    }
+    return x;
+  }
+
   // The vehicle exactly at the equilibrium with motor `failed` stopped:
   // spin axis vertical, rates as solved, descending at the set rate.
   DescentInput at_equilibrium(int failed) const {
@@ -149,7 +160,7 @@ class SpinningDescentTest : public ::testing::Test {
 
 TEST_F(SpinningDescentTest, AtTheEquilibriumAsksForTheEquilibriumThrusts) {
   for (int failed = 0; failed < 4; ++failed) {
-    descent_.start(failed, 0);
+    descent_.start(failed, 0, equilibrium_fractions(failed));
     const SpinEquilibrium& eq = descent_.equilibrium(failed);
     const DescentCommand& c = descent_.update(at_equilibrium(failed), 2500);
     EXPECT_EQ(c.phase, DescentPhase::kDescending);
@@ -162,7 +173,7 @@ TEST_F(SpinningDescentTest, AtTheEquilibriumAsksForTheEquilibriumThrusts) {
 }
 
 TEST_F(SpinningDescentTest, TurnsTheSpinAxisBackUp) {
-  descent_.start(1, 0);
+  descent_.start(1, 0, equilibrium_fractions(1));
   DescentInput in = at_equilibrium(1);
   const SpinEquilibrium& eq = descent_.equilibrium(1);
   // The spin axis tipped 10 degrees about north: the torque asked across
@@ -174,7 +185,7 @@ TEST_F(SpinningDescentTest, TurnsTheSpinAxisBackUp) {
 }
 
 TEST_F(SpinningDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
-  descent_.start(2, 0);
+  descent_.start(2, 0, equilibrium_fractions(2));
   const DescentInput good = at_equilibrium(2);
   std::int64_t t = 0;
   for (const double bad : {kSpinNaN, std::numeric_limits<double>::infinity(), 1e9, -1e9}) {
@@ -195,7 +206,7 @@ TEST_F(SpinningDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
 }
 
 TEST_F(SpinningDescentTest, LandsOnlyOnceStillWithLittleThrustAskedFor) {
-  descent_.start(0, 0);
+  descent_.start(0, 0, equilibrium_fractions(0));
   DescentInput in = at_equilibrium(0);
   std::int64_t t = 0;
   // Descending: never landed.
@@ -214,7 +225,7 @@ TEST_F(SpinningDescentTest, LandsOnlyOnceStillWithLittleThrustAskedFor) {
 }
 
 TEST_F(SpinningDescentTest, WithoutVelocityTheThrottleIsTheCollective) {
-  descent_.start(3, 0);
+  descent_.start(3, 0, equilibrium_fractions(3));
   DescentInput in = at_equilibrium(3);
   in.velocity.setConstant(kSpinNaN);
   in.throttle = 0.5;
