@@ -92,6 +92,7 @@ struct SimCommand {
   CommonOptions common;
   std::string scenario = "hover";
   std::vector<std::string> fail;  // MOTOR@SECONDS
+  bool no_scenario_failures = false;  // drop the scenario's own failure events
   bool undetected = false;
   std::uint64_t seed = 1;
   bool json = false;

@@ -132,11 +132,14 @@ int main(int argc, char** argv) {
   add_vehicle(sim_app, sim_cmd.common);
   sim_app->add_option("--scenario", sim_cmd.scenario,
                       "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
-                      "drive) or a YAML file (default hover)");
+                      "drive, spin_landing, spin_landing_gusts) or a YAML file (default hover)");
   sim_app->add_option("--fail", sim_cmd.fail,
                       "fail a motor: MOTOR@SECONDS[:KIND], motor numbered as motormix matrix "
                       "prints it or named; KIND stop (default), half_thrust, intermittent, "
                       "desync or telemetry (repeatable)");
+  sim_app->add_flag("--no-scenario-failures", sim_cmd.no_scenario_failures,
+                    "drop the scenario's own motor failures (motor_out, spin_landing): with "
+                    "--fail, another motor fails instead");
   sim_app->add_flag("--undetected", sim_cmd.undetected,
                     "nothing outside motormix reports failed motors on motor_status: only "
                     "motormix's own detector (failure_detection:) can find them");

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
@@ -146,6 +147,12 @@ int sim(const SimCommand& cmd) {
     config = load_vehicle(cmd.common, "sim");
     if (!config) return kExitUsage;
     scenario = sim::load_scenario(cmd.scenario);
+    if (cmd.no_scenario_failures) {
+      auto& events = scenario->timeline;
+      events.erase(std::remove_if(events.begin(), events.end(),
+                                  [](const sim::ScenarioEvent& e) { return e.fail.has_value(); }),
+                   events.end());
+    }
     if (!config->vehicle_model.incomplete.empty()) throw config::ConfigError(config->vehicle_model.incomplete);
     sim::scenario_config(*config, *scenario);  // the scenario fits the vehicle
   } catch (const config::ConfigError& e) {

@@ -147,6 +147,11 @@ TEST(SpinLanding, QuadXLandsOnEveryMotorFoundByItsOwnDetector) {
                   {"failure_detection.enabled=true"});
 }
 
+TEST(SpinLanding, TeamQuadLandsOnEveryMotorFoundByItsOwnDetector) {
+  expect_landings(kTeamQuad, "spin_landing", kReportedAfterS, true, kAll,
+                  {"failure_detection.enabled=true"});
+}
+
 TEST(SpinLanding, QuadXWithRotorMomentumLandsOnEveryMotorFoundByItsOwnDetector) {
   // The rotors' own angular momentum modelled (a light 10-inch prop and
   // bell): the controller knows it from the same `vehicle:` section. With a

@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""SIM.md's table for the spin landing (docs/motor-loss-landing.md), flown
+with the CLI in lockstep:
+
+  tools/spin_landing_table.py --motormix build-release/motormix [--seeds N] > spin.md
+
+Each row: a quad configuration, a scenario (spin_landing, spin_landing_gusts),
+how the failure became known (reported after the scenario's 100 ms, found by
+motormix's detector) and the rotors' inertia; every motor stopping at 8 s at
+10 m on N seeds. Columns: flights landed (not crashed, touched down no faster
+than 2 m/s), the worst touchdown speed, tilt, spin and drift, and the spin and
+opposite/neighbour thrusts settled before touchdown next to the relaxed-hover
+equilibrium (motor 1's flights, first seed).
+"""
+
+import argparse
+import json
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+
+ROWS = [
+    ("quad_x", "spin_landing", "reported", 0.0),
+    ("quad_x", "spin_landing_gusts", "reported", 0.0),
+    ("quad_x", "spin_landing", "detected", 0.0),
+    ("quad_x", "spin_landing", "reported", 3e-5),
+    ("quad_x", "spin_landing", "detected", 3e-5),
+    ("team_quad", "spin_landing", "reported", 0.0),
+    ("team_quad", "spin_landing_gusts", "reported", 0.0),
+    ("team_quad", "spin_landing", "detected", 0.0),
+]
+
+
+def fly(motormix, config, scenario, known, inertia, motor, seed):
+    args = [motormix, "sim", "--config", f"config/{config}.yaml", "--scenario", scenario,
+            "--seed", str(seed), "--json", "--set", f"vehicle.rotor_inertia_kgm2={inertia}"]
+    if known == "detected":
+        args += ["--undetected", "--set", "failure_detection.enabled=true"]
+    # The scenario stops motor 1; another motor instead.
+    args += ["--no-scenario-failures", "--fail", f"{motor + 1}@8"]
+    out = subprocess.run(args, capture_output=True, text=True)
+    return json.loads(out.stdout)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--motormix", required=True)
+    p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("--jobs", type=int, default=2)
+    a = p.parse_args()
+    jobs = []
+    for row in ROWS:
+        for motor in range(4):
+            for seed in range(1, a.seeds + 1):
+                jobs.append((row, motor, seed))
+    with ThreadPoolExecutor(a.jobs) as pool:
+        results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), jobs))
+    print("| vehicle | scenario | failure | rotor inertia | landed | touchdown max (m/s) "
+          "| tilt max (deg) | spin max (rad/s) | drift max (m) | settled spin / equilibrium (rad/s) "
+          "| settled opposite, neighbours / equilibrium (N) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for row in ROWS:
+        rs = [r for (j, r) in zip(jobs, results) if j[0] == row]
+        landed = [r for r in rs if not r["crashed"] and r.get("touchdown_speed_mps") is not None
+                  and r["touchdown_speed_mps"] <= 2.0]
+        first = next(r for (j, r) in zip(jobs, results) if j[0] == row and j[1] == 0 and j[2] == 1)
+        settled = "n/a"
+        thrusts = "n/a"
+        if "spin" in first and not first["crashed"]:
+            s, e = first["spin"]["settled"], first["spin"]["equilibrium"]
+            settled = f"{s['rate_rad_s']:.1f} / {e['rate_rad_s']:.1f}"
+            # Motor 1 failed: m2 is across from it on both quads' numbering? Name by equilibrium:
+            # the largest equilibrium thrust is the opposite motor.
+            eq = e["thrust_n"]
+            opp = max(range(4), key=lambda i: eq[i])
+            nb = [i for i in range(4) if i != opp and eq[i] > 0]
+            settled_n = s["thrust_n"]
+            thrusts = (f"{settled_n[opp]:.2f}, {sum(settled_n[i] for i in nb) / len(nb):.2f} / "
+                       f"{eq[opp]:.2f}, {sum(eq[i] for i in nb) / len(nb):.2f}")
+
+        def worst(key):
+            vals = [r[key] for r in landed if r.get(key) is not None]
+            return f"{max(vals):.2f}" if vals else "n/a"
+        tilt = max(r["max_thrust_axis_tilt_deg"] for r in rs)
+        spin = max(r["max_spin_rate_rad_s"] for r in rs)
+        print(f"| {row[0]} | {row[1]} | {row[2]} | {row[3]:g} | {len(landed)} of {len(rs)} "
+              f"| {worst('touchdown_speed_mps')} | {tilt:.1f} | {spin:.1f} | {worst('drift_m')} "
+              f"| {settled} | {thrusts} |")
+
+
+if __name__ == "__main__":
+    main()
