@@ -1,7 +1,6 @@
 #include <motormix/spinning_descent.hpp>
 
 #include <Eigen/LU>
-#include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
@@ -229,16 +228,20 @@ Eigen::Vector3d SpinningDescent::allocate(const SpinEquilibrium& eq,
       if (st == 0) ++free;
     }
     if (free > 0) {
-      Eigen::Matrix3d cols = Eigen::Matrix3d::Zero();
+      // Normal equations on the free motors; a held motor's row and column
+      // are the identity (its correction 0). The allocation matrix is
+      // invertible, so any set of its columns is independent and this is
+      // positive definite.
+      Eigen::Matrix3d normal = wa.transpose() * wa;
+      Eigen::Vector3d rhs = wa.transpose() * (wd - wa * f);
       for (Eigen::Index j = 0; j < 3; ++j) {
-        if (state[static_cast<std::size_t>(j)] == 0) cols.col(j) = wa.col(j);
+        if (state[static_cast<std::size_t>(j)] == 0) continue;
+        normal.row(j).setZero();
+        normal.col(j).setZero();
+        normal(j, j) = 1.0;
+        rhs[j] = 0.0;
       }
-      const Eigen::Vector3d rhs = wd - wa * f;
-      // Least-norm solution for the free motors (the others' columns are zero).
-      const Eigen::Vector3d x = cols.completeOrthogonalDecomposition().solve(rhs);
-      for (Eigen::Index j = 0; j < 3; ++j) {
-        if (state[static_cast<std::size_t>(j)] == 0) f[j] = x[j];
-      }
+      f += normal.inverse() * rhs;
     }
     if ((f.array() < lo.array() - 1e-9).any() || (f.array() > hi.array() + 1e-9).any()) continue;
     const double cost = (wa * f - wd).squaredNorm();

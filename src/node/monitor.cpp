@@ -148,6 +148,23 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
       }
     }
   }
+  // The spin landing, while it has something to say.
+  if (st.landing_state != mixer_status_t::LANDING_OFF) {
+    s << "\nlanding   ";
+    const std::string motor = st.landing_motor > 0 ? motor_name(o, st.landing_motor - 1) : "?";
+    switch (st.landing_state) {
+      case mixer_status_t::LANDING_DESCENDING:
+        s << "spinning down without " << motor << ": " << fixed(st.spin_rate, 1)
+          << " rad/s, spin axis " << fixed(st.spin_axis_error_deg, 1) << " deg off";
+        break;
+      case mixer_status_t::LANDING_LANDED:
+        s << "landed without " << motor << ", disarmed";
+        break;
+      default:
+        s << motor << " failed, no fresh attitude: no spin landing";
+        break;
+    }
+  }
   s << "\nauthority";
   for (int a = 0; a < 4; ++a) s << "  " << kAxes[a] << " " << fixed(st.authority[a], 2);
   s << "\n\n";

@@ -18,11 +18,13 @@
 #include <motormix/presets.hpp>
 #include <motormix/prioritized_allocator.hpp>
 #include <motormix/shift_allocator.hpp>
+#include <motormix/spinning_descent.hpp>
 #include <motormix/yaw_yielding_allocator.hpp>
 
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cerrno>
 #include <cstdlib>
 #include <functional>
@@ -207,6 +209,46 @@ TEST(NoHeap, TheFailureDetectorJudgesWithoutAllocating) {
   g_counting = false;
   EXPECT_EQ(g_allocations.load(), 0);
   EXPECT_EQ(detector.detection().failed, 0U);  // reset forgot the declaration
+}
+
+// The spin landing's per-cycle path: the equilibria are solved in the
+// constructor; taking over, every cycle (saturated or not, with and without
+// a velocity) and landing allocate nothing.
+TEST(NoHeap, TheSpinLandingFliesWithoutAllocating) {
+  SpinningDescentModel m;
+  m.mass_kg = 1.2;
+  m.inertia_kgm2 = {0.0202, 0.0202, 0.0398};
+  m.rotational_drag = 0.002;
+  m.rotor_inertia_kgm2 = 3e-5;
+  m.max_rotor_speed_rad_s = 750.0;
+  const double a = 0.25 / std::sqrt(2.0);
+  const double xy[4][2] = {{a, a}, {-a, -a}, {a, -a}, {-a, a}};
+  const double spin[4] = {1, 1, -1, -1};
+  for (std::size_t i = 0; i < 4; ++i) {
+    const Eigen::Vector3d p(xy[i][0], xy[i][1], 0.0), axis(0.0, 0.0, -1.0);
+    m.axis[i] = axis;
+    m.torque_per_newton[i] = p.cross(axis) + spin[i] * 0.016 * -axis;
+    m.max_thrust_n[i] = 5.88;
+    m.spin[i] = spin[i];
+  }
+  SpinningDescent descent(m, SpinningDescentSettings{});
+  ASSERT_TRUE(descent.equilibrium(0).found) << descent.equilibrium(0).why;
+  const MotorVector last = MotorVector::Constant(4, 0.5);
+  g_allocations = 0;
+  g_counting = true;
+  descent.start(0, 0, last);
+  DescentInput in;
+  for (std::int64_t k = 1; k < 4000; ++k) {
+    const double t = static_cast<double>(k) * 0.0025;
+    in.attitude = Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * std::sin(t), Eigen::Vector3d::UnitX()));
+    in.rates = {2.0 * std::cos(t), 1.0, 15.0};
+    in.velocity = k < 2000 ? Eigen::Vector3d(0.1, 0.0, 1.0) : Eigen::Vector3d::Zero();
+    if (k % 500 == 0) in.velocity.setConstant(std::numeric_limits<double>::quiet_NaN());
+    descent.update(in, k * 2500);
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(descent.command().phase, DescentPhase::kLanded);  // on the ground at the end
 }
 
 }  // namespace
