@@ -71,7 +71,7 @@ struct SpinningDescentSettings {
   double spin_rate_rad_s = 20.0;   // equilibrium spin rate (magnitude of the body rates)
   double descent_rate_mps = 1.0;   // vertical speed flown down
   double max_tilt_deg = 8.0;       // largest tilt of the spin axis asked to brake drift
-  double attitude_gain = 10.0;     // 1/s: spin-axis error to rate across it
+  double attitude_gain = 12.0;     // 1/s: spin-axis error to rate across it
   double rate_gain = 30.0;        // 1/s: rate error to angular acceleration
   double velocity_gain = 1.5;      // 1/s: vertical speed error to acceleration
   double velocity_integral = 0.6;  // 1/s^2

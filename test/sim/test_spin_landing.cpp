@@ -33,8 +33,10 @@ constexpr double kReportedAfterS = 0.100;
 // quad's legacy_budget mixer answers the failure more slowly in the time
 // before it is reported, and a 100 ms report tips it past 90 degrees on
 // every motor; 80 ms is the longest report it lands from on every motor and
-// seed. In wind and gusts the quad X lands on at least this many of its 20
-// flights (a gust in the first half second tips it).
+// seed. In wind and gusts the quad X lands all 20 flights, but its worst
+// tilt is 89.5 degrees, half a degree from the crash rule: the test holds it
+// to this many, so a build whose rounding tips one flight over is not red
+// while a real regression is.
 constexpr double kTeamQuadReportedAfterS = 0.080;
 constexpr int kQuadXGustsLandedAtLeast = 18;
 constexpr double kFailAtS = 8.0;  // hovering at 10 m by then
