@@ -196,6 +196,7 @@ void ControlLoop::land(std::int64_t now_us, double ramp) {
     if (previous_state_ == LoopState::kDisarmed) landing_->armed();
     LandingRunner::Inputs in;
     in.flying = ramp >= 1.0 && !motor_test_.running();
+    in.may_start = state == LoopState::kArmed;
     in.failed = result_.failed;
     in.attitude = &attitude_;
     in.throttle = setpoint_.sample().throttle;

@@ -53,10 +53,13 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
                           MixerOutput& out) {
   const int motor = in.flying ? single_motor(in.failed) : -1;
   const bool fresh = in.attitude->fresh(now_us, attitude_timeout_us_);
-  if (motor < 0 || !fresh || (descent_.running() && descent_.failed() != motor)) {
+  // A failsafe (the controller's stream lost) keeps a landing going; it
+  // never starts one: the motors may have stopped on the ground.
+  const bool allowed = descent_.running() ? descent_.failed() == motor : in.may_start;
+  if (motor < 0 || !fresh || !allowed) {
     descent_.stop();
     report_ = LandingReport{};
-    if (motor >= 0) {
+    if (motor >= 0 && !fresh) {  // what keeps it from landing: say so
       report_.state = LandingState::kNoAttitude;
       report_.motor = motor;
     }

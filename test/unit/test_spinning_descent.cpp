@@ -331,6 +331,36 @@ TEST_F(LandingLoopTest, AStaleAttitudeLetsGoAndTwoFailedMotorsAreNotItsCase) {
   EXPECT_EQ(cycle(true, true, 0b0101).landing.state, loop::LandingState::kOff);
 }
 
+TEST_F(LandingLoopTest, AFailsafeKeepsALandingGoingButNeverStartsOne) {
+  cycle(false, true, 0);
+  cycle(true, true, 0);
+  // The controller's stream stops (only attitude and motor_status arrive).
+  const auto quiet = [&](MotorMask failed) -> const loop::CycleResult& {
+    now_ += 2500;
+    utime_ += 2500;
+    loop_.on_motor_status(loop::MotorStatusSample{utime_, 4, failed}, now_, kWall);
+    loop::AttitudeSample a;
+    a.utime = utime_;
+    a.velocity = {0.0, 0.0, 1.0};
+    loop_.on_attitude(a, now_, kWall);
+    return loop_.cycle(now_);
+  };
+  const loop::CycleResult* r = nullptr;
+  for (int k = 0; k < 60; ++k) r = &quiet(0);
+  ASSERT_EQ(r->state, loop::LoopState::kFailsafe);
+  r = &quiet(0b0001);  // a motor reported failed now: no landing, motors stay stopped
+  EXPECT_NE(r->landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(r->mix.output[1], config_.outputs[1].disarmed);
+  // Started while armed, a landing goes on through the failsafe.
+  cycle(false, true, 0);
+  cycle(true, true, 0);
+  EXPECT_EQ(cycle(true, true, 0b0001).landing.state, loop::LandingState::kDescending);
+  for (int k = 0; k < 60; ++k) r = &quiet(0b0001);
+  EXPECT_EQ(r->state, loop::LoopState::kFailsafe);
+  EXPECT_EQ(r->landing.state, loop::LandingState::kDescending);
+  EXPECT_GT(r->mix.output[1], config_.outputs[1].disarmed);
+}
+
 TEST_F(LandingLoopTest, LandedDisarmsAndArmingAgainNeedsADisarmedSetpoint) {
   cycle(false, true, 0);
   cycle(true, true, 0);

@@ -33,8 +33,8 @@
 //   spooled up hands the outputs to the spin landing (landing_runner.hpp)
 //   for as long as a fresh attitude arrives; it keeps flying through a
 //   failsafe that would otherwise keep mixing or disarm (the commands it
-//   would miss are ones it no longer follows), ends when the setpoint
-//   disarms, and disarms the loop itself once landed.
+//   would miss are ones it no longer follows) but never starts in one, ends
+//   when the setpoint disarms, and disarms the loop itself once landed.
 // - What a cycle reports is what is true in that cycle: a cycle that does
 //   not mix (disarmed, failsafe with disarmed outputs, motor test) reports
 //   no saturation and nothing unallocated.

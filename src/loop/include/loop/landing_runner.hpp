@@ -46,7 +46,8 @@ class LandingRunner {
   explicit LandingRunner(const config::Config& config);
 
   struct Inputs {
-    bool flying = false;   // armed (or in a failsafe that still drives the motors), spooled up
+    bool flying = false;     // armed or in a failsafe, spooled up, no motor test
+    bool may_start = false;  // armed: a failsafe may keep a landing going, never start one
     MotorMask failed = 0;  // the failure set in force
     const LatestInput<AttitudeSample>* attitude = nullptr;
     double throttle = 0.0;  // the setpoint's
