@@ -18,16 +18,18 @@
 //     brought onto the equilibrium axis by asking for body rates across it;
 //     the rate about the axis is left alone (yaw is given up);
 //   * the torque across the axis comes from nonlinear dynamic inversion:
-//     I * rate error * gain + w x Iw + drag, the last two being exactly what
-//     holds the equilibrium. The feedback part rotates with the body at the
+//     I * rate error * gain + w x (Iw + h) + drag, the last two being exactly
+//     what holds the equilibrium (h: the rotors' own angular momentum, when
+//     the model has their inertia). The feedback part rotates with the body at the
 //     spin rate, so it is led by the motors' time constant (the first-order
 //     lag inverted for a vector turning at that rate);
 //   * the collective thrust flies the configured descent rate from the
 //     vertical velocity (proportional-integral, tilt compensated); without
 //     a velocity it follows the setpoint's throttle;
 //   * allocation: three motors, three demands (thrust and the two tilting
-//     torques), solved exactly; what does not fit is taken from the torques
-//     before the thrust;
+//     torques), solved exactly; when that leaves a motor's range, the
+//     thrusts inside the ranges closest to the demands (least squares over
+//     the box, the thrust weighted below the torques);
 //   * landing: once the descent has been flown and the vertical speed stays
 //     near zero, the controller says so (the loop then disarms).
 
