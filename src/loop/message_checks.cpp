@@ -116,37 +116,44 @@ Rejection check_esc_telemetry(const EscTelemetrySample& t, int motors,
   return order;
 }
 
+namespace {
+
+// A vector that is all known or all NaN (unknown): none infinite, no half
+// of one, each known component within +-limit. `known`: whether it is.
+template <std::size_t N>
+Rejection known_or_unknown(const std::array<double, N>& v, double limit, bool& known) {
+  std::size_t unknown = 0;
+  for (double c : v) {
+    if (std::isnan(c)) {
+      ++unknown;
+    } else if (!std::isfinite(c)) {
+      return Rejection::kNonFinite;
+    } else if (std::abs(c) > limit) {
+      return Rejection::kOutOfRange;
+    }
+  }
+  known = unknown == 0;
+  return unknown == 0 || unknown == N ? Rejection::kNone : Rejection::kNonFinite;
+}
+
+}  // namespace
+
 Rejection check_attitude(const AttitudeSample& a, std::int64_t last_utime) {
   for (double w : a.rates) {
     if (!std::isfinite(w)) return Rejection::kNonFinite;
     if (std::abs(w) > kMaxBodyRateRadS) return Rejection::kOutOfRange;
   }
-  int unknown = 0;
-  double norm_sq = 0.0;
-  for (double c : a.q) {
-    if (std::isnan(c)) {
-      ++unknown;
-    } else if (!std::isfinite(c)) {
-      return Rejection::kNonFinite;
-    }
-    norm_sq += c * c;
+  bool known = false;
+  Rejection r = known_or_unknown(a.q, 1.0 + kUnitTolerance, known);
+  if (r != Rejection::kNone) return r;
+  if (known) {
+    double norm_sq = 0.0;
+    for (double c : a.q) norm_sq += c * c;
+    if (std::abs(std::sqrt(norm_sq) - 1.0) > kUnitTolerance) return Rejection::kOutOfRange;
   }
-  if (unknown != 0 && unknown != 4) return Rejection::kNonFinite;  // half a quaternion
-  if (unknown == 0 && std::abs(std::sqrt(norm_sq) - 1.0) > kUnitTolerance) {
-    return Rejection::kOutOfRange;
-  }
-  // Velocity: all three known or all NaN, and no faster than any multirotor flies.
-  int unknown_v = 0;
-  for (double v : a.velocity) {
-    if (std::isnan(v)) {
-      ++unknown_v;
-    } else if (!std::isfinite(v)) {
-      return Rejection::kNonFinite;
-    } else if (std::abs(v) > kMaxVelocityMps) {
-      return Rejection::kOutOfRange;
-    }
-  }
-  if (unknown_v != 0 && unknown_v != 3) return Rejection::kNonFinite;
+  // Velocity: no faster than any multirotor flies.
+  r = known_or_unknown(a.velocity, kMaxVelocityMps, known);
+  if (r != Rejection::kNone) return r;
   return check_order(a.utime, last_utime);
 }
 

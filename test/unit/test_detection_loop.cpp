@@ -159,9 +159,22 @@ TEST(DetectionLoop, AttitudeIsReadOnlyForTheRatesSourceAndChecked) {
   EXPECT_EQ(send({1, 0, 0, 0}, {0, 80.0, 0}), Rejection::kOutOfRange);
   EXPECT_EQ(send({kNaN, 0, 0, 0}, {0, 0, 0}), Rejection::kNonFinite);  // half a quaternion
   EXPECT_EQ(send({0.9, 0, 0, 0}, {0, 0, 0}), Rejection::kOutOfRange);  // not unit length
-  EXPECT_EQ(loop.on_attitude(AttitudeSample{utime - 5000, {1, 0, 0, 0}, {0, 0, 0}}, 0, kWall),
+  EXPECT_EQ(send({1.5, 0, 0, 0}, {0, 0, 0}), Rejection::kOutOfRange);
+  EXPECT_EQ(send({kInf, 0, 0, 0}, {0, 0, 0}), Rejection::kNonFinite);
+  EXPECT_EQ(loop.on_attitude(AttitudeSample{utime - 50000, {1, 0, 0, 0}, {0, 0, 0}}, 0, kWall),
             Rejection::kOutOfOrder);
-  EXPECT_EQ(loop.counters().attitude_received, 2);
+  // The velocity: all known or all NaN (the default), none infinite, plausible.
+  const auto with_velocity = [&](std::array<double, 3> v) {
+    AttitudeSample a{utime += 1000, {1, 0, 0, 0}, {0, 0, 0}};
+    a.velocity = v;
+    return loop.on_attitude(a, 0, kWall);
+  };
+  EXPECT_EQ(with_velocity({1.0, -2.0, 0.5}), Rejection::kNone);
+  EXPECT_EQ(with_velocity({kNaN, kNaN, kNaN}), Rejection::kNone);
+  EXPECT_EQ(with_velocity({kNaN, 0.0, 0.0}), Rejection::kNonFinite);  // half a velocity
+  EXPECT_EQ(with_velocity({0.0, kInf, 0.0}), Rejection::kNonFinite);
+  EXPECT_EQ(with_velocity({0.0, 0.0, 400.0}), Rejection::kOutOfRange);
+  EXPECT_EQ(loop.counters().attitude_received, 4);
 }
 
 TEST(DetectionLoop, WithoutTheSectionNothingIsRead) {
