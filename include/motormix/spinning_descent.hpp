@@ -74,7 +74,7 @@ struct SpinningDescentSettings {
   double descent_rate_mps = 1.0;   // vertical speed flown down
   double max_tilt_deg = 8.0;       // largest tilt of the spin axis asked to brake drift
   double attitude_gain = 12.0;     // 1/s: spin-axis error to rate across it
-  double rate_gain = 30.0;        // 1/s: rate error to angular acceleration
+  double rate_gain = 30.0;         // 1/s: rate error to angular acceleration
   double velocity_gain = 1.5;      // 1/s: vertical speed error to acceleration
   double velocity_integral = 0.6;  // 1/s^2
   double drift_gain = 0.4;         // 1/s: horizontal velocity to acceleration asked against it
@@ -86,11 +86,11 @@ struct SpinEquilibrium {
   bool found = false;
   std::string why;  // when not found: what could not be met
   int failed = -1;
-  std::array<int, 3> working{};         // the other motors, in index order
-  Eigen::Vector3d rates = Eigen::Vector3d::Zero();   // rad/s, body
+  std::array<int, 3> working{};                        // the other motors, in index order
+  Eigen::Vector3d rates = Eigen::Vector3d::Zero();     // rad/s, body
   Eigen::Vector3d thrust_n = Eigen::Vector3d::Zero();  // of working[0..2]
-  Eigen::Vector3d up = Eigen::Vector3d::Zero();  // the spin axis, pointing up (body)
-  double axis_tilt_deg = 0.0;  // between the spin axis and the thrust axis
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();        // the spin axis, pointing up (body)
+  double axis_tilt_deg = 0.0;                          // between the spin axis and the thrust axis
 };
 
 // Solves the equilibrium by Newton's method (start-up only).
@@ -107,8 +107,9 @@ const char* to_string(DescentPhase phase);
 
 struct DescentInput {
   Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  // body FRD -> NED
-  Eigen::Vector3d rates = Eigen::Vector3d::Zero();                // rad/s, body
-  Eigen::Vector3d velocity = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());      // m/s NED; NaN: unknown
+  Eigen::Vector3d rates = Eigen::Vector3d::Zero();               // rad/s, body
+  Eigen::Vector3d velocity =
+      Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());  // m/s NED; NaN: unknown
   double throttle = 0.0;  // the setpoint's, 0..1: the collective when the velocity is unknown
 };
 
@@ -117,7 +118,7 @@ struct DescentCommand {
   // Thrust fraction (0..1) per motor; the dead one 0.
   MotorVector thrust_fraction;
   Eigen::Vector3d thrust_n = Eigen::Vector3d::Zero();  // of the working motors
-  double spin_rate_rad_s = 0.0;                      // |rates| measured
+  double spin_rate_rad_s = 0.0;                        // |rates| measured
   double axis_error_deg = 0.0;  // between the spin axis and where it should point
   bool saturated = false;       // a torque demand did not fit
 };

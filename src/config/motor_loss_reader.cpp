@@ -91,7 +91,8 @@ void read_motor_loss(MapReader section, Config& config) {
     }
   }
   if (!why.empty()) {
-    if (mode == "spin_landing") fail(section.path_of("mode"), "spin_landing", "auto or off: " + why);
+    if (mode == "spin_landing")
+      fail(section.path_of("mode"), "spin_landing", "auto or off: " + why);
     config.motor_loss_off = why;
     return;
   }

@@ -25,7 +25,8 @@ constexpr double kMaxDtS = 0.05;
 constexpr double kThrustWeight = 0.3;
 constexpr double kMaxRateRadS = 100.0;  // beyond any gyro: clipped
 constexpr double kMaxSpeedMps = 200.0;  // beyond: taken as unknown
-constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees  // a longer gap is taken as this (a stalled process)
+constexpr double kMinTiltCompensationCos =
+    0.85;  // 32 degrees  // a longer gap is taken as this (a stalled process)
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -66,7 +67,8 @@ Layout layout(const SpinningDescentModel& m, int failed) {
 // Force and torque of the working motors' thrusts f (body).
 Eigen::Vector3d force_of(const SpinningDescentModel& m, const Layout& l, const Eigen::Vector3d& f) {
   Eigen::Vector3d F = Eigen::Vector3d::Zero();
-  for (std::size_t j = 0; j < 3; ++j) F += m.axis[static_cast<std::size_t>(l.working[j])] * f[static_cast<Eigen::Index>(j)];
+  for (std::size_t j = 0; j < 3; ++j)
+    F += m.axis[static_cast<std::size_t>(l.working[j])] * f[static_cast<Eigen::Index>(j)];
   return F;
 }
 
@@ -106,8 +108,7 @@ Eigen::Vector3d up_axis(const Eigen::Vector3d& w, const Eigen::Vector3d& force) 
   return n.dot(force) >= 0.0 ? n : Eigen::Vector3d(-n);
 }
 
-Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin,
-                  const Vector6d& x) {
+Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin, const Vector6d& x) {
   const Eigen::Vector3d f = x.head<3>();
   const Eigen::Vector3d w = x.tail<3>();
   const Eigen::Vector3d F = force_of(m, l, f);
@@ -145,7 +146,8 @@ SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed
   x.head<3>().setConstant(weight / 3.0);
   double yaw = 0.0;
   for (int b : l.neighbours)
-    yaw += m.torque_per_newton[static_cast<std::size_t>(l.working[static_cast<std::size_t>(b)])].z();
+    yaw +=
+        m.torque_per_newton[static_cast<std::size_t>(l.working[static_cast<std::size_t>(b)])].z();
   x.tail<3>() = Eigen::Vector3d(0.0, 0.0, yaw >= 0.0 ? spin_rate : -spin_rate);
   Vector6d r = residual(m, l, spin_rate, x);
   for (int it = 0; it < kNewtonIterations && r.norm() > kNewtonTolerance; ++it) {
@@ -187,9 +189,9 @@ SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed
     if (f > kEquilibriumHeadroom * m.max_thrust_n[k] || f < m.min_thrust_n[k]) {
       why.precision(3);
       why << "with motor " << failed + 1 << " stopped, spinning at " << spin_rate
-          << " rad/s needs motor " << k + 1 << " at " << f << " N, outside "
-          << m.min_thrust_n[k] << ".." << kEquilibriumHeadroom * m.max_thrust_n[k]
-          << " N (its idle to " << kEquilibriumHeadroom * 100 << " % of its thrust)";
+          << " rad/s needs motor " << k + 1 << " at " << f << " N, outside " << m.min_thrust_n[k]
+          << ".." << kEquilibriumHeadroom * m.max_thrust_n[k] << " N (its idle to "
+          << kEquilibriumHeadroom * 100 << " % of its thrust)";
       eq.why = why.str();
       return eq;
     }
@@ -261,7 +263,8 @@ SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
     equilibria_[k] = solve_spin_equilibrium(m_, failed, s_.spin_rate_rad_s);
     Eigen::Matrix3d a;
     for (Eigen::Index j = 0; j < 3; ++j) {
-      const auto motor = static_cast<std::size_t>(equilibria_[k].working[static_cast<std::size_t>(j)]);
+      const auto motor =
+          static_cast<std::size_t>(equilibria_[k].working[static_cast<std::size_t>(j)]);
       a(0, j) = -m_.axis[motor].z();
       a(1, j) = m_.torque_per_newton[motor].x();
       a(2, j) = m_.torque_per_newton[motor].y();
@@ -310,9 +313,8 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
     const double error = in.velocity.z() - s_.descent_rate_mps;  // NED: positive is too fast down
     // The integral learns the thrust model's error while upright only.
     if (-up_body.z() > kMinTiltCompensationCos) {
-      velocity_integral_ =
-          std::clamp(velocity_integral_ + s_.velocity_integral * error * dt,
-                     -0.4 * kStandardGravity, 0.4 * kStandardGravity);
+      velocity_integral_ = std::clamp(velocity_integral_ + s_.velocity_integral * error * dt,
+                                      -0.4 * kStandardGravity, 0.4 * kStandardGravity);
     }
     up_force = m_.mass_kg * (kStandardGravity + s_.velocity_gain * error + velocity_integral_);
     up_force = std::clamp(up_force, 0.3 * weight, 1.6 * weight);

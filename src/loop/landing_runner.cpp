@@ -90,8 +90,9 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
     const OutputChannel& ch = stage.channel(i);
     const double x = OutputStage::linearize(std::clamp(c.thrust_fraction[i], 0.0, 1.0), expo_);
     const double value = esc_min_[k] + x * (esc_max_[k] - esc_min_[k]);
-    out.output[i] = i == motor ? ch.disarmed
-                               : std::clamp(value, std::min(ch.min, ch.max), std::max(ch.min, ch.max));
+    out.output[i] = i == motor
+                        ? ch.disarmed
+                        : std::clamp(value, std::min(ch.min, ch.max), std::max(ch.min, ch.max));
     out.command[i] = i == motor ? 0.0 : c.thrust_fraction[i];
     out.direction[k] = 0;
   }

@@ -89,13 +89,13 @@ void expect_landings(const Vehicle& v, const char* scenario, double reported_aft
         SimOptions o;
         o.seed = static_cast<std::uint64_t>(seed);
         o.undetected = undetected;
-        const SimResult r =
-            run_lockstep(c, config::build_mixer(c), with_failure(scenario, motor, reported_after_s), o);
+        const SimResult r = run_lockstep(c, config::build_mixer(c),
+                                         with_failure(scenario, motor, reported_after_s), o);
         const std::string why = check_landing(r);
-        return why.empty() ? why
-                           : std::string(v.name) + " " + scenario + " motor " +
-                                 std::to_string(motor + 1) + " seed " + std::to_string(seed) +
-                                 ": " + why;
+        return why.empty()
+                   ? why
+                   : std::string(v.name) + " " + scenario + " motor " + std::to_string(motor + 1) +
+                         " seed " + std::to_string(seed) + ": " + why;
       }));
       if (runs.size() % 2 == 0) {  // two at a time: the machines have two cores
         for (auto& f : runs) f.wait();
@@ -116,8 +116,8 @@ void expect_landings(const Vehicle& v, const char* scenario, double reported_aft
   if (landed_at_least == static_cast<int>(runs.size())) {
     EXPECT_EQ(failures, "");
   }
-  std::cout << v.name << " " << scenario << ": " << landed << " of " << runs.size()
-            << " landed\n" << failures;
+  std::cout << v.name << " " << scenario << ": " << landed << " of " << runs.size() << " landed\n"
+            << failures;
 }
 
 constexpr int kAll = 4 * kSeeds;
@@ -130,8 +130,7 @@ TEST(SpinLanding, QuadXLandsOnEveryMotorReportedAfter100Ms) {
 }
 
 TEST(SpinLanding, QuadXInWindAndGusts) {
-  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false,
-                  kQuadXGustsLandedAtLeast);
+  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false, kQuadXGustsLandedAtLeast);
 }
 
 TEST(SpinLanding, TeamQuadLandsOnEveryMotorReportedAfter80Ms) {

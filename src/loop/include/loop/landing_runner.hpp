@@ -25,10 +25,10 @@ namespace motormix::loop {
 
 // What the status reports of the spin landing (mixer_status_t LANDING_*).
 enum class LandingState : std::int8_t {
-  kOff = 0,          // nothing to do (or not configured)
-  kDescending = 1,   // spinning, coming down on three motors
-  kLanded = 2,       // touched down and disarmed (until the next arming)
-  kNoAttitude = 3,   // one motor failed, but no fresh attitude: mixing as before
+  kOff = 0,         // nothing to do (or not configured)
+  kDescending = 1,  // spinning, coming down on three motors
+  kLanded = 2,      // touched down and disarmed (until the next arming)
+  kNoAttitude = 3,  // one motor failed, but no fresh attitude: mixing as before
 };
 
 const char* to_string(LandingState state);
@@ -48,7 +48,7 @@ class LandingRunner {
   struct Inputs {
     bool flying = false;     // armed or in a failsafe, spooled up, no motor test
     bool may_start = false;  // armed: a failsafe may keep a landing going, never start one
-    MotorMask failed = 0;  // the failure set in force
+    MotorMask failed = 0;    // the failure set in force
     const LatestInput<AttitudeSample>* attitude = nullptr;
     double throttle = 0.0;  // the setpoint's
   };
