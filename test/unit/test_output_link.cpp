@@ -1,4 +1,4 @@
-// The serial link to the pulse firmware (firmware/link/motormix_link.c,
+// The serial link to the pulse firmware (src/link/motormix_link.c,
 // the same C both ends compile): frames round-trip; a parser fed 10^5
 // corrupted frames (bit flips, truncation, a wrong CRC, random bytes) never
 // accepts one with other content than what was sent, and counts them; it
@@ -8,7 +8,7 @@
 
 #include "output/kiss_telemetry.hpp"
 
-#include "../firmware/link/motormix_link.h"
+#include "motormix_link.h"
 
 #include <gtest/gtest.h>
 

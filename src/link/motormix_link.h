@@ -1,5 +1,5 @@
 /* The serial link between `motormix output` and the microcontroller that
- * makes the ESC pulses (firmware/). One C99 file for both ends: no heap, no
+ * makes the ESC pulses (the firmware to come). One C99 file for both ends: no heap, no
  * I/O, fixed-size buffers, so the ATmega328P and the host parse the same
  * bytes the same way.
  *
