@@ -43,8 +43,7 @@ SpinningDescentModel model_of(const Config& config) {
   for (std::size_t i = 0; i < 4; ++i) {
     const RotorPhysics& r = v.rotors[i];
     m.axis[i] = r.axis;
-    m.torque_per_newton[i] =
-        r.position_m.cross(r.axis) + static_cast<double>(r.spin) * r.torque_ratio_m * -r.axis;
+    m.torque_per_newton[i] = r.torque_per_newton();
     m.max_thrust_n[i] = r.max_thrust_n;
     // The ESC's floor, not the idle: in the first half second the motor across
     // from the dead one must stop pushing the vehicle over (its idle thrust

@@ -35,8 +35,7 @@ VehicleModel::VehicleModel(const config::Config& config)
     const config::RotorPhysics& r = p_.rotors[i];
     const auto col = static_cast<Eigen::Index>(i);
     per_newton_.block<3, 1>(0, col) = r.axis;
-    per_newton_.block<3, 1>(3, col) =
-        r.position_m.cross(r.axis) + static_cast<double>(r.spin) * r.torque_ratio_m * -r.axis;
+    per_newton_.block<3, 1>(3, col) = r.torque_per_newton();
   }
 }
 

@@ -10,6 +10,8 @@
 
 #include <motormix/geometry.hpp>
 
+#include <Eigen/Geometry>  // cross products
+
 #include <string>
 #include <vector>
 
@@ -21,6 +23,12 @@ struct RotorPhysics {
   Spin spin = Spin::kCcw;
   double max_thrust_n = 0.0;    // at full ESC command and the battery's reference voltage
   double torque_ratio_m = 0.0;  // drag torque per newton of thrust
+
+  // Torque on the body (N m, FRD) per newton of this rotor's thrust: its
+  // moment about the centre of mass and its drag against the spin.
+  Eigen::Vector3d torque_per_newton() const {
+    return position_m.cross(axis) + static_cast<double>(spin) * torque_ratio_m * -axis;
+  }
 };
 
 struct BatteryPhysics {
