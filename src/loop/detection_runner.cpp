@@ -9,16 +9,15 @@ DetectionRunner::DetectionRunner(const config::Config& config)
     : detector_(config.failure_detection->detector),
       min_throttle_(config.failure_detection->min_throttle),
       pole_pairs_(config.failure_detection->motor_poles / 2.0),
-      expo_(config.vehicle_model.thrust_expo),
-      esc_min_(config.vehicle_model.esc_min),
-      esc_max_(config.vehicle_model.esc_max) {
+      curve_{config.vehicle_model.esc_min, config.vehicle_model.esc_max,
+             config.vehicle_model.thrust_expo} {
   // Without a vehicle section's ESC range, the output stage's own.
-  esc_min_.resize(static_cast<std::size_t>(config.motors()));
-  esc_max_.resize(static_cast<std::size_t>(config.motors()));
-  for (std::size_t i = 0; i < config.outputs.size() && i < esc_min_.size(); ++i) {
-    if (!(esc_max_[i] > esc_min_[i])) {
-      esc_min_[i] = config.outputs[i].min;
-      esc_max_[i] = config.outputs[i].max;
+  curve_.min.resize(static_cast<std::size_t>(config.motors()));
+  curve_.max.resize(static_cast<std::size_t>(config.motors()));
+  for (std::size_t i = 0; i < config.outputs.size() && i < curve_.min.size(); ++i) {
+    if (!(curve_.max[i] > curve_.min[i])) {
+      curve_.min[i] = config.outputs[i].min;
+      curve_.max[i] = config.outputs[i].max;
     }
   }
   thrust_.setZero(config.motors());
@@ -40,12 +39,8 @@ void DetectionRunner::on_attitude(const AttitudeSample& sample, std::int64_t now
 const Detection& DetectionRunner::update(const MotorVector& outputs, MotorMask excluded,
                                          bool allowed, std::int64_t now_us) {
   for (Eigen::Index i = 0; i < thrust_.size(); ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const double x =
-        i < outputs.size()
-            ? std::clamp((outputs[i] - esc_min_[k]) / (esc_max_[k] - esc_min_[k]), 0.0, 1.0)
-            : 0.0;
-    thrust_[i] = OutputStage::thrust_of(x, expo_);
+    thrust_[i] =
+        i < outputs.size() ? curve_.thrust_of(static_cast<std::size_t>(i), outputs[i]) : 0.0;
   }
   return detector_.update(thrust_, excluded, allowed, now_us);
 }

@@ -36,9 +36,8 @@ const char* to_string(LandingState state) {
 LandingRunner::LandingRunner(const config::Config& config)
     : descent_(config.motor_loss->model, config.motor_loss->settings),
       attitude_timeout_us_(seconds_to_us(config.motor_loss->attitude_timeout_s)),
-      expo_(config.vehicle_model.thrust_expo),
-      esc_min_(config.vehicle_model.esc_min),
-      esc_max_(config.vehicle_model.esc_max) {}
+      curve_{config.vehicle_model.esc_min, config.vehicle_model.esc_max,
+             config.vehicle_model.thrust_expo} {}
 
 void LandingRunner::disarmed() {
   descent_.stop();
@@ -88,8 +87,7 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
   for (int i = 0; i < stage.outputs(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const OutputChannel& ch = stage.channel(i);
-    const double x = OutputStage::linearize(std::clamp(c.thrust_fraction[i], 0.0, 1.0), expo_);
-    const double value = esc_min_[k] + x * (esc_max_[k] - esc_min_[k]);
+    const double value = curve_.output_of(k, c.thrust_fraction[i]);
     out.output[i] = i == motor
                         ? ch.disarmed
                         : std::clamp(value, std::min(ch.min, ch.max), std::max(ch.min, ch.max));

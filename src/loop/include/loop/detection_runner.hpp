@@ -6,6 +6,7 @@
 // `vehicle:` section's esc_min, esc_max and thrust_expo). When detection is
 // allowed is the loop's call (control_loop.hpp).
 
+#include "loop/esc_curve.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
 
@@ -42,8 +43,7 @@ class DetectionRunner {
   FailureDetector detector_;
   double min_throttle_;
   double pole_pairs_;
-  double expo_;
-  std::vector<double> esc_min_, esc_max_;
+  EscCurve curve_;
   MotorVector thrust_;
 };
 

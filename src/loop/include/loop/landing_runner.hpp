@@ -11,6 +11,7 @@
 // when the attitude goes stale, when another motor fails as well, or when
 // the loop disarms; once it reports the vehicle landed, the loop disarms.
 
+#include "loop/esc_curve.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
 
@@ -65,8 +66,7 @@ class LandingRunner {
  private:
   SpinningDescent descent_;
   std::int64_t attitude_timeout_us_;
-  double expo_;
-  std::vector<double> esc_min_, esc_max_;
+  EscCurve curve_;
   LandingReport report_;
 };
 

@@ -1,0 +1,31 @@
+#pragma once
+// What each motor's ESC makes of an output-stage value, as the vehicle's
+// `vehicle:` section describes it (esc_min, esc_max, thrust_expo): the
+// thrust fraction a value gives (the failure detector's view of the
+// outputs) and the value that gives a thrust fraction (the spin landing's
+// commands). One curve for both, so they cannot disagree.
+
+#include <motormix/output_stage.hpp>
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace motormix::loop {
+
+struct EscCurve {
+  std::vector<double> min, max;  // per motor, in the output unit: thrust 0 and full
+  double expo = 0.0;
+
+  // Thrust fraction (0..1) of output value `output` on motor i.
+  double thrust_of(std::size_t i, double output) const {
+    return OutputStage::thrust_of(std::clamp((output - min[i]) / (max[i] - min[i]), 0.0, 1.0),
+                                  expo);
+  }
+  // Output value that gives thrust fraction `thrust` (clamped to 0..1) on motor i.
+  double output_of(std::size_t i, double thrust) const {
+    return min[i] + OutputStage::linearize(std::clamp(thrust, 0.0, 1.0), expo) * (max[i] - min[i]);
+  }
+};
+
+}  // namespace motormix::loop
