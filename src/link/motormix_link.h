@@ -1,20 +1,28 @@
-/* The serial link between `motormix output` and the microcontroller that
- * makes the ESC pulses (the firmware to come). One C99 file for both ends: no heap, no
- * I/O, fixed-size buffers, so the ATmega328P and the host parse the same
- * bytes the same way.
+/* The serial link between `motormix output` and the pulse firmware on the
+ * microcontroller that makes the ESC pulses (firmware/pulses). One C99 file
+ * for both ends: no heap, no I/O, fixed-size buffers, so the ATmega328P and
+ * the host parse the same bytes the same way.
  *
  * Frame: 0xA5 0x5A, length (of type + sequence + payload), type, sequence,
  * payload, CRC-32 (IEEE 802.3, little-endian) over length..payload.
  * CRC-32 rather than a 16-bit CRC: the firmware must not change a pulse on
  * 10^5 corrupted frames, and a 16-bit check lets one random frame in 65536
- * through.
+ * through. Multi-byte fields are little-endian.
  *
- * Host -> MCU, MM_LINK_PULSES: armed (0/1), count (1..MM_LINK_MAX_CHANNELS),
- * then count pulse widths in microseconds (u16, little-endian). Not armed:
- * every channel gets its disarmed pulse, whatever the widths say.
- * MCU -> host, MM_LINK_REPORT: frames accepted, CRC errors, malformed
- * frames (u32 each), link timeouts, watchdog resets (u16 each), the last
- * accepted sequence number (u8).
+ * Host -> MCU
+ *   MM_LINK_CONFIG: period (us), link timeout (ms), lowest and highest
+ *     armed pulse (us), channel count, then one disarmed pulse (us) per
+ *     channel. The firmware makes no pulse at all until it has one; it takes
+ *     a new one only while its outputs are disarmed.
+ *   MM_LINK_PULSES: armed (0/1), count (must equal the configured count),
+ *     then count pulse widths (us). Not armed: every channel gets its
+ *     disarmed pulse, whatever the widths say.
+ * MCU -> host
+ *   MM_LINK_REPORT: frames accepted, CRC errors, malformed frames (u32
+ *     each), link timeouts, watchdog resets, rejected frames (u16 each: well
+ *     formed but refused: out of sequence, before a configuration, wrong
+ *     count, a configuration while armed), the last accepted sequence number
+ *     and state flags (MM_LINK_FLAG_*).
  */
 #ifndef MOTORMIX_LINK_H
 #define MOTORMIX_LINK_H
@@ -31,12 +39,43 @@ extern "C" {
 #define MM_LINK_MAX_CHANNELS 8u
 #define MM_LINK_PULSES 0x01u
 #define MM_LINK_REPORT 0x02u
-/* Largest length field: a pulses frame with every channel. */
-#define MM_LINK_MAX_BODY (2u + 2u + 2u * MM_LINK_MAX_CHANNELS)
+#define MM_LINK_CONFIG 0x03u
+
+/* Limits both ends hold a configuration to (servo-style ESC pulses at
+ * 40..500 Hz; a pulse ends at least MM_LINK_MIN_LOW_US before the next
+ * period starts). */
+#define MM_LINK_MIN_PERIOD_US 2000u
+#define MM_LINK_MAX_PERIOD_US 25000u
+#define MM_LINK_MIN_PULSE_US 500u
+#define MM_LINK_MAX_PULSE_US 2500u
+#define MM_LINK_MIN_LOW_US 40u
+#define MM_LINK_MIN_TIMEOUT_MS 10u
+#define MM_LINK_MAX_TIMEOUT_MS 1000u
+
+#define MM_LINK_CONFIG_BODY(count) (11u + 2u * (count))
+#define MM_LINK_PULSES_BODY(count) (4u + 2u * (count))
+#define MM_LINK_REPORT_BODY 22u
+/* Largest length field: a configuration with every channel. */
+#define MM_LINK_MAX_BODY MM_LINK_CONFIG_BODY(MM_LINK_MAX_CHANNELS)
 /* Largest frame on the wire: sync, length, body, CRC. */
 #define MM_LINK_MAX_FRAME (2u + 1u + MM_LINK_MAX_BODY + 4u)
 
+/* Report flags. */
+#define MM_LINK_FLAG_CONFIGURED 0x01u /* has a configuration, makes pulses */
+#define MM_LINK_FLAG_ARMED 0x02u      /* the pulses now are armed ones */
+#define MM_LINK_FLAG_TIMED_OUT 0x04u  /* disarmed by its own link watchdog */
+
 uint32_t mm_link_crc32(uint32_t crc, const uint8_t* data, size_t len);
+
+typedef struct {
+  uint8_t sequence;
+  uint16_t period_us;
+  uint16_t link_timeout_ms;
+  uint16_t min_us; /* armed pulses are clamped into [min_us, max_us] */
+  uint16_t max_us;
+  uint8_t count;
+  uint16_t disarmed_us[MM_LINK_MAX_CHANNELS];
+} mm_link_config;
 
 typedef struct {
   uint8_t sequence;
@@ -51,38 +90,69 @@ typedef struct {
   uint32_t malformed;
   uint16_t link_timeouts;
   uint16_t watchdog_resets;
+  uint16_t rejected;
   uint8_t last_sequence;
+  uint8_t flags;
 } mm_link_report;
 
+/* 1 if every field is within the limits above (pulses shorter than the
+ * period by MM_LINK_MIN_LOW_US, min <= max, disarmed pulses in range). */
+int mm_link_config_valid(const mm_link_config* c);
+
 /* Encode into out (at least MM_LINK_MAX_FRAME bytes); the frame's length in
- * bytes, 0 if count is outside 1..MM_LINK_MAX_CHANNELS. */
+ * bytes, 0 if the content cannot be sent (a count outside
+ * 1..MM_LINK_MAX_CHANNELS, an invalid configuration). */
+size_t mm_link_encode_config(const mm_link_config* c, uint8_t* out);
 size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out);
 size_t mm_link_encode_report(const mm_link_report* r, uint8_t sequence, uint8_t* out);
 
+/* What a completed frame held: its type says which member is valid. */
+typedef struct {
+  uint8_t type;
+  union {
+    mm_link_config config;
+    mm_link_pulses pulses;
+    mm_link_report report;
+  } u;
+} mm_link_frame;
+
 /* A byte-at-a-time parser: it finds the sync, checks the length and the
- * CRC, and after anything wrong searches again from the byte after the
- * failed sync, so a truncated or corrupted frame does not take the next
- * good one with it. */
+ * CRC (computed as the bytes arrive), and after anything wrong searches
+ * again from the byte after the failed sync, so a truncated or corrupted
+ * frame does not take the next good one with it. The bytes to search again
+ * wait in a ring, and each mm_link_poll takes one of them: the firmware
+ * polls between reads of its UART, so no search after a failure makes it
+ * miss an incoming byte. */
+#define MM_LINK_PENDING 128u /* a power of two, at least 2 * MM_LINK_MAX_FRAME */
 typedef struct {
   uint8_t state;
   uint8_t length;
   uint8_t have;
+  uint32_t crc; /* running CRC over length..body */
   uint8_t body[MM_LINK_MAX_BODY + 4u];
   uint8_t raw[MM_LINK_MAX_FRAME]; /* every byte since the sync being tried */
   uint8_t raw_len;
-  uint8_t pending[2u * MM_LINK_MAX_FRAME]; /* bytes to search again */
+  uint8_t pending[MM_LINK_PENDING]; /* a ring of bytes to search */
+  uint8_t pending_head;
   uint8_t pending_len;
   uint32_t crc_errors;
-  uint32_t malformed; /* a length out of range, an unknown type, a bad payload */
+  uint32_t malformed; /* a length out of range, an unknown type, a bad payload, a byte
+                         dropped because the ring was full */
 } mm_link_parser;
 
 void mm_link_parser_init(mm_link_parser* p);
 
-/* Feeds one byte. Returns the type of a frame that just completed and
- * passed every check (its decoded content in *pulses or *report, whichever
- * it is; either pointer may be NULL to ignore that type), 0 otherwise. */
-uint8_t mm_link_feed(mm_link_parser* p, uint8_t byte, mm_link_pulses* pulses,
-                     mm_link_report* report);
+/* Queues one received byte (dropped and counted as malformed if the ring is
+ * full). */
+void mm_link_push(mm_link_parser* p, uint8_t byte);
+/* Searches one queued byte. Returns the type of a frame that just completed
+ * and passed every check (its decoded content in *frame), 0 otherwise. */
+uint8_t mm_link_poll(mm_link_parser* p, mm_link_frame* frame);
+static inline uint8_t mm_link_pending(const mm_link_parser* p) { return p->pending_len; }
+
+/* Push, then poll until a frame completes or nothing is queued: the host's
+ * way, where no byte can be missed. */
+uint8_t mm_link_feed(mm_link_parser* p, uint8_t byte, mm_link_frame* frame);
 
 #ifdef __cplusplus
 }

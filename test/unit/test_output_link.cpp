@@ -32,6 +32,26 @@ mm_link_pulses some_pulses(std::uint8_t seq, std::uint8_t count) {
   return p;
 }
 
+// Feeds bytes; the pulses of a PULSES frame that completed on byte i, if any.
+bool feed_pulses(mm_link_parser& parser, std::uint8_t byte, mm_link_pulses& got) {
+  mm_link_frame frame{};
+  if (mm_link_feed(&parser, byte, &frame) != MM_LINK_PULSES) return false;
+  got = frame.u.pulses;
+  return true;
+}
+
+mm_link_config four_channel_config() {
+  mm_link_config c{};
+  c.sequence = 3;
+  c.period_us = 2500;
+  c.link_timeout_ms = 100;
+  c.min_us = 1000;
+  c.max_us = 2000;
+  c.count = 4;
+  for (int i = 0; i < 4; ++i) c.disarmed_us[i] = 1000;
+  return c;
+}
+
 bool same(const mm_link_pulses& a, const mm_link_pulses& b) {
   if (a.sequence != b.sequence || a.armed != b.armed || a.count != b.count) return false;
   for (std::uint8_t i = 0; i < a.count; ++i) {
@@ -54,23 +74,72 @@ TEST(OutputLink, PulsesAndReportsRoundTrip) {
     const std::size_t n = mm_link_encode_pulses(&sent, buf);
     ASSERT_EQ(n, 7u + 4u + 2u * count);
     mm_link_pulses got{};
-    std::uint8_t type = 0;
-    for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], &got, nullptr);
-    EXPECT_EQ(type, MM_LINK_PULSES);
+    bool completed = false;
+    for (std::size_t i = 0; i < n; ++i) completed = feed_pulses(parser, buf[i], got);
+    EXPECT_TRUE(completed);
     EXPECT_TRUE(same(sent, got));
   }
-  mm_link_report r{123456, 7, 8, 9, 1, 200};
-  const std::size_t n = mm_link_encode_report(&r, 5, buf);
-  mm_link_report got{};
+  mm_link_report r{123456, 7, 8, 9, 1, 17, 200, MM_LINK_FLAG_CONFIGURED};
+  std::size_t n = mm_link_encode_report(&r, 5, buf);
+  mm_link_frame got{};
   std::uint8_t type = 0;
-  for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], nullptr, &got);
+  for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], &got);
   EXPECT_EQ(type, MM_LINK_REPORT);
-  EXPECT_EQ(got.frames, 123456U);
-  EXPECT_EQ(got.last_sequence, 200);
+  EXPECT_EQ(got.u.report.frames, 123456U);
+  EXPECT_EQ(got.u.report.rejected, 17);
+  EXPECT_EQ(got.u.report.last_sequence, 200);
+  EXPECT_EQ(got.u.report.flags, MM_LINK_FLAG_CONFIGURED);
+  const mm_link_config c = four_channel_config();
+  n = mm_link_encode_config(&c, buf);
+  ASSERT_EQ(n, 7u + MM_LINK_CONFIG_BODY(4));
+  for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], &got);
+  EXPECT_EQ(type, MM_LINK_CONFIG);
+  EXPECT_EQ(got.u.config.period_us, 2500);
+  EXPECT_EQ(got.u.config.max_us, 2000);
+  EXPECT_EQ(got.u.config.disarmed_us[3], 1000);
   EXPECT_EQ(parser.crc_errors, 0U);
   mm_link_pulses bad = some_pulses(1, 8);
   bad.count = 9;
   EXPECT_EQ(mm_link_encode_pulses(&bad, buf), 0U);  // more channels than a frame carries
+}
+
+TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  const mm_link_config good = four_channel_config();
+  EXPECT_EQ(mm_link_config_valid(&good), 1);
+  auto with = [&](auto change) {
+    mm_link_config c = good;
+    change(c);
+    return c;
+  };
+  const mm_link_config bad[] = {
+      with([](mm_link_config& c) { c.period_us = 1999; }),      // faster than 500 Hz
+      with([](mm_link_config& c) { c.period_us = 25001; }),     // slower than 40 Hz
+      with([](mm_link_config& c) { c.max_us = 2480; }),         // no low time before the next period
+      with([](mm_link_config& c) { c.min_us = 2100; }),         // min above max
+      with([](mm_link_config& c) { c.disarmed_us[2] = 400; }),  // below any servo pulse
+      with([](mm_link_config& c) { c.link_timeout_ms = 5; }),
+      with([](mm_link_config& c) { c.link_timeout_ms = 1001; }),
+      with([](mm_link_config& c) { c.count = 0; }),
+      with([](mm_link_config& c) { c.count = 9; })};
+  for (const mm_link_config& c : bad) {
+    EXPECT_EQ(mm_link_config_valid(&c), 0);
+    EXPECT_EQ(mm_link_encode_config(&c, buf), 0U);
+  }
+  // An invalid one built by hand (right CRC) is counted as malformed.
+  const std::size_t n = mm_link_encode_config(&good, buf);
+  buf[3 + 2] = 0x10;  // the period becomes 0x0110 = 272 us, then the CRC is made right
+  buf[3 + 3] = 0x01;
+  const std::uint32_t crc = mm_link_crc32(0, buf + 2, n - 6);
+  for (int i = 0; i < 4; ++i) buf[n - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+  mm_link_parser parser;
+  mm_link_parser_init(&parser);
+  mm_link_frame got{};
+  std::uint8_t type = 0;
+  for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], &got);
+  EXPECT_EQ(type, 0);
+  EXPECT_EQ(parser.malformed, 1U);
+  EXPECT_EQ(parser.crc_errors, 0U);
 }
 
 TEST(OutputLink, CorruptedFramesNeverChangeAPulseAndAreCounted) {
@@ -106,8 +175,7 @@ TEST(OutputLink, CorruptedFramesNeverChangeAPulseAndAreCounted) {
     }
     mm_link_pulses got{};
     for (std::size_t i = 0; i < n; ++i) {
-      if (mm_link_feed(&parser, buf[i], &got, nullptr) == MM_LINK_PULSES && !same(got, sent) &&
-          !same(got, previous_good)) {
+      if (feed_pulses(parser, buf[i], got) && !same(got, sent) && !same(got, previous_good)) {
         ++accepted_changed;
       }
     }
@@ -116,7 +184,7 @@ TEST(OutputLink, CorruptedFramesNeverChangeAPulseAndAreCounted) {
     const std::size_t m = mm_link_encode_pulses(&next, buf);
     bool found = false;
     for (std::size_t i = 0; i < m; ++i) {
-      if (mm_link_feed(&parser, buf[i], &got, nullptr) != MM_LINK_PULSES) continue;
+      if (!feed_pulses(parser, buf[i], got)) continue;
       if (same(got, next)) {
         found = true;
       } else if (!same(got, sent) && !same(got, previous_good)) {

@@ -1,0 +1,276 @@
+/* motormix pulse firmware for the ATmega328P (Arduino Uno, Nano) at 16 MHz:
+ * servo-style ESC pulses on up to eight pins (D2..D9), set by frames from
+ * `motormix output` over the serial port (250000 baud, src/link), with a
+ * link watchdog of its own and the hardware watchdog.
+ *
+ * Safe states, in order:
+ * - at power-up and after any reset, no pulse at all until the host sends a
+ *   configuration (an ESC without a signal does not start);
+ * - configured, disarmed pulses until a valid, newer PULSES frame says armed;
+ * - when no valid PULSES frame has come for the configured link timeout,
+ *   disarmed pulses again, the first of them starting within the timeout of
+ *   the last frame (the host died, was killed, or the cable came out);
+ * - if the main loop or the pulse interrupt stops, the hardware watchdog
+ *   resets the chip within 60 ms: no pulse at all, as at power-up.
+ * The serial port is polled, not interrupt-driven, so nothing but the pulse
+ * interrupt can delay an edge. */
+#include <avr/eeprom.h>
+#include <avr/interrupt.h>
+#include <avr/io.h>
+#include <avr/wdt.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "motormix_link.h"
+#include "pulse_schedule.h"
+#include "pulse_timing.h"
+
+#if F_CPU != 16000000UL
+#error "the pulse timing is for 16 MHz (Timer1 at clk/8: 2 ticks per microsecond)"
+#endif
+#define BAUD 250000UL
+#define REPORT_EVERY_TICKS 100000UL /* 50 ms */
+
+/* ---- shared with the pulse interrupt (pulse_isr.S) ---- */
+typedef struct {
+  uint8_t port_d;
+  uint8_t port_b;
+  uint16_t next_compare;
+  uint8_t flags;
+} mm_isr_edge;
+mm_isr_edge mm_isr_rise;
+mm_isr_edge mm_isr_active[MM_LINK_MAX_CHANNELS];
+mm_isr_edge* volatile mm_isr_next;
+void mm_isr_period_start(void);
+
+/* ---- the period, owned by the interrupt once it runs ---- */
+static uint16_t g_period_ticks;
+static uint16_t g_rise_at; /* tick of the rise just written */
+static volatile uint8_t g_periods;
+static mm_schedule g_disarmed;
+/* Schedules from PULSES frames, double-buffered: the main loop writes the
+ * one the interrupt is not using, with g_writing set, then names it ready. */
+static mm_schedule g_frame[2];
+static uint8_t g_frame_armed[2];
+static volatile uint8_t g_writing, g_ready, g_current;
+static volatile uint8_t g_link_ok; /* 0: disarmed pulses, whatever the frames said */
+static volatile uint8_t g_out_armed;
+
+/* ---- main loop state ---- */
+static mm_link_config g_config;
+static uint8_t g_configured;
+static mm_link_parser g_parser;
+static mm_link_report g_report;
+static uint8_t g_have_sequence;
+static uint32_t g_now_high, g_deadline, g_next_report;
+static uint16_t g_last_tcnt;
+static uint16_t g_timeout_ticks_high; /* link timeout - one period, in ticks >> 8 */
+static uint8_t g_tx[MM_LINK_MAX_FRAME];
+static uint8_t g_tx_len, g_tx_at, g_report_seq;
+
+/* Reset cause, saved before anything else runs (the watchdog stays on
+ * after a watchdog reset and must be stopped at once). */
+static uint8_t g_mcusr __attribute__((section(".noinit")));
+void early_init(void) __attribute__((naked, used, section(".init3")));
+void early_init(void) {
+  g_mcusr = MCUSR;
+  MCUSR = 0;
+  wdt_disable();
+}
+
+#define WATCHDOG_COUNT_ADDRESS ((uint16_t*)0)
+
+void mm_isr_period_start(void) {
+  g_rise_at = (uint16_t)(g_rise_at + g_period_ticks);
+  ++g_periods;
+  if (!g_writing) g_current = g_ready;
+  const uint8_t armed_frame = g_link_ok && g_frame_armed[g_current];
+  const mm_schedule* s = g_link_ok ? &g_frame[g_current] : &g_disarmed;
+  g_out_armed = armed_frame;
+  const uint16_t start = g_rise_at;
+  for (uint8_t k = 0; k < s->n; ++k) {
+    mm_isr_edge* e = &mm_isr_active[k];
+    e->port_d = s->fall[k].port_d;
+    e->port_b = s->fall[k].port_b;
+    if (k + 1u < s->n) {
+      const mm_fall* next = &s->fall[k + 1u];
+      e->next_compare =
+          (uint16_t)(start + next->at - (next->polled ? 0u : (uint16_t)MM_ENTRY_LEAD_TICKS));
+      e->flags = next->polled ? (uint8_t)(1u << MM_EDGE_NEXT_POLLED) : 0u;
+    } else {
+      e->next_compare = (uint16_t)(start + g_period_ticks - MM_ENTRY_LEAD_TICKS);
+      e->flags = (uint8_t)(1u << MM_EDGE_NEXT_RISE);
+    }
+  }
+  OCR1A = (uint16_t)(start + s->fall[0].at - MM_ENTRY_LEAD_TICKS);
+  /* The interrupt wrote the rise's (meaningless) next compare before
+   * calling here; a match of it in between must not fire the first fall
+   * early. The first fall is at least 500 us away, so no real match is lost. */
+  TIFR1 = _BV(OCF1A);
+  mm_isr_next = &mm_isr_active[0];
+}
+
+/* A 32-bit tick clock from Timer1, extended here: the loop runs far more
+ * often than the timer wraps (32.8 ms). */
+static uint32_t now_ticks(void) {
+  const uint16_t t = TCNT1;
+  if (t < g_last_tcnt) g_now_high += 0x10000UL;
+  g_last_tcnt = t;
+  return g_now_high | t;
+}
+
+static void pins_low(void) {
+  uint8_t d, b;
+  mm_rise_ports(MM_LINK_MAX_CHANNELS, &d, &b);
+  PORTD = (uint8_t)(PORTD & ~d);
+  PORTB = (uint8_t)(PORTB & ~b);
+}
+
+static void stop_pulses(void) {
+  TIMSK1 = 0;
+  TIFR1 = _BV(OCF1A);
+  pins_low();
+}
+
+static void apply_config(const mm_link_config* c) {
+  stop_pulses();
+  g_config = *c;
+  g_period_ticks = (uint16_t)(c->period_us * MM_TICKS_PER_US);
+  /* Disarmed pulses start within the timeout of the last frame: the link
+   * is called lost one period before the timeout. */
+  const uint32_t timeout_ticks = (uint32_t)c->link_timeout_ms * 1000UL * MM_TICKS_PER_US;
+  g_timeout_ticks_high = (uint16_t)((timeout_ticks - g_period_ticks) >> 8);
+  mm_schedule_build(c->disarmed_us, c->count, &g_disarmed);
+  g_frame[0] = g_disarmed;
+  g_frame[1] = g_disarmed;
+  g_frame_armed[0] = g_frame_armed[1] = 0;
+  g_ready = g_current = 0;
+  g_link_ok = 0;
+  g_out_armed = 0;
+  g_have_sequence = 0;
+  mm_rise_ports(c->count, &mm_isr_rise.port_d, &mm_isr_rise.port_b);
+  mm_isr_rise.flags = (uint8_t)(1u << MM_EDGE_RISE);
+  mm_isr_rise.next_compare = 0; /* set by mm_isr_period_start */
+  mm_isr_next = &mm_isr_rise;
+  /* The first rise a little ahead; the interrupt takes it from there. */
+  g_rise_at = (uint16_t)(TCNT1 + 400u - g_period_ticks);
+  OCR1A = (uint16_t)(g_rise_at + g_period_ticks - MM_ENTRY_LEAD_TICKS);
+  TIFR1 = _BV(OCF1A);
+  TIMSK1 = _BV(OCIE1A);
+  g_configured = 1;
+}
+
+static uint8_t same_config(const mm_link_config* a, const mm_link_config* b) {
+  if (a->period_us != b->period_us || a->link_timeout_ms != b->link_timeout_ms ||
+      a->min_us != b->min_us || a->max_us != b->max_us || a->count != b->count)
+    return 0;
+  return memcmp(a->disarmed_us, b->disarmed_us, sizeof a->disarmed_us[0] * a->count) == 0;
+}
+
+static void take_pulses(const mm_link_pulses* p, uint32_t now) {
+  if (!g_configured || p->count != g_config.count ||
+      (g_have_sequence && (int8_t)(p->sequence - g_report.last_sequence) <= 0)) {
+    ++g_report.rejected; /* before a configuration, wrong count, old or repeated */
+    return;
+  }
+  uint16_t width[MM_LINK_MAX_CHANNELS];
+  for (uint8_t k = 0; k < p->count; ++k) {
+    uint16_t w = p->armed ? p->pulse_us[k] : g_config.disarmed_us[k];
+    if (p->armed && w < g_config.min_us) w = g_config.min_us;
+    if (p->armed && w > g_config.max_us) w = g_config.max_us;
+    width[k] = w;
+  }
+  g_writing = 1;
+  const uint8_t w = (uint8_t)(1u - g_current);
+  mm_schedule_build(width, p->count, &g_frame[w]);
+  g_frame_armed[w] = p->armed;
+  g_ready = w;
+  g_writing = 0;
+  g_report.last_sequence = p->sequence;
+  g_have_sequence = 1;
+  ++g_report.frames;
+  g_deadline = now + ((uint32_t)g_timeout_ticks_high << 8);
+  g_link_ok = 1;
+}
+
+static void take_frame(uint8_t type, const mm_link_frame* f, uint32_t now) {
+  if (type == MM_LINK_PULSES) {
+    take_pulses(&f->u.pulses, now);
+  } else if (type == MM_LINK_CONFIG) {
+    if (g_configured && same_config(&f->u.config, &g_config)) return;
+    if (g_configured && g_out_armed) {
+      ++g_report.rejected; /* never while the motors may be turning */
+      return;
+    }
+    apply_config(&f->u.config);
+  }
+}
+
+static void queue_report(void) {
+  g_report.crc_errors = g_parser.crc_errors;
+  g_report.malformed = g_parser.malformed;
+  g_report.flags = (uint8_t)((g_configured ? MM_LINK_FLAG_CONFIGURED : 0u) |
+                             (g_out_armed ? MM_LINK_FLAG_ARMED : 0u) |
+                             (g_configured && !g_link_ok ? MM_LINK_FLAG_TIMED_OUT : 0u));
+  g_tx_len = (uint8_t)mm_link_encode_report(&g_report, g_report_seq++, g_tx);
+  g_tx_at = 0;
+}
+
+int main(void) {
+  uint16_t resets = eeprom_read_word(WATCHDOG_COUNT_ADDRESS);
+  if (resets == 0xFFFFu) resets = 0; /* a fresh EEPROM */
+  if (g_mcusr & _BV(WDRF)) eeprom_update_word(WATCHDOG_COUNT_ADDRESS, ++resets);
+  g_report.watchdog_resets = resets;
+
+  uint8_t d, b;
+  mm_rise_ports(MM_LINK_MAX_CHANNELS, &d, &b);
+  pins_low();
+  DDRD |= d;
+  DDRB |= b;
+
+  UBRR0 = (uint16_t)(F_CPU / (8UL * BAUD) - 1UL);
+  UCSR0A = _BV(U2X0);
+  UCSR0B = _BV(RXEN0) | _BV(TXEN0);
+  UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
+
+  TCCR1A = 0;
+  TCCR1B = _BV(CS11); /* clk/8, normal mode: free-running, compare A drives the edges */
+  mm_link_parser_init(&g_parser);
+  wdt_enable(WDTO_60MS);
+  sei();
+
+  uint8_t seen_periods = g_periods;
+  for (;;) {
+    const uint32_t now = now_ticks();
+    /* A received byte first, else one step of the search: a step takes a
+     * few microseconds, a byte 40, so the UART's two-byte buffer never
+     * overruns, even while the parser searches again after a bad frame. */
+    if (UCSR0A & _BV(RXC0)) {
+      const uint8_t status = UCSR0A;
+      const uint8_t byte = UDR0;
+      if (status & (_BV(FE0) | _BV(DOR0))) ++g_parser.malformed; /* a broken or lost byte */
+      mm_link_push(&g_parser, byte);
+    } else if (mm_link_pending(&g_parser)) {
+      mm_link_frame frame;
+      const uint8_t type = mm_link_poll(&g_parser, &frame);
+      if (type) take_frame(type, &frame, now);
+    }
+    if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
+      g_link_ok = 0;
+      g_have_sequence = 0; /* a host that comes back starts its own count */
+      ++g_report.link_timeouts;
+    }
+    if (g_tx_at < g_tx_len) {
+      if (UCSR0A & _BV(UDRE0)) UDR0 = g_tx[g_tx_at++];
+    } else if ((int32_t)(now - g_next_report) >= 0) {
+      g_next_report = now + REPORT_EVERY_TICKS;
+      queue_report();
+    }
+    /* The watchdog is fed only while the pulse interrupt is alive too. */
+    const uint8_t periods = g_periods;
+    if (!g_configured || periods != seen_periods) {
+      seen_periods = periods;
+      wdt_reset();
+    }
+  }
+}

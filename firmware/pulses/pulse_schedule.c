@@ -1,0 +1,58 @@
+#include "pulse_schedule.h"
+
+void mm_channel_bits(uint8_t channel, uint8_t* port_d_bit, uint8_t* port_b_bit) {
+  *port_d_bit = channel < 6u ? (uint8_t)(1u << (channel + 2u)) : 0u;
+  *port_b_bit = (channel >= 6u && channel < 8u) ? (uint8_t)(1u << (channel - 6u)) : 0u;
+}
+
+void mm_rise_ports(uint8_t count, uint8_t* port_d, uint8_t* port_b) {
+  uint8_t d = 0, b = 0;
+  for (uint8_t k = 0; k < count; ++k) {
+    uint8_t bd, bb;
+    mm_channel_bits(k, &bd, &bb);
+    d |= bd;
+    b |= bb;
+  }
+  *port_d = d;
+  *port_b = b;
+}
+
+void mm_schedule_build(const uint16_t* width_us, uint8_t count, mm_schedule* out) {
+  uint8_t order[MM_LINK_MAX_CHANNELS];
+  if (count > MM_LINK_MAX_CHANNELS) count = MM_LINK_MAX_CHANNELS;
+  for (uint8_t k = 0; k < count; ++k) {
+    /* Insertion sort by width: at most eight. */
+    uint8_t j = k;
+    while (j > 0 && width_us[order[j - 1u]] > width_us[k]) {
+      order[j] = order[j - 1u];
+      --j;
+    }
+    order[j] = k;
+  }
+  uint8_t d, b;
+  mm_rise_ports(count, &d, &b);
+  out->n = 0;
+  uint16_t last_at = 0;
+  uint8_t i = 0;
+  while (i < count) {
+    /* A group: every channel within 1 us of the group's first. */
+    const uint16_t first = width_us[order[i]];
+    uint16_t at = (uint16_t)(first * MM_TICKS_PER_US);
+    while (i < count && width_us[order[i]] <= first + 1u) {
+      if (width_us[order[i]] != first) at = (uint16_t)(first * MM_TICKS_PER_US + 1u);
+      uint8_t bd, bb;
+      mm_channel_bits(order[i], &bd, &bb);
+      d = (uint8_t)(d & ~bd);
+      b = (uint8_t)(b & ~bb);
+      ++i;
+    }
+    /* Groups start at least 2 us apart and sit at most 0.5 us after their
+     * first width, so consecutive edges are at least 3 ticks apart. */
+    mm_fall* f = &out->fall[out->n++];
+    f->at = at;
+    f->port_d = d;
+    f->port_b = b;
+    f->polled = (uint8_t)(out->n > 1u && (uint16_t)(at - last_at) < MM_POLL_GAP_TICKS);
+    last_at = at;
+  }
+}

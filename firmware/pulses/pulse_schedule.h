@@ -1,0 +1,49 @@
+/* Where each channel's pulse falls, as the pulse interrupt needs it: the
+ * falling edges of one period in time order, channels that fall together
+ * in one edge, each edge with the two port values it writes. Pure C99 (no
+ * AVR header), so the host's tests build the same schedules.
+ *
+ * Every channel rises at the period start; channel k is on Arduino pin
+ * D(2+k): PD2..PD7, then PB0 and PB1. Time is Timer1 at clk/8: two ticks per
+ * microsecond at 16 MHz.
+ *
+ * Edges the interrupt cannot leave and re-enter between are waited for
+ * inside it (polled), and edges closer than it can write one after the
+ * other share a tick: two channels exactly 1 us apart fall 0.5 us early and
+ * late respectively. Equal widths always share an edge. */
+#ifndef MOTORMIX_PULSE_SCHEDULE_H
+#define MOTORMIX_PULSE_SCHEDULE_H
+
+#include <stdint.h>
+
+#include "motormix_link.h"
+
+#define MM_TICKS_PER_US 2u
+/* The shortest time between two edges the interrupt's waiting loop writes
+ * one after the other (its loop takes 22 cycles: 3 ticks are 24). */
+#define MM_MIN_GAP_TICKS 3u
+/* Edges closer than this to the one before are waited for inside the
+ * interrupt rather than by leaving it and being called again (leaving and
+ * re-entering takes about 11 us). */
+#define MM_POLL_GAP_TICKS 32u
+
+typedef struct {
+  uint16_t at;    /* ticks after the period start */
+  uint8_t port_d; /* PORTD and PORTB once this edge is written */
+  uint8_t port_b;
+  uint8_t polled; /* 1: waited for inside the interrupt */
+} mm_fall;
+
+typedef struct {
+  uint8_t n;
+  mm_fall fall[MM_LINK_MAX_CHANNELS];
+} mm_schedule;
+
+/* The port bits of channels 0..count-1 (both 0 for a channel past 7). */
+void mm_channel_bits(uint8_t channel, uint8_t* port_d_bit, uint8_t* port_b_bit);
+void mm_rise_ports(uint8_t count, uint8_t* port_d, uint8_t* port_b);
+
+/* The falls for widths in microseconds (count 1..MM_LINK_MAX_CHANNELS). */
+void mm_schedule_build(const uint16_t* width_us, uint8_t count, mm_schedule* out);
+
+#endif /* MOTORMIX_PULSE_SCHEDULE_H */

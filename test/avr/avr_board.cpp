@@ -1,0 +1,152 @@
+#include "avr_board.hpp"
+
+#include <stdexcept>
+
+extern "C" {
+#include <avr_ioport.h>
+#include <avr_uart.h>
+#include <sim_avr.h>
+#include <sim_elf.h>
+#include <sim_irq.h>
+}
+
+namespace motormix::avr {
+namespace {
+
+struct PinParam {
+  AvrBoard* board;
+  int channel;
+};
+
+void pin_changed(avr_irq_t*, std::uint32_t value, void* param) {
+  auto* p = static_cast<PinParam*>(param);
+  p->board->on_pin(p->channel, value != 0);
+}
+
+void uart_out(avr_irq_t*, std::uint32_t value, void* param) {
+  static_cast<AvrBoard*>(param)->on_uart_out(static_cast<std::uint8_t>(value));
+}
+
+void uart_xoff(avr_irq_t*, std::uint32_t, void* param) {
+  static_cast<AvrBoard*>(param)->on_xoff(true);
+}
+void uart_xon(avr_irq_t*, std::uint32_t, void* param) {
+  static_cast<AvrBoard*>(param)->on_xoff(false);
+}
+
+// One parameter block per board and channel, alive as long as the board.
+thread_local std::vector<std::unique_ptr<PinParam>> g_pin_params;
+
+}  // namespace
+
+AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
+    : byte_cycles_(static_cast<std::uint64_t>(kCpuHz * 10.0 / baud)) {
+  elf_firmware_t fw{};
+  if (elf_read_firmware(elf_path.c_str(), &fw) != 0) {
+    throw std::runtime_error("cannot read the firmware " + elf_path);
+  }
+  avr_ = avr_make_mcu_by_name("atmega328p");
+  if (!avr_) throw std::runtime_error("simavr has no atmega328p");
+  avr_init(avr_);
+  avr_load_firmware(avr_, &fw);
+  avr_->frequency = static_cast<std::uint32_t>(kCpuHz);
+  avr_->log = 0;
+
+  // Polled UART: simavr would otherwise sleep on every empty poll, and
+  // print what the firmware sends.
+  std::uint32_t flags = 0;
+  avr_ioctl(avr_, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+  flags &= ~static_cast<std::uint32_t>(AVR_UART_FLAG_POLL_SLEEP | AVR_UART_FLAG_STDIO);
+  avr_ioctl(avr_, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT),
+                          uart_out, this);
+  // simavr's receiver holds a few bytes; past that it says XOFF and drops
+  // what comes, so bytes wait here until XON.
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF),
+                          uart_xoff, this);
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON),
+                          uart_xon, this);
+  uart_in_ = avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+  for (int ch = 0; ch < kChannels; ++ch) {
+    const char port = ch < 6 ? 'D' : 'B';
+    const int bit = ch < 6 ? ch + 2 : ch - 6;
+    g_pin_params.push_back(std::make_unique<PinParam>(PinParam{this, ch}));
+    avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(port), bit), pin_changed,
+                            g_pin_params.back().get());
+  }
+}
+
+AvrBoard::~AvrBoard() {
+  if (avr_) avr_terminate(avr_);
+}
+
+std::uint64_t AvrBoard::cycle() const { return avr_->cycle; }
+
+void AvrBoard::feed_due_bytes() {
+  while (!xoff_ && !rx_.empty() && rx_.front().cycle <= avr_->cycle) {
+    avr_raise_irq(uart_in_, rx_.front().byte);
+    rx_.pop_front();
+  }
+}
+
+void AvrBoard::on_xoff(bool off) {
+  if (off && !xoff_) ++xoffs_;
+  xoff_ = off;
+}
+
+bool AvrBoard::run_until(std::uint64_t cycle) {
+  while (avr_->cycle < cycle) {
+    if (!rx_.empty() && rx_.front().cycle <= avr_->cycle) feed_due_bytes();
+    const std::uint64_t before = avr_->cycle;
+    const int state = avr_run(avr_);
+    if (state == cpu_Done || state == cpu_Crashed) return false;
+    if (avr_->cycle < before) ++resets_;  // not expected: simavr keeps counting
+  }
+  return true;
+}
+
+void AvrBoard::send(const std::uint8_t* bytes, std::size_t n) {
+  std::uint64_t t = std::max<std::uint64_t>(rx_free_at_, avr_->cycle);
+  for (std::size_t i = 0; i < n; ++i) {
+    t += byte_cycles_;  // the byte is in the receiver once its stop bit is
+    rx_.push_back({t, bytes[i]});
+  }
+  rx_free_at_ = t;
+}
+
+std::vector<std::uint8_t> AvrBoard::take_output() {
+  std::vector<std::uint8_t> out;
+  out.swap(tx_);
+  return out;
+}
+
+std::vector<Pulse> AvrBoard::take_pulses() {
+  std::vector<Pulse> out;
+  out.swap(pulses_);
+  return out;
+}
+
+std::vector<PinEdge> AvrBoard::take_edges() {
+  std::vector<PinEdge> out;
+  out.swap(edges_);
+  return out;
+}
+
+void AvrBoard::disable_interrupts() { avr_->sreg[S_I] = 0; }
+
+void AvrBoard::on_pin(int channel, bool high) {
+  if (level_[channel] == high) return;
+  level_[channel] = high;
+  const std::uint64_t now = avr_->cycle;
+  edges_.push_back({now, channel, high});
+  if (high) {
+    rise_[channel] = now;
+  } else if (rise_[channel] != 0) {
+    pulses_.push_back(
+        {channel, rise_[channel], static_cast<double>(now - rise_[channel]) * 1e6 / kCpuHz});
+  }
+}
+
+void AvrBoard::on_uart_out(std::uint8_t byte) { tx_.push_back(byte); }
+
+}  // namespace motormix::avr

@@ -1,0 +1,100 @@
+#pragma once
+// An Arduino Nano in simavr running the motormix pulse firmware
+// (firmware/pulses): the ELF loaded into a simulated ATmega328P at 16 MHz,
+// bytes into its UART at the wire rate, bytes out of it, and every edge of
+// the eight pulse pins (D2..D9) with the cycle it happened on. For the
+// firmware's tests and for the end-to-end bridge (avr_pty_bridge).
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+struct avr_t;
+struct avr_irq_t;
+
+namespace motormix::avr {
+
+constexpr double kCpuHz = 16e6;
+constexpr int kChannels = 8;
+
+struct PinEdge {
+  std::uint64_t cycle;
+  int channel;  // 0..7: D2..D9
+  bool high;
+};
+
+// A pulse as measured on a pin: where it rose, how long it was high.
+struct Pulse {
+  int channel;
+  std::uint64_t rise_cycle;
+  double width_us;
+};
+
+class AvrBoard {
+ public:
+  // Throws std::runtime_error if the ELF cannot be read or simavr lacks
+  // the part.
+  explicit AvrBoard(const std::string& elf_path, unsigned baud = 250000);
+  ~AvrBoard();
+  AvrBoard(const AvrBoard&) = delete;
+  AvrBoard& operator=(const AvrBoard&) = delete;
+
+  // Runs the core until its cycle counter reaches `cycle` (or it stops:
+  // false then).
+  bool run_until(std::uint64_t cycle);
+  bool run_for_us(double us) { return run_until(cycle() + static_cast<std::uint64_t>(us * 16.0)); }
+  std::uint64_t cycle() const;
+  double now_us() const { return static_cast<double>(cycle()) / 16.0; }
+
+  // Bytes to the firmware's RX pin, after those already queued, one per
+  // byte time (10 bits).
+  void send(const std::uint8_t* bytes, std::size_t n);
+  void send(const std::vector<std::uint8_t>& bytes) { send(bytes.data(), bytes.size()); }
+  bool sending() const { return !rx_.empty(); }
+  // Bytes the firmware sent since the last call.
+  std::vector<std::uint8_t> take_output();
+
+  // Pulses completed since the last call, in the order they ended.
+  std::vector<Pulse> take_pulses();
+  // Edges since the last call (every pin change).
+  std::vector<PinEdge> take_edges();
+  bool pin_high(int channel) const { return level_[channel]; }
+
+  // Fault injection: clears the interrupt flag in SREG, as a firmware bug
+  // that left interrupts off would.
+  void disable_interrupts();
+  int resets_seen() const { return resets_; }
+
+  // Callbacks from simavr (public for the C trampolines).
+  void on_pin(int channel, bool high);
+  void on_uart_out(std::uint8_t byte);
+  void on_xoff(bool off);
+  // Times simavr's receiver was full (bytes then wait, as behind RTS).
+  int xoffs() const { return xoffs_; }
+
+ private:
+  struct Pending {
+    std::uint64_t cycle;
+    std::uint8_t byte;
+  };
+  void feed_due_bytes();
+
+  avr_t* avr_ = nullptr;
+  avr_irq_t* uart_in_ = nullptr;
+  bool xoff_ = false;
+  int xoffs_ = 0;
+  std::uint64_t byte_cycles_;
+  std::deque<Pending> rx_;
+  std::uint64_t rx_free_at_ = 0;
+  std::vector<std::uint8_t> tx_;
+  std::vector<PinEdge> edges_;
+  std::vector<Pulse> pulses_;
+  bool level_[kChannels] = {};
+  std::uint64_t rise_[kChannels] = {};
+  int resets_ = 0;
+};
+
+}  // namespace motormix::avr

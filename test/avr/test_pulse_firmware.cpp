@@ -1,0 +1,364 @@
+// The pulse firmware (firmware/pulses) as built for the ATmega328P, run in
+// simavr: pulse widths measured on the emulated pins against what the frames
+// asked for, the link watchdog, the hardware watchdog, the sequence and
+// configuration rules, and a stream of corrupted frames that must never
+// change a pulse. Nothing here depends on the host's speed: time is the
+// simulated chip's cycle counter.
+
+#include "avr_board.hpp"
+#include "motormix_link.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#ifndef MOTORMIX_FIRMWARE_ELF
+#error "MOTORMIX_FIRMWARE_ELF: the firmware under test"
+#endif
+
+namespace motormix::avr {
+namespace {
+
+// The bound for a pulse against the width asked for.
+constexpr double kPulseToleranceUs = 1.0;
+// What the firmware reaches when two channels are not exactly 1 us apart
+// (an edge's timing is fixed to a cycle or two: 0.0625 us each).
+constexpr double kExactToleranceUs = 0.2;
+constexpr double kPeriodUs = 2500.0;  // 400 Hz
+constexpr double kLinkTimeoutMs = 100.0;
+constexpr double kUsPerCycle = 1.0 / 16.0;
+
+class Host {
+ public:
+  Host() : board(MOTORMIX_FIRMWARE_ELF) { board.run_for_us(2000); }  // past the C start-up
+
+  mm_link_config config(std::uint8_t count = 4, std::uint16_t period_us = 2500,
+                        std::uint16_t disarmed = 1000) {
+    mm_link_config c{};
+    c.period_us = period_us;
+    c.link_timeout_ms = static_cast<std::uint16_t>(kLinkTimeoutMs);
+    c.min_us = 1000;
+    c.max_us = 2000;
+    c.count = count;
+    for (int i = 0; i < count; ++i) c.disarmed_us[i] = disarmed;
+    return c;
+  }
+  void send_config(const mm_link_config& c) {
+    mm_link_config copy = c;
+    copy.sequence = seq++;
+    std::uint8_t buf[MM_LINK_MAX_FRAME];
+    const std::size_t n = mm_link_encode_config(&copy, buf);
+    ASSERT_GT(n, 0u);
+    board.send(buf, n);
+  }
+  std::vector<std::uint8_t> pulses_frame(const std::vector<std::uint16_t>& widths, bool armed) {
+    mm_link_pulses p{};
+    p.sequence = seq++;
+    p.armed = armed ? 1 : 0;
+    p.count = static_cast<std::uint8_t>(widths.size());
+    for (std::size_t i = 0; i < widths.size(); ++i) p.pulse_us[i] = widths[i];
+    std::vector<std::uint8_t> buf(MM_LINK_MAX_FRAME);
+    buf.resize(mm_link_encode_pulses(&p, buf.data()));
+    return buf;
+  }
+  void send_pulses(const std::vector<std::uint16_t>& widths, bool armed = true) {
+    board.send(pulses_frame(widths, armed));
+  }
+  // The last report the firmware sent (it sends one every 50 ms).
+  mm_link_report last_report() {
+    for (std::uint8_t b : board.take_output()) {
+      mm_link_frame f{};
+      if (mm_link_feed(&parser, b, &f) == MM_LINK_REPORT) {
+        report = f.u.report;
+        ++reports;
+      }
+    }
+    return report;
+  }
+  // The widths of each channel's last complete pulse.
+  static std::map<int, double> last_widths(const std::vector<Pulse>& pulses) {
+    std::map<int, double> w;
+    for (const Pulse& p : pulses) w[p.channel] = p.width_us;
+    return w;
+  }
+
+  AvrBoard board;
+  std::uint8_t seq = 1;
+  mm_link_parser parser = [] {
+    mm_link_parser p;
+    mm_link_parser_init(&p);
+    return p;
+  }();
+  mm_link_report report{};
+  int reports = 0;
+};
+
+TEST(PulseFirmware, NoPulseBeforeAConfigurationThenDisarmedPulses) {
+  Host h;
+  h.board.run_for_us(30000);
+  EXPECT_TRUE(h.board.take_edges().empty()) << "pulses before any configuration";
+  h.send_config(h.config(4, 2500, 1000));
+  h.board.run_for_us(30000);
+  const std::vector<Pulse> pulses = h.board.take_pulses();
+  ASSERT_GE(pulses.size(), 4u * 10u);
+  for (const Pulse& p : pulses) EXPECT_NEAR(p.width_us, 1000.0, kExactToleranceUs);
+  // 400 Hz: consecutive rises of channel 0 one period apart.
+  std::vector<std::uint64_t> rises;
+  for (const Pulse& p : pulses)
+    if (p.channel == 0) rises.push_back(p.rise_cycle);
+  for (std::size_t i = 1; i < rises.size(); ++i)
+    EXPECT_NEAR(static_cast<double>(rises[i] - rises[i - 1]) * kUsPerCycle, kPeriodUs, 0.1);
+  const mm_link_report r = h.last_report();
+  EXPECT_TRUE(r.flags & MM_LINK_FLAG_CONFIGURED);
+  EXPECT_FALSE(r.flags & MM_LINK_FLAG_ARMED);
+  EXPECT_FALSE(h.board.pin_high(4)) << "a channel past the configured count pulsed";
+}
+
+// Random widths and the cases that stress the interrupt: equal widths,
+// 1, 2 and 3 us apart, a chain of 2 us steps, edges just under and over the
+// interrupt's re-entry gap.
+TEST(PulseFirmware, ArmedPulsesAreTheWidthsAskedForWithinOneMicrosecond) {
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  std::vector<std::vector<std::uint16_t>> sets = {
+      {1000, 1234, 1500, 1987}, {1500, 1500, 1500, 1500}, {1400, 1401, 1402, 1403},
+      {1400, 1402, 1404, 1406}, {1400, 1403, 1406, 1409}, {1400, 1415, 1416, 1431},
+      {1400, 1417, 1434, 1451}, {2000, 1999, 1001, 1000}, {1000, 1000, 2000, 2000}};
+  std::mt19937 rng(37);
+  std::uniform_int_distribution<int> width(1000, 2000), near(0, 40);
+  for (int k = 0; k < 300; ++k) {
+    const int base = width(rng);
+    std::vector<std::uint16_t> s(4);
+    for (auto& w : s)
+      w = static_cast<std::uint16_t>(k % 2 ? width(rng) : std::min(2000, base + near(rng)));
+    sets.push_back(s);
+  }
+  double worst = 0.0, worst_exact = 0.0;
+  for (const auto& s : sets) {
+    h.send_pulses(s);
+    h.board.run_for_us(2 * kPeriodUs);  // the frame's bytes and one period after them
+    h.board.take_pulses();
+    h.board.run_for_us(kPeriodUs);
+    const auto got = Host::last_widths(h.board.take_pulses());
+    ASSERT_EQ(got.size(), 4u);
+    bool one_apart = false;
+    for (std::size_t a = 0; a < 4; ++a)
+      for (std::size_t b = 0; b < 4; ++b) one_apart |= s[a] + 1 == s[b];
+    for (int ch = 0; ch < 4; ++ch) {
+      const double err = std::abs(got.at(ch) - s[ch]);
+      worst = std::max(worst, err);
+      if (!one_apart) worst_exact = std::max(worst_exact, err);
+      EXPECT_LE(err, kPulseToleranceUs) << "channel " << ch << " asked " << s[ch];
+    }
+  }
+  EXPECT_LE(worst_exact, kExactToleranceUs);
+  std::printf(
+      "pulse error: worst %.3f us; %.3f us without channels exactly 1 us apart (%zu sets)\n", worst,
+      worst_exact, sets.size());
+  h.board.run_for_us(60000);  // a report after the last frame
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.frames, sets.size());
+  EXPECT_EQ(r.crc_errors + r.malformed + r.rejected, 0u);
+  EXPECT_TRUE(r.flags & MM_LINK_FLAG_ARMED);
+}
+
+TEST(PulseFirmware, EightChannelsAtFiftyHertz) {
+  Host h;
+  h.send_config(h.config(8, 20000, 1000));
+  h.board.run_for_us(25000);
+  const std::vector<std::uint16_t> s = {1100, 1200, 1300, 1400, 1500, 1600, 1700, 1800};
+  h.send_pulses(s);
+  h.board.run_for_us(45000);
+  h.board.take_pulses();
+  h.board.run_for_us(20000);
+  const auto got = Host::last_widths(h.board.take_pulses());
+  ASSERT_EQ(got.size(), 8u);
+  for (int ch = 0; ch < 8; ++ch) EXPECT_NEAR(got.at(ch), s[ch], kExactToleranceUs) << ch;
+}
+
+TEST(PulseFirmware, LinkWatchdogDisarmsWithinTheTimeoutOfTheLastFrame) {
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  const std::vector<std::uint16_t> armed = {1600, 1650, 1700, 1750};
+  for (int i = 0; i < 40; ++i) {
+    h.send_pulses(armed);
+    h.board.run_for_us(kPeriodUs);
+  }
+  while (h.board.sending()) h.board.run_for_us(10);
+  const std::uint64_t last_frame = h.board.cycle();  // its last byte is in
+  h.board.take_pulses();
+  h.board.run_for_us(150000);
+  std::uint64_t first_disarmed = 0;
+  for (const Pulse& p : h.board.take_pulses()) {
+    if (std::abs(p.width_us - 1000.0) < kExactToleranceUs) {
+      first_disarmed = p.rise_cycle;
+      break;
+    }
+    EXPECT_GT(p.width_us, 1599.0) << "a pulse neither armed nor disarmed";
+  }
+  ASSERT_NE(first_disarmed, 0u) << "no disarmed pulse after the link went quiet";
+  const double after_ms = static_cast<double>(first_disarmed - last_frame) * kUsPerCycle / 1000.0;
+  std::printf("first disarmed pulse %.2f ms after the last frame (timeout %.0f ms)\n", after_ms,
+              kLinkTimeoutMs);
+  EXPECT_LE(after_ms, kLinkTimeoutMs);
+  EXPECT_GE(after_ms, kLinkTimeoutMs - 2 * kPeriodUs / 1000.0) << "disarmed too early";
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.link_timeouts, 1u);
+  EXPECT_TRUE(r.flags & MM_LINK_FLAG_TIMED_OUT);
+  EXPECT_FALSE(r.flags & MM_LINK_FLAG_ARMED);
+  // The link back: armed pulses again from the next frame, any sequence.
+  h.seq = 200;
+  h.send_pulses(armed);
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.take_pulses();
+  h.board.run_for_us(kPeriodUs);
+  EXPECT_NEAR(Host::last_widths(h.board.take_pulses()).at(3), 1750.0, kExactToleranceUs);
+}
+
+TEST(PulseFirmware, OldFramesAndConfigurationsWhileArmedAreRefusedAndCounted) {
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  h.send_pulses({1500, 1500, 1500, 1500});
+  const std::vector<std::uint8_t> replayed = h.pulses_frame({1900, 1900, 1900, 1900}, true);
+  h.send_pulses({1500, 1500, 1500, 1500});
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.send(replayed);  // a valid frame, one sequence number old
+  h.send_config(h.config(4, 2500, 1100));
+  h.board.run_for_us(4 * kPeriodUs);
+  h.board.take_pulses();
+  h.send_pulses({1500, 1500, 1500, 1500});
+  h.board.run_for_us(3 * kPeriodUs);
+  for (const Pulse& p : h.board.take_pulses()) EXPECT_NEAR(p.width_us, 1500.0, kExactToleranceUs);
+  h.board.run_for_us(60000);
+  mm_link_report r = h.last_report();
+  EXPECT_EQ(r.rejected, 2u);  // the old frame and the configuration while armed
+  // Disarmed, the new configuration is taken.
+  h.send_pulses({1500, 1500, 1500, 1500}, false);
+  h.board.run_for_us(3 * kPeriodUs);
+  h.send_config(h.config(4, 2500, 1100));
+  h.board.run_for_us(4 * kPeriodUs);
+  h.board.take_pulses();
+  h.board.run_for_us(3 * kPeriodUs);
+  for (const Pulse& p : h.board.take_pulses()) EXPECT_NEAR(p.width_us, 1100.0, kExactToleranceUs);
+}
+
+TEST(PulseFirmware, HardwareWatchdogResetsAStuckChipToNoPulses) {
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  for (int i = 0; i < 10; ++i) {
+    h.send_pulses({1700, 1700, 1700, 1700});
+    h.board.run_for_us(kPeriodUs);
+  }
+  h.board.take_edges();
+  const std::uint64_t stuck = h.board.cycle();
+  h.board.disable_interrupts();  // the pulse interrupt stops; the main loop runs on
+  h.board.run_for_us(100000);
+  // No edge after the watchdog's 60 ms (+ its oscillator's tolerance), and
+  // every pin low.
+  for (const PinEdge& e : h.board.take_edges()) {
+    const double ms = static_cast<double>(e.cycle - stuck) * kUsPerCycle / 1000.0;
+    EXPECT_TRUE(ms < 80.0 && !e.high) << "edge " << ms << " ms after the chip got stuck";
+  }
+  for (int ch = 0; ch < 4; ++ch) EXPECT_FALSE(h.board.pin_high(ch));
+  // It came back as from power-up: no pulse until configured; the reset counted.
+  h.board.run_for_us(30000);
+  EXPECT_TRUE(h.board.take_edges().empty());
+  h.send_config(h.config());
+  h.board.run_for_us(60000);
+  EXPECT_FALSE(h.board.take_pulses().empty());
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.watchdog_resets, 1u);
+  EXPECT_TRUE(r.flags & MM_LINK_FLAG_CONFIGURED);
+}
+
+// MOTORMIX_AVR_CORRUPT_FRAMES corrupted frames (10^5 by default; fewer under
+// the sanitizers), each of them bit flips, a truncation, a wrong CRC, random
+// bytes behind a sync, or a valid frame replayed; a good frame with the same
+// widths after every fourth keeps the link up. Not one pulse may change.
+TEST(PulseFirmwareCorruption, CorruptedFramesNeverChangeAPulseAndAreCounted) {
+  const char* env = std::getenv("MOTORMIX_AVR_CORRUPT_FRAMES");
+  const int frames = env ? std::atoi(env) : 100000;
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  const std::vector<std::uint16_t> widths = {1300, 1450, 1451, 1800};
+  h.send_pulses(widths);
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.take_pulses();
+  std::mt19937 rng(20261204);
+  int changed = 0, pulses = 0, sent_bad_crc_or_shape = 0, replays = 0;
+  std::vector<std::uint8_t> old = h.pulses_frame(widths, true);
+  for (int k = 0; k < frames; ++k) {
+    std::vector<std::uint16_t> other(4);
+    for (auto& w : other) w = static_cast<std::uint16_t>(1000 + rng() % 1001);
+    std::vector<std::uint8_t> f = h.pulses_frame(other, true);
+    const std::vector<std::uint8_t> intact = f;
+    --h.seq;  // the corrupted frame's number is not used up
+    switch (k % 5) {
+      case 0:
+        // Flips that cancel out leave a valid frame: flip until it differs.
+        do {
+          for (int b = 0, n = 1 + static_cast<int>(rng() % 8); b < n; ++b)
+            f[rng() % f.size()] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+        } while (f == intact);
+        ++sent_bad_crc_or_shape;
+        break;
+      case 1:
+        // Cut short; every frame after it starts with the sync 0xA5, so a
+        // cut before a 0xA5 would be completed, intact, by the next one.
+        do {
+          f.assign(intact.begin(), intact.begin() + 1 + rng() % (intact.size() - 1));
+        } while (intact[f.size()] == MM_LINK_SYNC0);
+        break;
+      case 2:
+        f[f.size() - 1 - rng() % 4] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+        ++sent_bad_crc_or_shape;
+        break;
+      case 3:
+        for (std::size_t i = 2; i < f.size(); ++i) f[i] = static_cast<std::uint8_t>(rng());
+        break;
+      default:
+        f = old;  // captured earlier, valid, out of sequence
+        ++replays;
+        break;
+    }
+    h.board.send(f);
+    if (k % 4 == 3) {
+      old = h.pulses_frame(widths, true);
+      h.board.send(old);
+    }
+    while (h.board.sending()) h.board.run_for_us(200);
+    for (const Pulse& p : h.board.take_pulses()) {
+      ++pulses;
+      if (std::abs(p.width_us - widths[p.channel]) > kPulseToleranceUs) {
+        ++changed;
+        std::printf("after corrupted frame %d: channel %d pulse %.3f us\n", k, p.channel,
+                    p.width_us);
+      }
+    }
+  }
+  h.board.run_for_us(60000);
+  const mm_link_report r = h.last_report();
+  std::printf(
+      "%d corrupted frames: %d pulses measured, %d changed; firmware counted %u CRC "
+      "errors, %u malformed, %u rejected, %u good frames; simavr's receiver full %d times\n",
+      frames, pulses, changed, r.crc_errors, r.malformed, r.rejected, r.frames, h.board.xoffs());
+  EXPECT_EQ(changed, 0);
+  EXPECT_GT(pulses, frames / 2);
+  EXPECT_EQ(r.link_timeouts, 0u);
+  EXPECT_GE(r.crc_errors + r.malformed, static_cast<std::uint32_t>(sent_bad_crc_or_shape * 9 / 10));
+  EXPECT_GE(r.rejected, static_cast<std::uint32_t>(replays));
+}
+
+}  // namespace
+}  // namespace motormix::avr
