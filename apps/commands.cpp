@@ -6,6 +6,7 @@
 #include "node/lcm_node.hpp"
 #include "node/log_replay.hpp"
 #include "node/monitor.hpp"
+#include "output/output_process.hpp"
 
 #include <unistd.h>
 
@@ -21,7 +22,6 @@
 namespace motormix::app {
 
 namespace {
-
 
 bool check_range(const char* name, double value, double lo, double hi) {
   if (std::isfinite(value) && value >= lo && value <= hi) return true;
@@ -42,7 +42,8 @@ std::vector<int> motors_in(MotorMask mask, int motors) {
 
 std::optional<config::Config> load_vehicle(const CommonOptions& common, const char* command) {
   try {
-    if (common.preset.empty()) return config::load_config_file(common.config_path, common.overrides);
+    if (common.preset.empty())
+      return config::load_config_file(common.config_path, common.overrides);
     return config::load_config_text("geometry: {preset: " + common.preset + "}\n",
                                     "preset " + common.preset, common.overrides);
   } catch (const config::ConfigError& e) {
@@ -58,8 +59,8 @@ int run(const RunCommand& cmd) {
     std::cout << "config "
               << (cmd.common.preset.empty() ? cmd.common.config_path
                                             : "of preset " + cmd.common.preset)
-              << " is valid: " << config->motors()
-              << " motors, strategy " << config::to_string(config->strategy) << "\n";
+              << " is valid: " << config->motors() << " motors, strategy "
+              << config::to_string(config->strategy) << "\n";
     if (config->failure_detection) {
       const FailureDetectorSettings& d = config->failure_detection->detector;
       std::cout << "failure detection:";
@@ -83,6 +84,37 @@ int run(const RunCommand& cmd) {
   options.max_cycles = cmd.max_cycles;
   options.timing_report_path = cmd.timing_report;
   return node::run_node(*config, options, std::cerr);
+}
+
+int output(const OutputCommand& cmd) {
+  const auto config = load_vehicle(cmd.common, "output");
+  if (!config) return kExitUsage;
+  if (config->hardware.driver == config::HardwareDriver::kNone) {
+    std::cerr << "motormix output: the configuration has no hardware driver (set hardware.driver: "
+                 "serial or sysfs; docs/wiring-it-to-motors.md)\n";
+    return kExitUsage;
+  }
+  if (cmd.check_only) {
+    const config::Hardware& hw = config->hardware;
+    std::cout << "hardware: " << config::to_string(hw.driver) << ", " << config->motors()
+              << " motors at " << hw.pulse_rate_hz
+              << " Hz, disarmed when motor_pwm_t is older than " << hw.motor_pwm_timeout_s * 1e3
+              << " ms";
+    if (hw.driver == config::HardwareDriver::kSerial) {
+      std::cout << "; " << hw.serial.device << " at " << hw.serial.baud
+                << " baud, the firmware disarms on its own after " << hw.serial.link_timeout_s * 1e3
+                << " ms without a frame";
+    } else {
+      std::cout << "; " << hw.sysfs.root << "/pwmchip" << hw.sysfs.chip;
+    }
+    std::cout << "; " << hw.telemetry.size() << " ESC telemetry wire(s)\n";
+    return kExitOk;
+  }
+  output::OutputOptions options;
+  options.lcm_url = cmd.lcm_url;
+  options.disarm_only = cmd.disarm_only;
+  options.max_run_s = cmd.max_run_s;
+  return output::run_output(*config, options, std::cerr);
 }
 
 int mix(const MixCommand& cmd) {

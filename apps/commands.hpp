@@ -43,6 +43,15 @@ struct RunCommand {
 };
 int run(const RunCommand& cmd);
 
+struct OutputCommand {
+  CommonOptions common;
+  std::string lcm_url;
+  bool check_only = false;
+  bool disarm_only = false;
+  double max_run_s = 0.0;
+};
+int output(const OutputCommand& cmd);
+
 // The configuration `common` names (the file, or the preset's defaults),
 // with its overrides; on error, says so on stderr as "motormix COMMAND: ..."
 // and returns nothing.
@@ -55,7 +64,7 @@ struct MixCommand {
   double pitch = 0.0;
   double yaw = 0.0;
   bool json = false;
-  bool batch = false;  // demands from stdin, one JSON line out per demand
+  bool batch = false;                     // demands from stdin, one JSON line out per demand
   std::optional<double> battery_voltage;  // applied unfiltered, needs a battery section
   std::vector<std::string> failed;        // motor numbers or names, added to mixer.failed_motors
   bool parse_only = false;                // validate everything, then exit 0 without mixing
@@ -91,7 +100,7 @@ int replay(const ReplayCommand& cmd);
 struct SimCommand {
   CommonOptions common;
   std::string scenario = "hover";
-  std::vector<std::string> fail;  // MOTOR@SECONDS
+  std::vector<std::string> fail;      // MOTOR@SECONDS
   bool no_scenario_failures = false;  // drop the scenario's own failure events
   bool undetected = false;
   std::uint64_t seed = 1;
@@ -111,8 +120,8 @@ struct MotorTestCommand {
   std::string motor;  // number as motormix matrix prints it, or name
   double throttle = 0.1;
   double seconds = 2.0;
-  bool sequence = false;  // every motor in turn, in the diagram's numbering
-  double wait_s = 3.0;    // for the mixer's answer
+  bool sequence = false;    // every motor in turn, in the diagram's numbering
+  double wait_s = 3.0;      // for the mixer's answer
   bool parse_only = false;  // resolve the motor, then exit 0 without the bus
 };
 int motor_test(const MotorTestCommand& cmd);

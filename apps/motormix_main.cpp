@@ -28,10 +28,10 @@ int main(int argc, char** argv) {
   const auto add_vehicle = [&vehicles](CLI::App* sub, CommonOptions& common,
                                        const char* config_help = "YAML configuration file",
                                        bool required = true) {
-    auto* config = sub->add_option("--config", common.config_path, config_help)
-                       ->check(CLI::ExistingFile);
-    config->excludes(sub->add_option("--preset", common.preset,
-                                     "a preset vehicle (its defaults; motormix matrix lists them)"));
+    auto* config =
+        sub->add_option("--config", common.config_path, config_help)->check(CLI::ExistingFile);
+    config->excludes(sub->add_option(
+        "--preset", common.preset, "a preset vehicle (its defaults; motormix matrix lists them)"));
     sub->add_option("--set", common.overrides, "override a config value: key.path=value");
     if (required) vehicles.emplace_back(sub, &common);
   };
@@ -40,8 +40,9 @@ int main(int argc, char** argv) {
   // $LCM_DEFAULT_URL, else LCM's own default. Taking the variable here
   // (rather than leaving it to LCM) lets messages name the URL in use.
   const auto add_lcm_url = [](CLI::App* sub, std::string& url, const char* when = "") {
-    sub->add_option("--lcm-url", url,
-                    std::string("LCM URL") + when + " (default: $LCM_DEFAULT_URL, then LCM's default)")
+    sub->add_option(
+           "--lcm-url", url,
+           std::string("LCM URL") + when + " (default: $LCM_DEFAULT_URL, then LCM's default)")
         ->envname("LCM_DEFAULT_URL");
   };
 
@@ -59,6 +60,20 @@ int main(int argc, char** argv) {
                       "at the end of the run, write its loop timing to this file as JSON "
                       "(wake-up lateness and period percentiles, the largest and when, "
                       "overruns, kernel drops, the scheduling granted)");
+
+  OutputCommand output_cmd;
+  CLI::App* output_app = app.add_subcommand(
+      "output", "drive the ESC pins from motor_pwm_t (the hardware: section), with its failsafe");
+  add_vehicle(output_app, output_cmd.common);
+  add_lcm_url(output_app, output_cmd.lcm_url);
+  output_app->add_flag("--check", output_cmd.check_only,
+                       "validate the configuration and its hardware section and exit");
+  output_app->add_flag("--disarm", output_cmd.disarm_only,
+                       "write the disarmed pulses once and exit (for a supervisor's stop hook)");
+  output_app
+      ->add_option("--max-seconds", output_cmd.max_run_s,
+                   "stop by itself after this long, disarmed (0: until a signal)")
+      ->check(CLI::NonNegativeNumber);
 
   MixCommand mix_cmd;
   CLI::App* mix_app = app.add_subcommand(
@@ -226,6 +241,7 @@ int main(int argc, char** argv) {
     return kExitOk;
   }
   if (run_app->parsed()) return run(run_cmd);
+  if (output_app->parsed()) return output(output_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);

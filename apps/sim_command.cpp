@@ -59,8 +59,10 @@ nlohmann::json failures_json(const std::vector<sim::FailureOutcome>& outcomes,
                         {"kind", sim::to_string(o.failure.kind)},
                         {"reported", !undetected && sim::reported_outside(o.failure.kind)}};
     f["detected_at_s"] = o.detected_at_s >= 0 ? nlohmann::json(o.detected_at_s) : nlohmann::json();
-    f["detected_motor"] = o.detected_motor >= 0 ? nlohmann::json(name(o.detected_motor)) : nlohmann::json();
-    f["detected_by"] = o.detected_at_s >= 0 ? nlohmann::json(to_string(o.detected_by)) : nlohmann::json();
+    f["detected_motor"] =
+        o.detected_motor >= 0 ? nlohmann::json(name(o.detected_motor)) : nlohmann::json();
+    f["detected_by"] =
+        o.detected_at_s >= 0 ? nlohmann::json(to_string(o.detected_by)) : nlohmann::json();
     failures.push_back(f);
   }
   return failures;
@@ -85,17 +87,18 @@ void add_spin(nlohmann::json& j, const sim::SimResult& r, const config::Config& 
               const std::vector<sim::FailureOutcome>& outcomes) {
   if (!config.motor_loss || outcomes.empty() || r.settled_thrust_n.empty()) return;
   const int failed = outcomes.front().failure.motor;
-  const SpinEquilibrium eq = solve_spin_equilibrium(
-      config.motor_loss->model, failed, config.motor_loss->settings.spin_rate_rad_s);
+  const SpinEquilibrium eq = solve_spin_equilibrium(config.motor_loss->model, failed,
+                                                    config.motor_loss->settings.spin_rate_rad_s);
   nlohmann::json thrust = nlohmann::json::array();
   for (int i = 0, w = 0; i < config.motors(); ++i) {
     thrust.push_back(i == failed ? 0.0 : eq.thrust_n[w++]);
   }
-  j["spin"] = {{"settled", {{"rate_rad_s", r.settled_spin_rate_rad_s},
-                            {"thrust_n", r.settled_thrust_n}}},
-               {"equilibrium", {{"rate_rad_s", eq.rates.norm()},
-                                {"thrust_n", thrust},
-                                {"axis_tilt_deg", eq.axis_tilt_deg}}}};
+  j["spin"] = {
+      {"settled", {{"rate_rad_s", r.settled_spin_rate_rad_s}, {"thrust_n", r.settled_thrust_n}}},
+      {"equilibrium",
+       {{"rate_rad_s", eq.rates.norm()},
+        {"thrust_n", thrust},
+        {"axis_tilt_deg", eq.axis_tilt_deg}}}};
 }
 
 nlohmann::json to_json(const sim::SimResult& r, bool wheeled) {
@@ -153,7 +156,8 @@ int sim(const SimCommand& cmd) {
                                   [](const sim::ScenarioEvent& e) { return e.fail.has_value(); }),
                    events.end());
     }
-    if (!config->vehicle_model.incomplete.empty()) throw config::ConfigError(config->vehicle_model.incomplete);
+    if (!config->vehicle_model.incomplete.empty())
+      throw config::ConfigError(config->vehicle_model.incomplete);
     sim::scenario_config(*config, *scenario);  // the scenario fits the vehicle
   } catch (const config::ConfigError& e) {
     std::cerr << "motormix sim: " << e.what() << "\n";
@@ -167,8 +171,8 @@ int sim(const SimCommand& cmd) {
     sim::MotorFailure failure;
     if (!parse_failure(f, *config, failure)) {
       std::cerr << "motormix sim: --fail " << f << ": expected MOTOR@SECONDS[:KIND] with MOTOR 1.."
-                << config->motors() << " or a motor name and KIND one of "
-                << sim::kFailureKindNames << "\n";
+                << config->motors() << " or a motor name and KIND one of " << sim::kFailureKindNames
+                << "\n";
       return kExitUsage;
     }
     options.failures.push_back(failure);

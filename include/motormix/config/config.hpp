@@ -5,6 +5,7 @@
 
 #include <motormix/battery_compensation.hpp>
 #include <motormix/config/failure_detection.hpp>
+#include <motormix/config/hardware.hpp>
 #include <motormix/config/motor_loss.hpp>
 #include <motormix/config/vehicle_physics.hpp>
 #include <motormix/geometry.hpp>
@@ -123,6 +124,8 @@ struct Config {
   // (`motor_loss:`); otherwise motor_loss_off says why not.
   std::optional<MotorLoss> motor_loss;
   std::string motor_loss_off;
+  // The `hardware:` section: what `motormix output` drives.
+  Hardware hardware;
   std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }

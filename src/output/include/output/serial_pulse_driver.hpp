@@ -1,0 +1,55 @@
+#pragma once
+// The pulse firmware (firmware/pulses) behind a serial port: a CONFIG frame
+// at start, again whenever a report says the chip has none (it was reset)
+// and once a second; one PULSES frame per write; the firmware's reports
+// read back.
+
+#include "output/pulse_driver.hpp"
+
+#include "motormix_link.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace motormix::output {
+
+struct SerialPulseSettings {
+  double period_us = 2500.0;
+  double link_timeout_ms = 100.0;
+  double min_us = 1000.0;  // the firmware clamps armed pulses into [min_us, max_us] too
+  double max_us = 2000.0;
+  std::vector<double> disarmed_us;  // one per motor
+};
+
+class SerialPulseDriver : public PulseDriver {
+ public:
+  // Takes ownership of fd (an open, non-blocking serial port or pty).
+  // Throws std::invalid_argument if the settings make no valid CONFIG.
+  SerialPulseDriver(int fd, const SerialPulseSettings& settings);
+  ~SerialPulseDriver() override;
+
+  bool write(const double* pulse_us, int count, bool armed) override;
+  bool service(double now_s) override;
+  std::string describe() const override;
+
+  bool have_report() const { return reports_ > 0; }
+  const mm_link_report& report() const { return report_; }
+  std::uint64_t frames_sent() const { return frames_sent_; }
+  std::uint64_t write_failures() const { return write_failures_; }
+
+ private:
+  bool send(const std::uint8_t* bytes, std::size_t n);
+  void send_config();
+
+  int fd_;
+  mm_link_config config_{};
+  mm_link_parser parser_{};
+  mm_link_report report_{};
+  std::uint64_t reports_ = 0;
+  std::uint8_t sequence_ = 1;
+  double next_config_s_ = 0.0;
+  bool resend_config_ = true;
+  std::uint64_t frames_sent_ = 0, write_failures_ = 0;
+};
+
+}  // namespace motormix::output

@@ -1,0 +1,288 @@
+#include "output/output_process.hpp"
+
+#include "output/kiss_telemetry.hpp"
+#include "output/output_gate.hpp"
+#include "output/serial_port.hpp"
+#include "output/serial_pulse_driver.hpp"
+#include "output/sysfs_pwm_driver.hpp"
+
+#include <motormix/esc_telemetry_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <poll.h>
+#include <sys/signalfd.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <thread>
+#include <vector>
+
+namespace motormix::output {
+
+namespace {
+
+constexpr double kTickS = 0.005;       // the gate is checked this often without input
+constexpr double kKeepAliveS = 0.020;  // and the hardware written at least this often
+constexpr double kStatusEveryS = 5.0;
+
+double monotonic_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::vector<PulseRange> ranges_of(const config::Config& config) {
+  std::vector<PulseRange> out;
+  for (const OutputChannel& ch : config.outputs) {
+    out.push_back({std::min(ch.min, ch.max), std::max(ch.min, ch.max), ch.disarmed});
+  }
+  return out;
+}
+
+std::unique_ptr<PulseDriver> make_driver(const config::Config& config) {
+  const config::Hardware& hw = config.hardware;
+  const double period_us = 1e6 / hw.pulse_rate_hz;
+  std::vector<double> disarmed;
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (const PulseRange& r : ranges_of(config)) {
+    disarmed.push_back(r.disarmed);
+    lo = std::min(lo, r.low);
+    hi = std::max(hi, r.high);
+  }
+  if (hw.driver == config::HardwareDriver::kSerial) {
+    SerialPulseSettings s;
+    s.period_us = period_us;
+    s.link_timeout_ms = hw.serial.link_timeout_s * 1e3;
+    s.min_us = lo;
+    s.max_us = hi;
+    s.disarmed_us = disarmed;
+    return std::make_unique<SerialPulseDriver>(open_serial_port(hw.serial.device, hw.serial.baud),
+                                               s);
+  }
+  return std::make_unique<SysfsPwmDriver>(hw.sysfs, period_us, disarmed);
+}
+
+struct TelemetryWire {
+  config::TelemetryPort port;
+  int fd = -1;
+  KissTelemetryParser parser;
+};
+
+class OutputNode {
+ public:
+  OutputNode(const config::Config& config, lcm::LCM& lcm, PulseDriver& driver, std::ostream& log)
+      : config_(config),
+        lcm_(lcm),
+        driver_(driver),
+        log_(log),
+        gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s),
+        values_(static_cast<std::size_t>(config.motors())) {}
+
+  void subscribe() { lcm_.subscribe(config_.channels.motor_pwm, &OutputNode::on_motor_pwm, this); }
+
+  // Decides and writes when something changed or the hardware is due.
+  void step(double now, bool message) {
+    const GateState state = gate_.decide(now, values_.data());
+    if (message || state != state_ || now - last_write_s_ >= kKeepAliveS) {
+      if (!driver_.write(values_.data(), gate_.outputs(), state == GateState::kArmed))
+        ++write_failures_;
+      last_write_s_ = now;
+    }
+    if (state != state_) {
+      log_ << "motormix output: " << to_string(state_) << " -> " << to_string(state) << std::endl;
+      state_ = state;
+    }
+  }
+
+  void write_disarmed() {
+    for (int i = 0; i < gate_.outputs(); ++i)
+      values_[static_cast<std::size_t>(i)] = gate_.range(i).disarmed;
+    driver_.write(values_.data(), gate_.outputs(), false);
+  }
+
+  void status_line() {
+    const GateCounters& c = gate_.counters();
+    log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
+         << " taken, " << undecodable_ << " undecodable, " << c.wrong_size << " wrong size, "
+         << c.not_finite << " not finite, " << c.clamped << " values clamped, " << c.stale_events
+         << " times stale; " << driver_.describe() << std::endl;
+  }
+
+  void publish_telemetry(const TelemetryWire& wire, const KissReading& r) {
+    motormix::esc_telemetry_t msg;
+    msg.utime = wall_us();
+    msg.count = 1;
+    msg.motor = {static_cast<std::int8_t>(wire.port.motor + 1)};
+    msg.rpm = {std::numeric_limits<float>::quiet_NaN()};  // the frame carries eRPM only
+    msg.erpm = {static_cast<float>(r.erpm)};
+    msg.current_a = {static_cast<float>(r.current_a)};
+    msg.voltage_v = {static_cast<float>(r.voltage_v)};
+    msg.temperature_c = {static_cast<float>(r.temperature_c)};
+    msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
+    lcm_.publish(config_.channels.esc_telemetry, &msg);
+  }
+
+ private:
+  void on_motor_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    // Nothing here throws: a message that does not decode is counted.
+    motormix::motor_pwm_t msg;
+    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || msg.num_motors < 0 ||
+        msg.pwm.size() != static_cast<std::size_t>(msg.num_motors)) {
+      ++undecodable_;
+      return;
+    }
+    const double now = monotonic_s();
+    if (gate_.accept(msg.pwm.data(), msg.num_motors, msg.armed, now)) step(now, true);
+  }
+
+  const config::Config& config_;
+  lcm::LCM& lcm_;
+  PulseDriver& driver_;
+  std::ostream& log_;
+  OutputGate gate_;
+  std::vector<double> values_;
+  GateState state_ = GateState::kStarting;
+  double last_write_s_ = -1e9;
+  std::uint64_t undecodable_ = 0, write_failures_ = 0;
+};
+
+}  // namespace
+
+int run_output(const config::Config& config, const OutputOptions& options, std::ostream& log) {
+  if (config.hardware.driver == config::HardwareDriver::kNone) {
+    log << "motormix output: the configuration has no hardware driver (hardware.driver: none); "
+           "see docs/wiring-it-to-motors.md"
+        << std::endl;
+    return 1;
+  }
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
+  if (sigprocmask(SIG_BLOCK, &signals, nullptr) != 0) {
+    log << "motormix output: cannot block signals: " << std::strerror(errno) << std::endl;
+    return 1;
+  }
+  std::unique_ptr<PulseDriver> driver;
+  std::vector<TelemetryWire> wires;
+  try {
+    driver = make_driver(config);  // disarmed pulses from here on
+    for (const config::TelemetryPort& p : config.hardware.telemetry) {
+      TelemetryWire w;
+      w.port = p;
+      w.fd = open_serial_port(p.device, p.baud);
+      wires.push_back(std::move(w));
+    }
+  } catch (const std::exception& e) {
+    log << "motormix output: " << e.what() << std::endl;
+    return 1;
+  }
+  const auto close_wires = [&] {
+    for (TelemetryWire& w : wires) ::close(w.fd);
+  };
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) {
+    log << "motormix output: cannot open LCM; see docs/troubleshooting.md" << std::endl;
+    close_wires();
+    return 1;
+  }
+  OutputNode node(config, lcm, *driver, log);
+  node.write_disarmed();
+  log << "motormix output: " << config::to_string(config.hardware.driver) << " driver, "
+      << config.motors() << " motors at " << config.hardware.pulse_rate_hz << " Hz; disarmed until "
+      << config.channels.motor_pwm << " says armed (stale after "
+      << config.hardware.motor_pwm_timeout_s * 1e3 << " ms)" << std::endl;
+  if (options.disarm_only) {
+    // Twice, a period apart, so a frame lost on the wire does not matter.
+    driver->service(monotonic_s());
+    std::this_thread::sleep_for(std::chrono::duration<double>(2.0 / config.hardware.pulse_rate_hz));
+    node.write_disarmed();
+    close_wires();
+    return 0;
+  }
+  node.subscribe();
+
+  const int signal_fd = signalfd(-1, &signals, SFD_CLOEXEC);
+  const int timer_fd = timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
+  itimerspec spec{};
+  spec.it_interval.tv_nsec = static_cast<long>(kTickS * 1e9);
+  spec.it_value.tv_nsec = static_cast<long>(kTickS * 1e9);
+  if (signal_fd < 0 || timer_fd < 0 || timerfd_settime(timer_fd, 0, &spec, nullptr) != 0) {
+    log << "motormix output: cannot create the timer or signal descriptor: " << std::strerror(errno)
+        << std::endl;
+    close_wires();
+    return 1;
+  }
+  std::vector<pollfd> fds = {
+      {lcm.getFileno(), POLLIN, 0}, {timer_fd, POLLIN, 0}, {signal_fd, POLLIN, 0}};
+  for (const TelemetryWire& w : wires) fds.push_back({w.fd, POLLIN, 0});
+  const double start = monotonic_s();
+  double next_status = start + kStatusEveryS;
+  int code = 0;
+  while (true) {
+    if (poll(fds.data(), fds.size(), -1) < 0) {
+      if (errno == EINTR) continue;
+      log << "motormix output: poll failed: " << std::strerror(errno) << std::endl;
+      code = 1;
+      break;
+    }
+    if (fds[2].revents & POLLIN) {
+      signalfd_siginfo info{};
+      [[maybe_unused]] const ssize_t got = read(signal_fd, &info, sizeof info);
+      log << "motormix output: signal " << info.ssi_signo << ", writing disarmed pulses and exiting"
+          << std::endl;
+      break;
+    }
+    if (fds[0].revents & POLLIN) lcm.handle();
+    const double now = monotonic_s();
+    if (fds[1].revents & POLLIN) {
+      std::uint64_t expirations = 0;
+      [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);
+      node.step(now, false);
+      if (!driver->service(now)) {
+        log << "motormix output: the serial device failed; disarmed pulses follow from the "
+               "firmware's own link watchdog"
+            << std::endl;
+        code = 1;
+        break;
+      }
+    }
+    for (std::size_t i = 0; i < wires.size(); ++i) {
+      if (!(fds[3 + i].revents & POLLIN)) continue;
+      std::uint8_t buf[256];
+      const ssize_t n = read(wires[i].fd, buf, sizeof buf);
+      const auto t_us = static_cast<std::int64_t>(now * 1e6);
+      for (ssize_t k = 0; k < n; ++k) {
+        KissReading r;
+        if (wires[i].parser.feed(buf[k], t_us, r)) node.publish_telemetry(wires[i], r);
+      }
+    }
+    if (now >= next_status) {
+      node.status_line();
+      next_status = now + kStatusEveryS;
+    }
+    if (options.max_run_s > 0 && now - start >= options.max_run_s) break;
+  }
+  for (int i = 0; i < 3; ++i) node.write_disarmed();
+  node.status_line();
+  close_wires();
+  ::close(timer_fd);
+  ::close(signal_fd);
+  return code;
+}
+
+}  // namespace motormix::output

@@ -1,0 +1,115 @@
+#include "output/serial_pulse_driver.hpp"
+
+#include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace motormix::output {
+
+namespace {
+
+std::uint16_t us(double v) {
+  return static_cast<std::uint16_t>(std::clamp(std::lround(v), 0L, 65535L));
+}
+
+}  // namespace
+
+SerialPulseDriver::SerialPulseDriver(int fd, const SerialPulseSettings& s) : fd_(fd) {
+  config_.period_us = us(s.period_us);
+  config_.link_timeout_ms = us(s.link_timeout_ms);
+  config_.min_us = us(s.min_us);
+  config_.max_us = us(s.max_us);
+  config_.count = static_cast<std::uint8_t>(std::min<std::size_t>(s.disarmed_us.size(), 255));
+  for (std::size_t i = 0; i < s.disarmed_us.size() && i < MM_LINK_MAX_CHANNELS; ++i)
+    config_.disarmed_us[i] = us(s.disarmed_us[i]);
+  if (!mm_link_config_valid(&config_)) {
+    ::close(fd_);
+    throw std::invalid_argument("the pulse firmware cannot take this configuration");
+  }
+  mm_link_parser_init(&parser_);
+  send_config();
+}
+
+SerialPulseDriver::~SerialPulseDriver() { ::close(fd_); }
+
+bool SerialPulseDriver::send(const std::uint8_t* bytes, std::size_t n) {
+  // A frame goes whole or not at all: the port is non-blocking and a frame
+  // is far smaller than its buffer; a partial write would only cost a CRC
+  // error at the other end.
+  const ssize_t w = ::write(fd_, bytes, n);
+  if (w != static_cast<ssize_t>(n)) {
+    ++write_failures_;
+    return false;
+  }
+  return true;
+}
+
+void SerialPulseDriver::send_config() {
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  config_.sequence = sequence_;
+  send(buf, mm_link_encode_config(&config_, buf));
+  resend_config_ = false;
+}
+
+bool SerialPulseDriver::write(const double* pulse_us, int count, bool armed) {
+  if (count != config_.count) return false;
+  mm_link_pulses p{};
+  p.sequence = sequence_++;
+  if (sequence_ == 0) sequence_ = 1;
+  p.armed = armed ? 1 : 0;
+  p.count = static_cast<std::uint8_t>(count);
+  for (int i = 0; i < count; ++i) p.pulse_us[i] = us(pulse_us[i]);
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  const bool ok = send(buf, mm_link_encode_pulses(&p, buf));
+  if (ok) ++frames_sent_;
+  return ok;
+}
+
+bool SerialPulseDriver::service(double now_s) {
+  std::uint8_t buf[256];
+  for (;;) {
+    const ssize_t n = ::read(fd_, buf, sizeof buf);
+    if (n > 0) {
+      for (ssize_t i = 0; i < n; ++i) {
+        mm_link_frame f{};
+        if (mm_link_feed(&parser_, buf[i], &f) == MM_LINK_REPORT) {
+          report_ = f.u.report;
+          ++reports_;
+          if (!(report_.flags & MM_LINK_FLAG_CONFIGURED)) resend_config_ = true;
+        }
+      }
+      continue;
+    }
+    if (n == 0 || errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) break;
+    if (errno == EIO) break;  // a pty whose other end is not open yet
+    return false;
+  }
+  if (resend_config_ || now_s >= next_config_s_) {
+    send_config();
+    next_config_s_ = now_s + 1.0;
+  }
+  return true;
+}
+
+std::string SerialPulseDriver::describe() const {
+  std::ostringstream s;
+  s << "serial: " << frames_sent_ << " frames sent, " << write_failures_ << " not written";
+  if (reports_ == 0) {
+    s << "; no report from the firmware yet";
+    return s.str();
+  }
+  s << "; firmware: " << report_.frames << " frames taken, " << report_.crc_errors
+    << " CRC errors, " << report_.malformed << " malformed, " << report_.rejected << " refused, "
+    << report_.link_timeouts << " link timeouts, " << report_.watchdog_resets
+    << " watchdog resets, "
+    << ((report_.flags & MM_LINK_FLAG_CONFIGURED) == 0  ? "unconfigured"
+        : (report_.flags & MM_LINK_FLAG_ARMED) != 0     ? "armed pulses"
+        : (report_.flags & MM_LINK_FLAG_TIMED_OUT) != 0 ? "disarmed (its link watchdog)"
+                                                        : "disarmed pulses");
+  return s.str();
+}
+
+}  // namespace motormix::output
