@@ -140,7 +140,9 @@ static void apply_config(const mm_link_config* c) {
    * is called lost one period before the timeout. */
   const uint32_t timeout_ticks = (uint32_t)c->link_timeout_ms * 1000UL * MM_TICKS_PER_US;
   g_timeout_ticks_high = (uint16_t)((timeout_ticks - g_period_ticks) >> 8);
-  mm_schedule_build(c->disarmed_us, c->count, &g_disarmed);
+  uint16_t ticks[MM_LINK_MAX_CHANNELS];
+  for (uint8_t k = 0; k < c->count; ++k) ticks[k] = (uint16_t)(c->disarmed_us[k] * MM_TICKS_PER_US);
+  mm_schedule_build(ticks, c->count, &g_disarmed);
   g_frame[0] = g_disarmed;
   g_frame[1] = g_disarmed;
   g_frame_armed[0] = g_frame_armed[1] = 0;
@@ -173,16 +175,18 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
     ++g_report.rejected; /* before a configuration, wrong count, old or repeated */
     return;
   }
-  uint16_t width[MM_LINK_MAX_CHANNELS];
+  uint16_t ticks[MM_LINK_MAX_CHANNELS];
+  const uint16_t lo = (uint16_t)(g_config.min_us * MM_TICKS_PER_US);
+  const uint16_t hi = (uint16_t)(g_config.max_us * MM_TICKS_PER_US);
   for (uint8_t k = 0; k < p->count; ++k) {
-    uint16_t w = p->armed ? p->pulse_us[k] : g_config.disarmed_us[k];
-    if (p->armed && w < g_config.min_us) w = g_config.min_us;
-    if (p->armed && w > g_config.max_us) w = g_config.max_us;
-    width[k] = w;
+    uint16_t t = p->armed ? p->pulse_hus[k] : (uint16_t)(g_config.disarmed_us[k] * MM_TICKS_PER_US);
+    if (p->armed && t < lo) t = lo;
+    if (p->armed && t > hi) t = hi;
+    ticks[k] = t;
   }
   g_writing = 1;
   const uint8_t w = (uint8_t)(1u - g_current);
-  mm_schedule_build(width, p->count, &g_frame[w]);
+  mm_schedule_build(ticks, p->count, &g_frame[w]);
   g_frame_armed[w] = p->armed;
   g_ready = w;
   g_writing = 0;

@@ -17,13 +17,13 @@ void mm_rise_ports(uint8_t count, uint8_t* port_d, uint8_t* port_b) {
   *port_b = b;
 }
 
-void mm_schedule_build(const uint16_t* width_us, uint8_t count, mm_schedule* out) {
+void mm_schedule_build(const uint16_t* width_ticks, uint8_t count, mm_schedule* out) {
   uint8_t order[MM_LINK_MAX_CHANNELS];
   if (count > MM_LINK_MAX_CHANNELS) count = MM_LINK_MAX_CHANNELS;
   for (uint8_t k = 0; k < count; ++k) {
     /* Insertion sort by width: at most eight. */
     uint8_t j = k;
-    while (j > 0 && width_us[order[j - 1u]] > width_us[k]) {
+    while (j > 0 && width_ticks[order[j - 1u]] > width_ticks[k]) {
       order[j] = order[j - 1u];
       --j;
     }
@@ -35,19 +35,22 @@ void mm_schedule_build(const uint16_t* width_us, uint8_t count, mm_schedule* out
   uint16_t last_at = 0;
   uint8_t i = 0;
   while (i < count) {
-    /* A group: every channel within 1 us of the group's first. */
-    const uint16_t first = width_us[order[i]];
-    uint16_t at = (uint16_t)(first * MM_TICKS_PER_US);
-    while (i < count && width_us[order[i]] <= first + 1u) {
-      if (width_us[order[i]] != first) at = (uint16_t)(first * MM_TICKS_PER_US + 1u);
+    const uint16_t first = width_ticks[order[i]];
+    uint16_t last = first;
+    while (i < count && width_ticks[order[i]] <= first + 2u) {
+      last = width_ticks[order[i]];
       uint8_t bd, bb;
       mm_channel_bits(order[i], &bd, &bb);
       d = (uint8_t)(d & ~bd);
       b = (uint8_t)(b & ~bb);
       ++i;
     }
-    /* Groups start at least 2 us apart and sit at most 0.5 us after their
-     * first width, so consecutive edges are at least 3 ticks apart. */
+    /* The middle (the later tick of two), or MM_MIN_GAP_TICKS after the
+     * group before: the group before fell at most one tick after its
+     * shortest, which is at least 3 ticks before this one's, so either way
+     * every width here is within one tick. */
+    uint16_t at = (uint16_t)(first + (last - first + 1u) / 2u);
+    if (out->n > 0 && at < last_at + MM_MIN_GAP_TICKS) at = (uint16_t)(last_at + MM_MIN_GAP_TICKS);
     mm_fall* f = &out->fall[out->n++];
     f->at = at;
     f->port_d = d;

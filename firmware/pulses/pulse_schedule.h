@@ -8,15 +8,21 @@
  * microsecond at 16 MHz.
  *
  * Edges the interrupt cannot leave and re-enter between are waited for
- * inside it (polled), and edges closer than it can write one after the
- * other share a tick: two channels exactly 1 us apart fall 0.5 us early and
- * late respectively. Equal widths always share an edge. */
+ * inside it (polled). Its waiting loop writes edges at least
+ * MM_MIN_GAP_TICKS apart, so widths closer than that are grouped: a group
+ * holds the widths within 2 ticks of its shortest, falls at their middle,
+ * and comes at least MM_MIN_GAP_TICKS after the group before. No channel
+ * then falls more than one tick (0.5 us) from its width. */
 #ifndef MOTORMIX_PULSE_SCHEDULE_H
 #define MOTORMIX_PULSE_SCHEDULE_H
 
 #include <stdint.h>
 
 #include "motormix_link.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 #define MM_TICKS_PER_US 2u
 /* The shortest time between two edges the interrupt's waiting loop writes
@@ -43,7 +49,11 @@ typedef struct {
 void mm_channel_bits(uint8_t channel, uint8_t* port_d_bit, uint8_t* port_b_bit);
 void mm_rise_ports(uint8_t count, uint8_t* port_d, uint8_t* port_b);
 
-/* The falls for widths in microseconds (count 1..MM_LINK_MAX_CHANNELS). */
-void mm_schedule_build(const uint16_t* width_us, uint8_t count, mm_schedule* out);
+/* The falls for widths in ticks (count 1..MM_LINK_MAX_CHANNELS). */
+void mm_schedule_build(const uint16_t* width_ticks, uint8_t count, mm_schedule* out);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MOTORMIX_PULSE_SCHEDULE_H */

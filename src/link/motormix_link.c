@@ -88,7 +88,7 @@ size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out) {
   b[1] = p->sequence;
   b[2] = p->armed ? 1u : 0u;
   b[3] = p->count;
-  for (uint8_t i = 0; i < p->count; ++i) put16(b + 4 + 2 * i, p->pulse_us[i]);
+  for (uint8_t i = 0; i < p->count; ++i) put16(b + 4 + 2 * i, p->pulse_hus[i]);
   return frame(out, (uint8_t)MM_LINK_PULSES_BODY(p->count));
 }
 
@@ -134,7 +134,7 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
     out->sequence = b[1];
     out->armed = b[2];
     out->count = count;
-    for (uint8_t i = 0; i < count; ++i) out->pulse_us[i] = get16(b + 4 + 2 * i);
+    for (uint8_t i = 0; i < count; ++i) out->pulse_hus[i] = get16(b + 4 + 2 * i);
   } else if (type == MM_LINK_CONFIG) {
     const uint8_t count = b[10];
     mm_link_config* out = &f->u.config;

@@ -15,8 +15,10 @@
  *     channel. The firmware makes no pulse at all until it has one; it takes
  *     a new one only while its outputs are disarmed.
  *   MM_LINK_PULSES: armed (0/1), count (must equal the configured count),
- *     then count pulse widths (us). Not armed: every channel gets its
- *     disarmed pulse, whatever the widths say.
+ *     then count pulse widths in half microseconds (the firmware's timer
+ *     resolution: a width of 1234.3 us goes as 2469 and comes out as
+ *     1234.5). Not armed: every channel gets its disarmed pulse, whatever
+ *     the widths say.
  * MCU -> host
  *   MM_LINK_REPORT: frames accepted, CRC errors, malformed frames (u32
  *     each), link timeouts, watchdog resets, rejected frames (u16 each: well
@@ -81,7 +83,7 @@ typedef struct {
   uint8_t sequence;
   uint8_t armed;
   uint8_t count;
-  uint16_t pulse_us[MM_LINK_MAX_CHANNELS];
+  uint16_t pulse_hus[MM_LINK_MAX_CHANNELS]; /* half microseconds: 3000 is 1500 us */
 } mm_link_pulses;
 
 typedef struct {

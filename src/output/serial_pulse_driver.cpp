@@ -61,7 +61,7 @@ bool SerialPulseDriver::write(const double* pulse_us, int count, bool armed) {
   if (sequence_ == 0) sequence_ = 1;
   p.armed = armed ? 1 : 0;
   p.count = static_cast<std::uint8_t>(count);
-  for (int i = 0; i < count; ++i) p.pulse_us[i] = us(pulse_us[i]);
+  for (int i = 0; i < count; ++i) p.pulse_hus[i] = us(2.0 * pulse_us[i]);
   std::uint8_t buf[MM_LINK_MAX_FRAME];
   const bool ok = send(buf, mm_link_encode_pulses(&p, buf));
   if (ok) ++frames_sent_;

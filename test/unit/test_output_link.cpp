@@ -27,7 +27,7 @@ mm_link_pulses some_pulses(std::uint8_t seq, std::uint8_t count) {
   p.armed = 1;
   p.count = count;
   for (std::uint8_t i = 0; i < count && i < MM_LINK_MAX_CHANNELS; ++i) {
-    p.pulse_us[i] = static_cast<std::uint16_t>(1000 + 97 * i + seq);
+    p.pulse_hus[i] = static_cast<std::uint16_t>(1000 + 97 * i + seq);
   }
   return p;
 }
@@ -55,7 +55,7 @@ mm_link_config four_channel_config() {
 bool same(const mm_link_pulses& a, const mm_link_pulses& b) {
   if (a.sequence != b.sequence || a.armed != b.armed || a.count != b.count) return false;
   for (std::uint8_t i = 0; i < a.count; ++i) {
-    if (a.pulse_us[i] != b.pulse_us[i]) return false;
+    if (a.pulse_hus[i] != b.pulse_hus[i]) return false;
   }
   return true;
 }

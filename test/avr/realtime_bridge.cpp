@@ -1,0 +1,86 @@
+#include "realtime_bridge.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <chrono>
+#include <stdexcept>
+
+namespace motormix::avr {
+
+namespace {
+
+constexpr double kChunkUs = 50.0;  // simulated between looks at the pty and the clock
+
+}  // namespace
+
+std::int64_t steady_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+RealtimeBridge::RealtimeBridge(const std::string& elf_path) : board_(elf_path) {
+  master_ = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  if (master_ < 0 || grantpt(master_) != 0 || unlockpt(master_) != 0) {
+    throw std::runtime_error("cannot create a pseudo-terminal");
+  }
+  char name[128];
+  if (ptsname_r(master_, name, sizeof name) != 0) throw std::runtime_error("ptsname_r failed");
+  slave_path_ = name;
+  thread_ = std::thread([this] { run(); });
+}
+
+RealtimeBridge::~RealtimeBridge() {
+  stop();
+  if (master_ >= 0) ::close(master_);
+}
+
+void RealtimeBridge::stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+std::vector<TimedPulse> RealtimeBridge::take_pulses() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<TimedPulse> out;
+  out.swap(pulses_);
+  return out;
+}
+
+void RealtimeBridge::run() {
+  const std::int64_t wall0 = steady_us();
+  const double sim0 = board_.now_us();
+  std::uint8_t buf[512];
+  while (!stop_) {
+    const ssize_t n = ::read(master_, buf, sizeof buf);
+    if (n > 0) {
+      board_.send(buf, static_cast<std::size_t>(n));
+      bytes_in_ += static_cast<std::uint64_t>(n);
+    }
+    board_.run_for_us(kChunkUs);
+    const std::vector<std::uint8_t> out = board_.take_output();
+    if (!out.empty()) {
+      // The host reads its end; bytes it leaves unread are dropped, as a
+      // USB serial adapter's buffer would.
+      [[maybe_unused]] const ssize_t w = ::write(master_, out.data(), out.size());
+    }
+    const std::vector<Pulse> pulses = board_.take_pulses();
+    if (!pulses.empty()) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const Pulse& p : pulses) {
+        const double rise_sim_us = static_cast<double>(p.rise_cycle) / 16.0 - sim0;
+        pulses_.push_back({p.channel, wall0 + static_cast<std::int64_t>(rise_sim_us), p.width_us});
+      }
+    }
+    const double sim_elapsed = board_.now_us() - sim0;
+    const double wall_elapsed = static_cast<double>(steady_us() - wall0);
+    if (sim_elapsed > wall_elapsed) {
+      std::this_thread::sleep_for(
+          std::chrono::microseconds(static_cast<std::int64_t>(sim_elapsed - wall_elapsed)));
+    } else if (wall_elapsed - sim_elapsed > max_lag_us_.load()) {
+      max_lag_us_ = wall_elapsed - sim_elapsed;
+    }
+  }
+}
+
+}  // namespace motormix::avr

@@ -1,0 +1,55 @@
+#pragma once
+// The simulated board in real time behind a pseudo-terminal: a thread runs
+// the firmware in simavr paced to the wall clock, passes bytes between the
+// pty and the chip's UART, and records every pulse with the wall time its
+// rising edge had (steady clock). `motormix output` opens the pty's other
+// end as if it were the Nano's USB serial port.
+
+#include "avr_board.hpp"
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace motormix::avr {
+
+struct TimedPulse {
+  int channel;
+  std::int64_t rise_wall_us;  // steady clock, microseconds
+  double width_us;
+};
+
+class RealtimeBridge {
+ public:
+  explicit RealtimeBridge(const std::string& elf_path);
+  ~RealtimeBridge();
+  RealtimeBridge(const RealtimeBridge&) = delete;
+  RealtimeBridge& operator=(const RealtimeBridge&) = delete;
+
+  const std::string& device() const { return slave_path_; }
+  std::vector<TimedPulse> take_pulses();
+  // How far the simulation fell behind the wall clock at worst, us.
+  double max_lag_us() const { return max_lag_us_.load(); }
+  std::uint64_t bytes_in() const { return bytes_in_.load(); }
+  void stop();
+
+ private:
+  void run();
+
+  AvrBoard board_;
+  int master_ = -1;
+  std::string slave_path_;
+  std::mutex mutex_;
+  std::vector<TimedPulse> pulses_;
+  std::atomic<bool> stop_{false};
+  std::atomic<double> max_lag_us_{0.0};
+  std::atomic<std::uint64_t> bytes_in_{0};
+  std::thread thread_;
+};
+
+std::int64_t steady_us();
+
+}  // namespace motormix::avr

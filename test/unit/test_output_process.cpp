@@ -1,0 +1,288 @@
+// `motormix output`'s parts without a bus: the output gate (the failsafe
+// every driver sits behind), the `hardware:` section's checks, the sysfs
+// PWM driver against a tree in a temporary directory (the order of its
+// writes as the kernel documents it), and the serial driver against the
+// firmware's end of a pseudo-terminal (frames out, reports in, a chip that
+// lost its configuration configured again).
+
+#include "output/output_gate.hpp"
+#include "output/serial_port.hpp"
+#include "output/serial_pulse_driver.hpp"
+#include "output/sysfs_pwm_driver.hpp"
+
+#include <motormix/config/load_config.hpp>
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace motormix::test {
+namespace {
+
+constexpr double kGateTimeoutS = 0.05;
+
+output::OutputGate quad_gate() {
+  return output::OutputGate(
+      {{1000, 2000, 1000}, {1000, 2000, 1000}, {1100, 1900, 1050}, {1000, 2000, 900}},
+      kGateTimeoutS);
+}
+
+TEST(OutputGate, DisarmedAtStartOnArmedFalseAndWhenStale) {
+  output::OutputGate gate = quad_gate();
+  double out[4];
+  EXPECT_EQ(gate.decide(0.0, out), output::GateState::kStarting);
+  EXPECT_EQ(out[2], 1050);
+  EXPECT_EQ(out[3], 900);
+  const float armed[4] = {1500, 1600, 1700, 1800};
+  ASSERT_TRUE(gate.accept(armed, 4, true, 1.0));
+  EXPECT_EQ(gate.decide(1.0, out), output::GateState::kArmed);
+  EXPECT_EQ(out[1], 1600);
+  EXPECT_EQ(gate.decide(1.0 + kGateTimeoutS * 0.99, out), output::GateState::kArmed);
+  EXPECT_EQ(gate.decide(1.0 + kGateTimeoutS * 1.01, out), output::GateState::kStale);
+  EXPECT_EQ(out[0], 1000);
+  EXPECT_EQ(gate.decide(2.0, out), output::GateState::kStale);
+  EXPECT_EQ(gate.counters().stale_events, 1u);  // counted once per loss
+  ASSERT_TRUE(gate.accept(armed, 4, false, 3.0));
+  EXPECT_EQ(gate.decide(3.0, out), output::GateState::kDisarmed);
+  EXPECT_EQ(out[1], 1000);
+}
+
+TEST(OutputGate, ClampsArmedValuesAndRefusesWrongSizesAndNonFiniteValues) {
+  output::OutputGate gate = quad_gate();
+  double out[4];
+  const float wide[4] = {900, 2500, 1000, 1500};
+  ASSERT_TRUE(gate.accept(wide, 4, true, 0.0));
+  gate.decide(0.0, out);
+  EXPECT_EQ(out[0], 1000);
+  EXPECT_EQ(out[1], 2000);
+  EXPECT_EQ(out[2], 1100);  // this motor's own range
+  EXPECT_EQ(gate.counters().clamped, 3u);
+  const float nan[4] = {1500, std::numeric_limits<float>::quiet_NaN(), 1500, 1500};
+  const float inf[4] = {1500, 1500, std::numeric_limits<float>::infinity(), 1500};
+  EXPECT_FALSE(gate.accept(nan, 4, true, 0.01));
+  EXPECT_FALSE(gate.accept(inf, 4, true, 0.01));
+  EXPECT_FALSE(gate.accept(wide, 3, true, 0.01));
+  EXPECT_EQ(gate.counters().not_finite, 2u);
+  EXPECT_EQ(gate.counters().wrong_size, 1u);
+  // The refused ones changed nothing, and did not keep the stream alive.
+  EXPECT_EQ(gate.decide(0.02, out), output::GateState::kArmed);
+  EXPECT_EQ(out[1], 2000);
+  EXPECT_EQ(gate.decide(0.06, out), output::GateState::kStale);
+}
+
+std::string expect_hardware_error(const std::string& hardware, const std::string& output = "") {
+  try {
+    config::load_config_text("geometry: {preset: quad_x}\n" + output + "hardware:\n" + hardware,
+                             "test");
+  } catch (const config::ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "accepted: " << hardware;
+  return "";
+}
+
+TEST(OutputHardwareConfig, RefusesWhatNoDriverCanMakeNamingKeyValueAndRange) {
+  EXPECT_NE(expect_hardware_error("  driver: serial\n").find("hardware.serial.device"),
+            std::string::npos);
+  EXPECT_NE(expect_hardware_error("  driver: pigeon\n").find("hardware.driver"), std::string::npos);
+  EXPECT_NE(expect_hardware_error("  driver: sysfs\n  pulse_rate_hz: 900\n").find("pulse_rate_hz"),
+            std::string::npos);
+  // 490 Hz leaves 2040 us: a 2000 us pulse needs 40 us low before the next.
+  const std::string too_long = expect_hardware_error("  driver: sysfs\n  pulse_rate_hz: 495\n");
+  EXPECT_NE(too_long.find("2000"), std::string::npos) << too_long;
+  EXPECT_NE(expect_hardware_error("  driver: sysfs\n  sysfs: {channels: [0, 1, 1, 2]}\n")
+                .find("hardware.sysfs.channels[2]"),
+            std::string::npos);
+  EXPECT_NE(expect_hardware_error("  driver: sysfs\n  sysfs: {channels: [0, 1]}\n").find("4"),
+            std::string::npos);
+  EXPECT_NE(expect_hardware_error("  driver: sysfs\n  telemetry: [{device: /dev/null, motor: 5}]\n")
+                .find("hardware.telemetry[0].motor"),
+            std::string::npos);
+  EXPECT_NE(
+      expect_hardware_error("  driver: sysfs\n", "output: {unit: duty}\n").find("output.unit"),
+      std::string::npos);
+  const config::Config ok = config::load_config_text(
+      "geometry: {preset: quad_x}\nhardware: {driver: serial, serial: {device: /dev/ttyUSB0}}\n",
+      "test");
+  EXPECT_EQ(ok.hardware.driver, config::HardwareDriver::kSerial);
+  EXPECT_DOUBLE_EQ(ok.hardware.motor_pwm_timeout_s, 0.05);
+  EXPECT_DOUBLE_EQ(ok.hardware.serial.link_timeout_s, 0.1);
+}
+
+// A sysfs PWM tree as the kernel shows it: pwmchip0 with export, and the
+// channel directories with their attributes (here: made by the "kernel"
+// when export is written, as udev would).
+struct FakePwmTree {
+  FakePwmTree() {
+    char tmpl[] = "/tmp/motormix-pwm-XXXXXX";
+    root = mkdtemp(tmpl);
+    std::filesystem::create_directories(root + "/pwmchip0");
+    std::ofstream(root + "/pwmchip0/export");
+  }
+  ~FakePwmTree() { std::filesystem::remove_all(root); }
+  void make_channel(int c) const {
+    const std::string dir = root + "/pwmchip0/pwm" + std::to_string(c);
+    std::filesystem::create_directories(dir);
+    for (const char* f : {"period", "duty_cycle", "enable"}) std::ofstream(dir + "/" + f);
+  }
+  std::string read(int c, const char* attr) const {
+    std::ifstream in(root + "/pwmchip0/pwm" + std::to_string(c) + "/" + attr);
+    std::string v;
+    in >> v;
+    return v;
+  }
+  std::string root;
+};
+
+TEST(SysfsPwm, ExportsThenSetsPeriodDutyAndEnableInTheKernelsOrder) {
+  FakePwmTree tree;
+  tree.make_channel(2);  // already exported; 5 is not
+  config::SysfsPwm s;
+  s.root = tree.root;
+  s.channels = {2, 5};
+  std::vector<std::pair<std::string, std::string>> writes;
+  auto observe = [&](const std::string& path, const std::string& value) {
+    writes.emplace_back(path.substr(tree.root.size()), value);
+    if (path.size() >= 6 && path.compare(path.size() - 6, 6, "export") == 0)
+      tree.make_channel(std::stoi(value));
+  };
+  output::SysfsPwmDriver driver(s, 2500.0, {1000.0, 1100.0}, observe);
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"/pwmchip0/pwm2/period", "2500000"}, {"/pwmchip0/pwm2/duty_cycle", "1000000"},
+      {"/pwmchip0/pwm2/enable", "1"},       {"/pwmchip0/export", "5"},
+      {"/pwmchip0/pwm5/period", "2500000"}, {"/pwmchip0/pwm5/duty_cycle", "1100000"},
+      {"/pwmchip0/pwm5/enable", "1"}};
+  EXPECT_EQ(writes, expected);
+  writes.clear();
+  const double pulses[2] = {1234.567, 1999.9996};
+  ASSERT_TRUE(driver.write(pulses, 2, true));
+  EXPECT_EQ(tree.read(2, "duty_cycle"), "1234567");
+  EXPECT_EQ(tree.read(5, "duty_cycle"), "2000000");
+  ASSERT_EQ(writes.size(), 2u);  // duty_cycle only, once set up
+  const double disarmed[2] = {1000.0, 1100.0};
+  ASSERT_TRUE(driver.write(disarmed, 2, false));
+  EXPECT_EQ(tree.read(2, "duty_cycle"), "1000000");  // a shorter value leaves no tail
+  EXPECT_FALSE(driver.write(disarmed, 1, false));    // wrong count
+}
+
+TEST(SysfsPwm, AMissingChipOrAChannelThatNeverAppearsIsAnErrorNamingThePath) {
+  FakePwmTree tree;
+  config::SysfsPwm s;
+  s.root = tree.root;
+  s.chip = 3;
+  s.channels = {0};
+  try {
+    output::SysfsPwmDriver driver(s, 2500.0, {1000.0});
+    ADD_FAILURE() << "no pwmchip3";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("pwmchip3"), std::string::npos);
+  }
+  s.chip = 0;
+  try {
+    output::SysfsPwmDriver driver(s, 2500.0, {1000.0}, {}, 0.05);
+    ADD_FAILURE() << "pwm0 never appeared";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("pwm0 did not appear"), std::string::npos) << e.what();
+  }
+}
+
+// The firmware's end of a pseudo-terminal: frames the driver sent, and
+// reports written back.
+struct PtyPair {
+  PtyPair() {
+    master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
+    grantpt(master);
+    unlockpt(master);
+    char name[128];
+    ptsname_r(master, name, sizeof name);
+    device = name;
+  }
+  ~PtyPair() { ::close(master); }
+  std::vector<mm_link_frame> frames() {
+    std::vector<mm_link_frame> out;
+    std::uint8_t buf[512];
+    ssize_t n;
+    while ((n = ::read(master, buf, sizeof buf)) > 0) {
+      for (ssize_t i = 0; i < n; ++i) {
+        mm_link_frame f{};
+        if (mm_link_feed(&parser, buf[i], &f) != 0) out.push_back(f);
+      }
+    }
+    return out;
+  }
+  void report(std::uint8_t flags) {
+    mm_link_report r{};
+    r.frames = 7;
+    r.flags = flags;
+    std::uint8_t buf[MM_LINK_MAX_FRAME];
+    const std::size_t n = mm_link_encode_report(&r, 1, buf);
+    ASSERT_EQ(::write(master, buf, n), static_cast<ssize_t>(n));
+  }
+  int master = -1;
+  std::string device;
+  mm_link_parser parser = [] {
+    mm_link_parser p;
+    mm_link_parser_init(&p);
+    return p;
+  }();
+};
+
+TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfterAReset) {
+  PtyPair pty;
+  output::SerialPulseSettings s;
+  s.period_us = 2500;
+  s.link_timeout_ms = 100;
+  s.min_us = 1000;
+  s.max_us = 2000;
+  s.disarmed_us = {1000, 1000, 1000, 1000};
+  output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
+  const double pulses[4] = {1234.3, 1500, 1750.74, 1999.9};
+  ASSERT_TRUE(driver.write(pulses, 4, true));
+  std::vector<mm_link_frame> got = pty.frames();
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+  EXPECT_EQ(got[0].u.config.period_us, 2500);
+  EXPECT_EQ(got[0].u.config.count, 4);
+  EXPECT_EQ(got[1].type, MM_LINK_PULSES);
+  EXPECT_EQ(got[1].u.pulses.armed, 1);
+  EXPECT_EQ(got[1].u.pulses.pulse_hus[0], 2469);  // 1234.5 us: the nearest half microsecond
+  EXPECT_EQ(got[1].u.pulses.pulse_hus[2], 3501);
+  EXPECT_EQ(got[1].u.pulses.pulse_hus[3], 4000);
+  // A report from a chip that lost its configuration (a watchdog reset):
+  // the configuration goes again at the next service.
+  pty.report(0);
+  ASSERT_TRUE(driver.service(0.0));  // also the first periodic configuration
+  got = pty.frames();
+  ASSERT_TRUE(driver.have_report());
+  EXPECT_EQ(driver.report().frames, 7u);
+  pty.report(0);
+  ASSERT_TRUE(driver.service(0.1));  // within the second: only because of the report
+  got = pty.frames();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+  pty.report(MM_LINK_FLAG_CONFIGURED);
+  ASSERT_TRUE(driver.service(0.2));
+  EXPECT_TRUE(pty.frames().empty());
+  EXPECT_NE(driver.describe().find("7 frames taken"), std::string::npos) << driver.describe();
+}
+
+TEST(SerialPulses, ANonSerialDeviceIsRefusedByName) {
+  try {
+    output::open_serial_port("/dev/null", 250000);
+    ADD_FAILURE() << "/dev/null taken as a serial port";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/null"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace motormix::test
