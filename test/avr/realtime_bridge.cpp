@@ -10,6 +10,7 @@ namespace motormix::avr {
 namespace {
 
 constexpr double kChunkUs = 50.0;  // simulated between looks at the pty and the clock
+constexpr double kSleepAtLeastUs = 500.0;
 
 }  // namespace
 
@@ -48,7 +49,7 @@ std::vector<TimedPulse> RealtimeBridge::take_pulses() {
 }
 
 void RealtimeBridge::run() {
-  const std::int64_t wall0 = steady_us();
+  std::int64_t wall0 = steady_us();
   const double sim0 = board_.now_us();
   std::uint8_t buf[512];
   while (!stop_) {
@@ -66,10 +67,15 @@ void RealtimeBridge::run() {
     }
     const std::vector<Pulse> pulses = board_.take_pulses();
     if (!pulses.empty()) {
+      // When the edge happened as seen from outside: now, less the
+      // simulated time since it (a simulation running late shows as
+      // latency, never hides it).
+      const std::int64_t wall_now = steady_us();
       std::lock_guard<std::mutex> lock(mutex_);
       for (const Pulse& p : pulses) {
-        const double rise_sim_us = static_cast<double>(p.rise_cycle) / 16.0 - sim0;
-        pulses_.push_back({p.channel, wall0 + static_cast<std::int64_t>(rise_sim_us), p.width_us});
+        const double since_us = board_.now_us() - static_cast<double>(p.rise_cycle) / 16.0;
+        pulses_.push_back(
+            {p.channel, wall_now - static_cast<std::int64_t>(since_us), p.width_us, p.rise_cycle});
       }
     }
     const double sim_elapsed = board_.now_us() - sim0;
@@ -79,6 +85,11 @@ void RealtimeBridge::run() {
           std::chrono::microseconds(static_cast<std::int64_t>(sim_elapsed - wall_elapsed)));
     } else if (wall_elapsed - sim_elapsed > max_lag_us_.load()) {
       max_lag_us_ = wall_elapsed - sim_elapsed;
+    }
+    // Late by more than a chunk: catch up from here rather than run fast
+    // (time lost is lost, as for a chip whose clock stopped).
+    if (wall_elapsed - sim_elapsed > 2 * kSleepAtLeastUs) {
+      wall0 += static_cast<std::int64_t>(wall_elapsed - sim_elapsed);
     }
   }
 }

@@ -18,8 +18,9 @@ namespace motormix::avr {
 
 struct TimedPulse {
   int channel;
-  std::int64_t rise_wall_us;  // steady clock, microseconds
+  std::int64_t rise_wall_us;  // steady clock, microseconds: when it was seen to rise
   double width_us;
+  std::uint64_t rise_cycle;  // the chip's: one per period, shared by its channels
 };
 
 class RealtimeBridge {
@@ -33,6 +34,7 @@ class RealtimeBridge {
   std::vector<TimedPulse> take_pulses();
   // How far the simulation fell behind the wall clock at worst, us.
   double max_lag_us() const { return max_lag_us_.load(); }
+  void reset_max_lag() { max_lag_us_ = 0.0; }
   std::uint64_t bytes_in() const { return bytes_in_.load(); }
   void stop();
 

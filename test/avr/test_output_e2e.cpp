@@ -1,0 +1,325 @@
+// End to end, no hardware: the pulse firmware in simavr, in real time behind
+// a pseudo-terminal (realtime_bridge.hpp), driven by `motormix output` over
+// its serial driver, on a private bus.
+// - A publisher standing in for the mixer sends motor_pwm_t at 400 Hz, each
+//   message's channel 0 unique, so every pulse period names the message it
+//   carries: pulse error against motor_pwm_t's values, and bus-to-pin
+//   latency (publish to rising edge), p50 and p99.
+// - The publisher stops (a mixer killed): time to disarmed pulses.
+// - `motormix output` is SIGKILLed: time to disarmed pulses (the firmware's
+//   own link watchdog).
+// - The real chain: `motormix run` flies the bundled team-quad flight from
+//   lcm-logplayer, and the pulses follow its motor_pwm_t; then the mixer is
+//   SIGKILLed.
+// Times are the simulated chip's, mapped to the wall clock; the bridge
+// reports how far the simulation ever fell behind, and the test asks that
+// to stay small so the numbers mean what they say.
+
+#include "integration/process.hpp"
+#include "realtime_bridge.hpp"
+#include "test_paths.hpp"
+#include "test_support.hpp"
+
+#include <motormix/motor_pwm_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#ifndef MOTORMIX_FIRMWARE_ELF
+#error "MOTORMIX_FIRMWARE_ELF: the firmware under test"
+#endif
+
+namespace motormix::test {
+namespace {
+
+using avr::steady_us;
+using avr::TimedPulse;
+
+constexpr double kPulseToleranceUs = 1.0;  // the bound
+constexpr double kDisarmedUs = 1000.0;
+// The simulated chip runs about 1.6 times faster than real time here, so a
+// busy moment on the host makes it late for a while; its lateness shows as
+// latency in every time below, and is allowed for in the failsafe bounds
+// (the chip's own timing is test_pulse_firmware's). Beyond this the run
+// says nothing about the chip.
+constexpr double kMaxSimulationLagUs = 20000.0;
+constexpr double kMixerDeathBoundMs = 100.0;   // output's 50 ms staleness + frames + a period
+constexpr double kOutputDeathBoundMs = 100.0;  // the firmware's link timeout
+constexpr double kLatencyP99BoundMs = 10.0;    // generous: the bench measures the host part
+constexpr double kMatchedShare = 0.97;
+
+std::string write_config(const std::string& device) {
+  const std::string path = "/tmp/motormix-e2e-" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(path) << "name: e2e\n"
+                         "geometry: {preset: quad_x}\n"
+                         "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                         "hardware:\n"
+                         "  driver: serial\n"
+                         "  pulse_rate_hz: 400\n"
+                         "  serial: {device: "
+                      << device << "}\n";
+  return path;
+}
+
+// One period's pulses: every channel rose together.
+struct Period {
+  std::int64_t rise_us;
+  std::map<int, double> width;
+};
+
+std::vector<Period> periods_of(const std::vector<TimedPulse>& pulses) {
+  std::map<std::uint64_t, Period> by_rise;
+  for (const TimedPulse& p : pulses) {
+    Period& period = by_rise[p.rise_cycle];
+    if (period.width.empty()) period.rise_us = p.rise_wall_us;
+    period.rise_us = std::max(period.rise_us, p.rise_wall_us);  // the latest view of the rise
+    period.width[p.channel] = p.width_us;
+  }
+  std::vector<Period> out;
+  for (auto& [rise, period] : by_rise)
+    if (period.width.size() == 4) out.push_back(period);
+  return out;
+}
+
+bool disarmed(const Period& p) {
+  for (const auto& [ch, w] : p.width)
+    if (std::abs(w - kDisarmedUs) > kPulseToleranceUs) return false;
+  return true;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
+}
+
+// The first disarmed period rising after `after_us`, in ms after it; NaN
+// if none, and -1 if an armed period came after a disarmed one.
+double ms_to_disarmed(const std::vector<Period>& periods, std::int64_t after_us) {
+  for (const Period& p : periods) {
+    if (p.rise_us <= after_us) continue;
+    if (disarmed(p)) return static_cast<double>(p.rise_us - after_us) / 1000.0;
+  }
+  return NAN;
+}
+
+TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
+  avr::RealtimeBridge bridge(MOTORMIX_FIRMWARE_ELF);
+  const std::string config = write_config(bridge.device());
+  auto output = std::make_unique<ChildProcess>(
+      std::vector<std::string>{motormix_binary(), "output", "--config", config},
+      "/tmp/motormix-e2e-output.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));  // configured: disarmed pulses
+  bridge.take_pulses();
+  bridge.reset_max_lag();  // from here the timings count
+
+  // 3 s of motor_pwm_t at 400 Hz, channel 0 unique per message (k % 800).
+  std::map<int, std::int64_t> published_us;  // k -> when
+  std::map<int, std::vector<float>> values;
+  const int kMessages = 1200;
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < kMessages; ++k) {
+    motormix::motor_pwm_t m;
+    m.num_motors = 4;
+    m.pwm = {1100.25f + static_cast<float>(k % 800), 1300.0f + 0.37f * static_cast<float>(k % 1000),
+             1500.5f + static_cast<float>((k * 7) % 300) * 0.73f,
+             1450.0f + 0.11f * static_cast<float>(k % 2000)};
+    m.command.assign(4, 0.5f);
+    m.direction.assign(4, 0);
+    m.armed = true;
+    m.utime = k;
+    std::this_thread::sleep_until(start + std::chrono::microseconds(2500 * k));
+    published_us[k] = steady_us();
+    values[k] = m.pwm;
+    lcm.publish("MOTOR_PWM", &m);
+  }
+  const std::int64_t last_publish = steady_us();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the "mixer" is gone
+  const std::vector<Period> run = periods_of(bridge.take_pulses());
+
+  // Each armed period: the message whose channel 0 it carries (the latest
+  // such published before its rise).
+  std::vector<double> errors, latency_ms;
+  std::map<int, bool> seen;
+  double worst = 0.0;
+  for (const Period& p : run) {
+    if (disarmed(p)) continue;
+    // Channel 0 says which message, to a microsecond (grouped edges move a
+    // pulse by up to half of one): of the messages it could be, published
+    // before the rise, the one the whole period matches best.
+    const int code = static_cast<int>(std::lround(p.width.at(0) - 1100.25));
+    int k = -1;
+    double best = 1e9;
+    for (int c0 = code - 1; c0 <= code + 1; ++c0) {
+      for (int c = (c0 % 800 + 800) % 800; c < kMessages; c += 800) {
+        if (published_us[c] >= p.rise_us) continue;
+        double e = 0.0;
+        for (int ch = 0; ch < 4; ++ch)
+          e = std::max(e, std::abs(p.width.at(ch) - values[c][static_cast<std::size_t>(ch)]));
+        if (e < best || (e == best && c > k)) {
+          best = e;
+          k = c;
+        }
+      }
+    }
+    ASSERT_GE(k, 0) << "a period carrying no message: channel 0 " << p.width.at(0);
+    for (int ch = 0; ch < 4; ++ch) {
+      const double err = p.width.at(ch) - values[k][static_cast<std::size_t>(ch)];
+      worst = std::max(worst, std::abs(err));
+      errors.push_back(std::abs(err));
+    }
+    if (!seen[k]) latency_ms.push_back(static_cast<double>(p.rise_us - published_us[k]) / 1000.0);
+    seen[k] = true;
+  }
+  const double mixer_gone_ms = ms_to_disarmed(run, last_publish);
+  std::printf(
+      "%zu armed periods carried %zu of %d messages; pulse error p50 %.3f us, worst %.3f "
+      "us; bus to pin p50 %.2f ms, p99 %.2f ms; disarmed %.1f ms after the last "
+      "motor_pwm_t\n",
+      errors.size() / 4, seen.size(), kMessages, percentile(errors, 0.5), worst,
+      percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), mixer_gone_ms);
+  EXPECT_LE(worst, kPulseToleranceUs);
+  EXPECT_GT(seen.size(), static_cast<std::size_t>(kMessages * 8 / 10));
+  EXPECT_LE(percentile(latency_ms, 0.99), kLatencyP99BoundMs);
+  EXPECT_LE(mixer_gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
+
+  // Armed again, then the output process killed outright.
+  for (int k = 0; k < 200; ++k) {
+    motormix::motor_pwm_t m;
+    m.num_motors = 4;
+    m.pwm.assign(4, 1600.0f);
+    m.command.assign(4, 0.6f);
+    m.direction.assign(4, 0);
+    m.armed = true;
+    lcm.publish("MOTOR_PWM", &m);
+    std::this_thread::sleep_for(std::chrono::microseconds(2500));
+    if (k == 150) {
+      output->signal(SIGKILL);
+    }
+  }
+  const std::int64_t killed = steady_us() - 49 * 2500;  // when k == 150 was
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const std::vector<Period> after = periods_of(bridge.take_pulses());
+  const double output_gone_ms = ms_to_disarmed(after, killed);
+  std::printf(
+      "disarmed %.1f ms after SIGKILL of motormix output; the simulation fell behind the "
+      "wall clock by %.2f ms at worst\n",
+      output_gone_ms, bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(output_gone_ms, kOutputDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_GT(output_gone_ms, 0.0);
+  EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
+  bridge.stop();
+  std::remove(config.c_str());
+}
+
+// The mixer's motor_pwm_t as the test receives it, with when.
+class PwmRecorder {
+ public:
+  PwmRecorder(lcm::LCM& lcm, const std::string& channel) : lcm_(lcm) {
+    lcm_.subscribe(channel, &PwmRecorder::on, this);
+    thread_ = std::thread([this] {
+      while (!stop_) lcm_.handleTimeout(20);
+    });
+  }
+  ~PwmRecorder() {
+    stop_ = true;
+    thread_.join();
+  }
+  struct Record {
+    std::int64_t at_us;
+    bool armed;
+    std::vector<float> pwm;
+  };
+  std::vector<Record> records() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return records_;
+  }
+
+ private:
+  void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::motor_pwm_t* m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    records_.push_back({steady_us(), m->armed != 0, m->pwm});
+  }
+  lcm::LCM& lcm_;
+  std::mutex mutex_;
+  std::vector<Record> records_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// The bundled team-quad flight through the real mixer and the output
+// process: each armed period's pulses are the values of a motor_pwm_t the
+// mixer published just before its rise; then the mixer is SIGKILLed.
+TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
+  avr::RealtimeBridge bridge(MOTORMIX_FIRMWARE_ELF);
+  const std::string config = source_path("config/team_quad.yaml");
+  const std::vector<std::string> hw = {"--set", "hardware.driver=serial", "--set",
+                                       "hardware.serial.device=" + bridge.device()};
+  std::vector<std::string> output_argv = {motormix_binary(), "output", "--config", config};
+  output_argv.insert(output_argv.end(), hw.begin(), hw.end());
+  ChildProcess output(output_argv, "/tmp/motormix-e2e-output2.log");
+  ChildProcess mixer({motormix_binary(), "run", "--config", config}, "/tmp/motormix-e2e-run.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  PwmRecorder recorder(lcm, "motor_pwm");  // the team's channel names (config/team_quad.yaml)
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));
+  bridge.take_pulses();
+  bridge.reset_max_lag();
+  ChildProcess player({"lcm-logplayer", source_path("test/data/flights/team_quad.lcmlog")});
+  std::this_thread::sleep_for(std::chrono::seconds(6));  // into the armed flight
+  mixer.signal(SIGKILL);
+  const std::int64_t killed = steady_us();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  player.signal(SIGKILL);
+  const std::vector<Period> periods = periods_of(bridge.take_pulses());
+  const std::vector<PwmRecorder::Record> pwm = recorder.records();
+
+  int armed_periods = 0, matched = 0;
+  double worst = 0.0;
+  for (const Period& p : periods) {
+    if (p.rise_us > killed || disarmed(p)) continue;
+    ++armed_periods;
+    // The best match among the armed messages of the 10 ms before the rise.
+    double best = 1e9;
+    for (const auto& r : pwm) {
+      if (!r.armed || r.at_us >= p.rise_us || r.at_us < p.rise_us - 10000) continue;
+      double e = 0.0;
+      for (int ch = 0; ch < 4; ++ch)
+        e = std::max(e, std::abs(p.width.at(ch) - r.pwm[static_cast<std::size_t>(ch)]));
+      best = std::min(best, e);
+    }
+    if (best <= kPulseToleranceUs) ++matched;
+    if (best < 1e9) worst = std::max(worst, best);
+  }
+  const double gone_ms = ms_to_disarmed(periods, killed);
+  std::printf(
+      "team quad flight: %d armed periods, %d match a motor_pwm_t of the 10 ms before "
+      "within %.1f us (worst %.3f us); disarmed %.1f ms after SIGKILL of motormix run; "
+      "simulation late by %.2f ms at worst\n",
+      armed_periods, matched, kPulseToleranceUs, worst, gone_ms, bridge.max_lag_us() / 1000.0);
+  EXPECT_GT(armed_periods, 1000);  // several seconds armed at 400 Hz
+  // The recorder is one more subscriber on a loaded two-core machine (the
+  // mixer, the output process, the player and the simulated chip): a
+  // message it misses leaves its period unmatched, so a few may be.
+  EXPECT_GE(matched, armed_periods * kMatchedShare);
+  EXPECT_LE(gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
+}
+
+}  // namespace
+}  // namespace motormix::test

@@ -1,0 +1,204 @@
+// `motormix output` as a process, on a private bus, with its sysfs driver
+// on a PWM tree in a temporary directory (the duty cycles are files to
+// read) and an ESC telemetry wire on a pseudo-terminal:
+// - disarmed at start; armed values pass, clamped into range; a message with
+//   a NaN is refused; armed=false disarms; a silent publisher disarms after
+//   the 50 ms timeout; SIGTERM disarms and exits 0;
+// - KISS telemetry frames from a generator, a third of them corrupted,
+//   come out as esc_telemetry_t, every good one and no bad one.
+
+#include "integration/process.hpp"
+#include "output/kiss_telemetry.hpp"
+#include "test_paths.hpp"
+
+#include <motormix/esc_telemetry_t.hpp>
+#include <motormix/motor_pwm_t.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace motormix::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr double kStaleBoundMs = 50.0 + 15.0;  // the timeout, its 5 ms tick, scheduling
+
+class OutputProcess : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    char tmpl[] = "/tmp/motormix-output-XXXXXX";
+    root_ = mkdtemp(tmpl);
+    std::filesystem::create_directories(root_ + "/pwmchip0");
+    std::ofstream(root_ + "/pwmchip0/export");
+    for (int c = 0; c < 4; ++c) {
+      const std::string dir = root_ + "/pwmchip0/pwm" + std::to_string(c);
+      std::filesystem::create_directories(dir);
+      for (const char* f : {"period", "duty_cycle", "enable"}) std::ofstream(dir + "/" + f);
+    }
+    master_ = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
+    ASSERT_GE(master_, 0);
+    grantpt(master_);
+    unlockpt(master_);
+    char name[128];
+    ptsname_r(master_, name, sizeof name);
+    config_ = root_ + "/config.yaml";
+    std::ofstream(config_) << "geometry: {preset: quad_x}\n"
+                              "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                              "hardware:\n"
+                              "  driver: sysfs\n"
+                              "  sysfs: {root: "
+                           << root_ << "}\n  telemetry: [{device: " << name << ", motor: 2}]\n";
+  }
+  void TearDown() override {
+    ::close(master_);
+    std::filesystem::remove_all(root_);
+  }
+  long long duty(int c) {
+    std::ifstream in(root_ + "/pwmchip0/pwm" + std::to_string(c) + "/duty_cycle");
+    long long v = -1;
+    in >> v;
+    return v;
+  }
+  // Waits until channel c's duty is `ns`; how long it took, ms (-1: not
+  // within the bound).
+  double wait_duty(int c, long long ns, double bound_ms) {
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - start <
+           std::chrono::duration<double, std::milli>(bound_ms)) {
+      if (duty(c) == ns) {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count();
+      }
+      std::this_thread::sleep_for(500us);
+    }
+    return -1.0;
+  }
+  void publish(lcm::LCM& lcm, std::vector<float> pwm, bool armed) {
+    motormix::motor_pwm_t m;
+    m.num_motors = static_cast<std::int32_t>(pwm.size());
+    m.pwm = std::move(pwm);
+    m.command.assign(m.pwm.size(), 0.5f);
+    m.direction.assign(m.pwm.size(), 0);
+    m.armed = armed;
+    lcm.publish("MOTOR_PWM", &m);
+  }
+
+  std::string root_, config_;
+  int master_ = -1;
+};
+
+TEST_F(OutputProcess, FailsafeChainOverSysfs) {
+  ChildProcess output({motormix_binary(), "output", "--config", config_}, root_ + "/output.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  ASSERT_GE(wait_duty(0, 1000000, 3000), 0.0) << "no disarmed duty at start";
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(duty(3), 1000000);
+
+  // Armed, one value beyond the range: clamped.
+  for (int i = 0; i < 20; ++i) {
+    publish(lcm, {1500, 1600, 2500, 1234.5f}, true);
+    std::this_thread::sleep_for(2500us);
+  }
+  EXPECT_EQ(duty(0), 1500000);
+  EXPECT_EQ(duty(2), 2000000);
+  EXPECT_EQ(duty(3), 1234500);
+  // A NaN: refused, nothing changes while good ones keep coming.
+  publish(lcm, {std::numeric_limits<float>::quiet_NaN(), 1900, 1900, 1900}, true);
+  publish(lcm, {1500, 1600, 2500, 1234.5f}, true);
+  std::this_thread::sleep_for(5ms);
+  EXPECT_EQ(duty(1), 1600000);
+  // armed=false: disarmed at once.
+  publish(lcm, {1500, 1600, 1700, 1800}, false);
+  EXPECT_GE(wait_duty(1, 1000000, 20), 0.0);
+  // Armed again, then the publisher goes quiet: disarmed after the timeout.
+  publish(lcm, {1700, 1700, 1700, 1700}, true);
+  ASSERT_GE(wait_duty(0, 1700000, 50), 0.0);
+  const double stale_ms = wait_duty(0, 1000000, 500);
+  std::printf("disarmed %.1f ms after the last motor_pwm_t\n", stale_ms);
+  EXPECT_GE(stale_ms, 40.0);
+  EXPECT_LE(stale_ms, kStaleBoundMs);
+  // Armed, then SIGTERM: disarmed, exit 0.
+  publish(lcm, {1800, 1800, 1800, 1800}, true);
+  ASSERT_GE(wait_duty(2, 1800000, 50), 0.0);
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(3s), 0);
+  EXPECT_EQ(duty(2), 1000000);
+  std::ifstream log(root_ + "/output.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("1 not finite"), std::string::npos) << text;
+  EXPECT_NE(text.find("values clamped"), std::string::npos) << text;
+}
+
+TEST_F(OutputProcess, KissTelemetryFromAWireComesOutAsEscTelemetry) {
+  ChildProcess output({motormix_binary(), "output", "--config", config_}, root_ + "/output.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  std::mutex mutex;
+  std::vector<motormix::esc_telemetry_t> got;
+  struct Handler {
+    std::mutex* mutex;
+    std::vector<motormix::esc_telemetry_t>* got;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::esc_telemetry_t* m) {
+      std::lock_guard<std::mutex> lock(*mutex);
+      got->push_back(*m);
+    }
+  } handler{&mutex, &got};
+  lcm.subscribe("ESC_TELEMETRY", &Handler::on, &handler);
+  std::atomic<bool> stop{false};
+  std::thread receiver([&] {
+    while (!stop) lcm.handleTimeout(20);
+  });
+  ASSERT_GE(wait_duty(0, 1000000, 3000), 0.0);  // running
+  std::mt19937 rng(1234);
+  int good = 0;
+  for (int k = 0; k < 150; ++k) {
+    output::KissReading r;
+    r.temperature_c = 30 + k % 20;
+    r.voltage_v = 15.0 + (k % 100) / 100.0;
+    r.current_a = 5.0 + (k % 50) / 10.0;
+    r.consumption_mah = 100 + k;
+    r.erpm = 20000 + 100 * k;
+    auto frame = output::kiss_frame(r);
+    if (k % 3 == 2) {
+      frame[rng() % frame.size()] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+    } else {
+      ++good;
+    }
+    ASSERT_EQ(::write(master_, frame.data(), frame.size()), static_cast<ssize_t>(frame.size()));
+    std::this_thread::sleep_for(3ms);  // the next request's gap
+  }
+  std::this_thread::sleep_for(200ms);
+  stop = true;
+  receiver.join();
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(static_cast<int>(got.size()), good);
+  for (const auto& m : got) {
+    ASSERT_EQ(m.count, 1);
+    EXPECT_EQ(m.motor[0], 2);
+    EXPECT_TRUE(std::isnan(m.rpm[0]));
+    EXPECT_GE(m.erpm[0], 20000.0f);
+    EXPECT_GE(m.voltage_v[0], 15.0f);
+    EXPECT_LE(m.voltage_v[0], 16.0f);
+  }
+}
+
+}  // namespace
+}  // namespace motormix::test
