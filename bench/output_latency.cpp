@@ -47,7 +47,7 @@ struct Relay {
   int fd;
   std::uint8_t seq = 1;
   void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    motormix::motor_pwm_t m;
+    motormix::motor_pwm_t m{};
     if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || m.num_motors < 1 ||
         m.num_motors > 8)
       return;
@@ -138,7 +138,7 @@ void measure_one(const char* name, const std::vector<std::string>& argv_without_
   lcm::LCM lcm;
   const auto start = std::chrono::steady_clock::now();
   for (int k = 0; k < count; ++k) {
-    motormix::motor_pwm_t m;
+    motormix::motor_pwm_t m{};
     m.num_motors = 4;
     const float w0 = 1100.0f + static_cast<float>(k % 800);
     m.pwm = {w0, 1500, 1500, 1500};

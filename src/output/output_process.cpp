@@ -118,11 +118,12 @@ class OutputNode {
     log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
          << " taken, " << undecodable_ << " undecodable, " << c.wrong_size << " wrong size, "
          << c.not_finite << " not finite, " << c.clamped << " values clamped, " << c.stale_events
-         << " times stale; " << driver_.describe() << std::endl;
+         << " times stale; " << write_failures_ << " hardware writes failed; "
+         << driver_.describe() << std::endl;
   }
 
   void publish_telemetry(const TelemetryWire& wire, const KissReading& r) {
-    motormix::esc_telemetry_t msg;
+    motormix::esc_telemetry_t msg{};
     msg.utime = wall_us();
     msg.count = 1;
     msg.motor = {static_cast<std::int8_t>(wire.port.motor + 1)};
@@ -138,7 +139,7 @@ class OutputNode {
  private:
   void on_motor_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     // Nothing here throws: a message that does not decode is counted.
-    motormix::motor_pwm_t msg;
+    motormix::motor_pwm_t msg{};
     if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || msg.num_motors < 0 ||
         msg.pwm.size() != static_cast<std::size_t>(msg.num_motors)) {
       ++undecodable_;

@@ -134,7 +134,7 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
   const int kMessages = 1200;
   const auto start = std::chrono::steady_clock::now();
   for (int k = 0; k < kMessages; ++k) {
-    motormix::motor_pwm_t m;
+    motormix::motor_pwm_t m{};
     m.num_motors = 4;
     m.pwm = {1100.25f + static_cast<float>(k % 800), 1300.0f + 0.37f * static_cast<float>(k % 1000),
              1500.5f + static_cast<float>((k * 7) % 300) * 0.73f,
@@ -200,7 +200,7 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
 
   // Armed again, then the output process killed outright.
   for (int k = 0; k < 200; ++k) {
-    motormix::motor_pwm_t m;
+    motormix::motor_pwm_t m{};
     m.num_motors = 4;
     m.pwm.assign(4, 1600.0f);
     m.command.assign(4, 0.6f);

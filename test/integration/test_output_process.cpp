@@ -91,7 +91,7 @@ class OutputProcess : public ::testing::Test {
     return -1.0;
   }
   void publish(lcm::LCM& lcm, std::vector<float> pwm, bool armed) {
-    motormix::motor_pwm_t m;
+    motormix::motor_pwm_t m{};
     m.num_motors = static_cast<std::int32_t>(pwm.size());
     m.pwm = std::move(pwm);
     m.command.assign(m.pwm.size(), 0.5f);
