@@ -8,6 +8,8 @@
 #include "node/monitor.hpp"
 #include "output/output_process.hpp"
 
+#include <motormix/signing.hpp>
+
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -115,6 +117,19 @@ int output(const OutputCommand& cmd) {
   options.disarm_only = cmd.disarm_only;
   options.max_run_s = cmd.max_run_s;
   return output::run_output(*config, options, std::cerr);
+}
+
+int keygen(const KeygenCommand& cmd) {
+  try {
+    signing::write_new_key(cmd.path);
+  } catch (const signing::KeyError& e) {
+    std::cerr << "motormix keygen: " << e.what() << "\n";
+    return kExitRuntime;
+  }
+  std::cout << "wrote a new signing key to " << cmd.path
+            << " (readable by its owner only); copy it to the other hosts of the bus over a "
+               "channel you trust\n";
+  return kExitOk;
 }
 
 int mix(const MixCommand& cmd) {

@@ -52,6 +52,12 @@ struct OutputCommand {
 };
 int output(const OutputCommand& cmd);
 
+struct KeygenCommand {
+  std::string path;
+};
+// A new signing key (64 hex digits, mode 0600); never overwrites a file.
+int keygen(const KeygenCommand& cmd);
+
 // The configuration `common` names (the file, or the preset's defaults),
 // with its overrides; on error, says so on stderr as "motormix COMMAND: ..."
 // and returns nothing.

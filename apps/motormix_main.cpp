@@ -75,6 +75,11 @@ int main(int argc, char** argv) {
                    "stop by itself after this long, disarmed (0: until a signal)")
       ->check(CLI::NonNegativeNumber);
 
+  KeygenCommand keygen_cmd;
+  CLI::App* keygen_app = app.add_subcommand(
+      "keygen", "write a new key for signed messages (mode 0600; never overwrites)");
+  keygen_app->add_option("file", keygen_cmd.path, "where to write it")->required();
+
   MixCommand mix_cmd;
   CLI::App* mix_app = app.add_subcommand(
       "mix", "evaluate the configured mixer once, as if armed with fresh inputs");
@@ -242,6 +247,7 @@ int main(int argc, char** argv) {
   }
   if (run_app->parsed()) return run(run_cmd);
   if (output_app->parsed()) return output(output_cmd);
+  if (keygen_app->parsed()) return keygen(keygen_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);

@@ -14,7 +14,7 @@ include(CMakePackageConfigHelpers)
 set(MOTORMIX_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/motormix)
 
 install(TARGETS motormix RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(TARGETS motormix_core motormix_config motormix_lcmtypes EXPORT motormixTargets
+install(TARGETS motormix_core motormix_config motormix_signing motormix_lcmtypes EXPORT motormixTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
@@ -25,6 +25,7 @@ install(FILES ${MOTORMIX_GENERATED_INCLUDE}/motormix/version.hpp
 install(DIRECTORY ${MOTORMIX_LCM_CPP_DIR}/motormix DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY ${MOTORMIX_LCM_PYTHON_DIR}/motormix DESTINATION ${MOTORMIX_INSTALL_PYTHONDIR}
   FILES_MATCHING PATTERN "*.py")
+install(FILES python/motormix_signing.py DESTINATION ${MOTORMIX_INSTALL_PYTHONDIR})
 install(FILES ${MOTORMIX_LCM_SOURCES} DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/lcmtypes)
 install(DIRECTORY config/ DESTINATION ${CMAKE_INSTALL_DATADIR}/motormix/config
   FILES_MATCHING PATTERN "*.yaml")
@@ -61,11 +62,11 @@ file(RELATIVE_PATH MOTORMIX_PC_TO_PREFIX
   /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
 string(REGEX REPLACE "/$" "" MOTORMIX_PC_TO_PREFIX "${MOTORMIX_PC_TO_PREFIX}")
 if(MOTORMIX_STATIC)
-  set(MOTORMIX_PC_REQUIRES "eigen3 lcm yaml-cpp pugixml")
+  set(MOTORMIX_PC_REQUIRES "eigen3 lcm yaml-cpp pugixml libsodium")
   set(MOTORMIX_PC_REQUIRES_PRIVATE "")
 else()
   set(MOTORMIX_PC_REQUIRES "eigen3 lcm")
-  set(MOTORMIX_PC_REQUIRES_PRIVATE "yaml-cpp pugixml")
+  set(MOTORMIX_PC_REQUIRES_PRIVATE "yaml-cpp pugixml libsodium")
 endif()
 configure_file(cmake/motormix.pc.in ${CMAKE_CURRENT_BINARY_DIR}/motormix.pc @ONLY)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/motormix.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -1,8 +1,8 @@
 #include "pulse_schedule.h"
 
 void mm_channel_bits(uint8_t channel, uint8_t* port_d_bit, uint8_t* port_b_bit) {
-  *port_d_bit = channel < 6u ? (uint8_t)(1u << (channel + 2u)) : 0u;
-  *port_b_bit = (channel >= 6u && channel < 8u) ? (uint8_t)(1u << (channel - 6u)) : 0u;
+  *port_d_bit = (uint8_t)(channel < 6u ? 1u << (channel + 2u) : 0u);
+  *port_b_bit = (uint8_t)((channel >= 6u && channel < 8u) ? 1u << (channel - 6u) : 0u);
 }
 
 void mm_rise_ports(uint8_t count, uint8_t* port_d, uint8_t* port_b) {

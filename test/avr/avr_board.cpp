@@ -1,5 +1,6 @@
 #include "avr_board.hpp"
 
+#include <cstdlib>
 #include <stdexcept>
 
 extern "C" {
@@ -48,7 +49,9 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
   avr_ = avr_make_mcu_by_name("atmega328p");
   if (!avr_) throw std::runtime_error("simavr has no atmega328p");
   avr_init(avr_);
-  avr_load_firmware(avr_, &fw);
+  avr_load_firmware(avr_, &fw);  // copies the image: ours to free
+  std::free(fw.flash);
+  std::free(fw.eeprom);
   avr_->frequency = static_cast<std::uint32_t>(kCpuHz);
   avr_->log = 0;
 
@@ -77,7 +80,10 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
 }
 
 AvrBoard::~AvrBoard() {
-  if (avr_) avr_terminate(avr_);
+  if (avr_) {
+    avr_terminate(avr_);  // frees what it allocated, not the part itself
+    std::free(avr_);
+  }
 }
 
 std::uint64_t AvrBoard::cycle() const { return avr_->cycle; }

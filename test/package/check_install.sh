@@ -90,6 +90,7 @@ consumer_build() {  # NAME SOURCE_DIR PREFIX [EXTRA CMAKE ARGUMENTS...]
 step "find_package(motormix): motormix::core + motormix::lcmtypes"
 consumer_build consumer "$src/test/package/consumer" "$prefix"
 "$work/consumer/build/core_and_types"
+"$work/consumer/build/signing" | grep -q 'signing: signed' || fail "motormix::signing: not signed"
 
 step "find_package(motormix): the README's embedding example (motormix::config)"
 consumer_build embedding "$src/examples/embedding" "$prefix"
