@@ -202,8 +202,10 @@ static void take_frame(uint8_t type, const mm_link_frame* f, uint32_t now) {
     take_pulses(&f->u.pulses, now);
   } else if (type == MM_LINK_CONFIG) {
     if (g_configured && same_config(&f->u.config, &g_config)) return;
-    if (g_configured && g_out_armed) {
-      ++g_report.rejected; /* never while the motors may be turning */
+    /* Never while the motors may be turning: armed pulses now, or an armed
+     * frame taken that the next period will start. */
+    if (g_configured && (g_out_armed || (g_link_ok && g_frame_armed[g_ready]))) {
+      ++g_report.rejected;
       return;
     }
     apply_config(&f->u.config);

@@ -261,6 +261,19 @@ TEST(PulseFirmware, OldFramesAndConfigurationsWhileArmedAreRefusedAndCounted) {
   h.board.take_pulses();
   h.board.run_for_us(3 * kPeriodUs);
   for (const Pulse& p : h.board.take_pulses()) EXPECT_NEAR(p.width_us, 1100.0, kExactToleranceUs);
+  // An armed frame and, right behind it, another configuration: whether or
+  // not a period has started from the frame yet, the configuration is
+  // refused.
+  const std::uint16_t refused_before = h.last_report().rejected;
+  h.send_pulses({1600, 1600, 1600, 1600});
+  h.send_config(h.config(4, 2500, 1200));
+  h.board.run_for_us(4 * kPeriodUs);
+  h.board.take_pulses();
+  h.send_pulses({1600, 1600, 1600, 1600});
+  h.board.run_for_us(3 * kPeriodUs);
+  for (const Pulse& p : h.board.take_pulses()) EXPECT_NEAR(p.width_us, 1600.0, kExactToleranceUs);
+  h.board.run_for_us(60000);
+  EXPECT_EQ(h.last_report().rejected, refused_before + 1);
 }
 
 TEST(PulseFirmware, HardwareWatchdogResetsAStuckChipToNoPulses) {
