@@ -39,6 +39,7 @@ namespace {
 using namespace std::chrono_literals;
 
 constexpr double kStaleBoundMs = 50.0 + 15.0;  // the timeout, its 5 ms tick, scheduling
+constexpr double kApplyBoundMs = 500.0;        // a value reaching the file, on a loaded machine
 
 class OutputProcess : public ::testing::Test {
  protected:
@@ -117,27 +118,33 @@ TEST_F(OutputProcess, FailsafeChainOverSysfs) {
     publish(lcm, {1500, 1600, 2500, 1234.5f}, true);
     std::this_thread::sleep_for(2500us);
   }
+  EXPECT_GE(wait_duty(3, 1234500, kApplyBoundMs), 0.0);
   EXPECT_EQ(duty(0), 1500000);
   EXPECT_EQ(duty(2), 2000000);
-  EXPECT_EQ(duty(3), 1234500);
-  // A NaN: refused, nothing changes while good ones keep coming.
+  // A NaN: refused, nothing changes while good ones keep coming (the good
+  // one after it is 1601 on motor 2: when that is written, the NaN message
+  // has been dealt with).
   publish(lcm, {std::numeric_limits<float>::quiet_NaN(), 1900, 1900, 1900}, true);
-  publish(lcm, {1500, 1600, 2500, 1234.5f}, true);
-  std::this_thread::sleep_for(5ms);
-  EXPECT_EQ(duty(1), 1600000);
-  // armed=false: disarmed at once.
+  publish(lcm, {1500, 1601, 2500, 1234.5f}, true);
+  EXPECT_GE(wait_duty(1, 1601000, kApplyBoundMs), 0.0);
+  EXPECT_EQ(duty(0), 1500000);
+  // armed=false: disarmed.
   publish(lcm, {1500, 1600, 1700, 1800}, false);
-  EXPECT_GE(wait_duty(1, 1000000, 20), 0.0);
+  EXPECT_GE(wait_duty(1, 1000000, kApplyBoundMs), 0.0);
   // Armed again, then the publisher goes quiet: disarmed after the timeout.
+  const auto last_publish = std::chrono::steady_clock::now();
   publish(lcm, {1700, 1700, 1700, 1700}, true);
-  ASSERT_GE(wait_duty(0, 1700000, 50), 0.0);
-  const double stale_ms = wait_duty(0, 1000000, 500);
+  ASSERT_GE(wait_duty(0, 1700000, kApplyBoundMs), 0.0);
+  ASSERT_GE(wait_duty(0, 1000000, 500), 0.0);
+  const double stale_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - last_publish)
+          .count();
   std::printf("disarmed %.1f ms after the last motor_pwm_t\n", stale_ms);
-  EXPECT_GE(stale_ms, 40.0);
+  EXPECT_GE(stale_ms, 50.0);  // never before the timeout
   EXPECT_LE(stale_ms, kStaleBoundMs);
   // Armed, then SIGTERM: disarmed, exit 0.
   publish(lcm, {1800, 1800, 1800, 1800}, true);
-  ASSERT_GE(wait_duty(2, 1800000, 50), 0.0);
+  ASSERT_GE(wait_duty(2, 1800000, kApplyBoundMs), 0.0);
   output.signal(SIGTERM);
   EXPECT_EQ(output.wait_for(3s), 0);
   EXPECT_EQ(duty(2), 1000000);
