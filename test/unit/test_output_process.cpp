@@ -16,12 +16,14 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -207,15 +209,20 @@ struct PtyPair {
     device = name;
   }
   ~PtyPair() { ::close(master); }
-  std::vector<mm_link_frame> frames() {
+  // The frames that came through, waiting (bounded) until `want` did:
+  // the tty layer hands bytes over a moment after they were written.
+  std::vector<mm_link_frame> frames(std::size_t want, int wait_ms = 1000) {
     std::vector<mm_link_frame> out;
     std::uint8_t buf[512];
-    ssize_t n;
-    while ((n = ::read(master, buf, sizeof buf)) > 0) {
-      for (ssize_t i = 0; i < n; ++i) {
-        mm_link_frame f{};
-        if (mm_link_feed(&parser, buf[i], &f) != 0) out.push_back(f);
+    for (int waited = 0; waited <= wait_ms && out.size() < want; ++waited) {
+      ssize_t n;
+      while ((n = ::read(master, buf, sizeof buf)) > 0) {
+        for (ssize_t i = 0; i < n; ++i) {
+          mm_link_frame f{};
+          if (mm_link_feed(&parser, buf[i], &f) != 0) out.push_back(f);
+        }
       }
+      if (out.size() < want) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     return out;
   }
@@ -247,7 +254,7 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
   const double pulses[4] = {1234.3, 1500, 1750.74, 1999.9};
   ASSERT_TRUE(driver.write(pulses, 4, true));
-  std::vector<mm_link_frame> got = pty.frames();
+  std::vector<mm_link_frame> got = pty.frames(2);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
   EXPECT_EQ(got[0].u.config.period_us, 2500);
@@ -257,21 +264,30 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   EXPECT_EQ(got[1].u.pulses.pulse_hus[0], 2469);  // 1234.5 us: the nearest half microsecond
   EXPECT_EQ(got[1].u.pulses.pulse_hus[2], 3501);
   EXPECT_EQ(got[1].u.pulses.pulse_hus[3], 4000);
-  // A report from a chip that lost its configuration (a watchdog reset):
-  // the configuration goes again at the next service.
-  pty.report(0);
-  ASSERT_TRUE(driver.service(0.0));  // also the first periodic configuration
-  got = pty.frames();
-  ASSERT_TRUE(driver.have_report());
-  EXPECT_EQ(driver.report().frames, 7u);
-  pty.report(0);
-  ASSERT_TRUE(driver.service(0.1));  // within the second: only because of the report
-  got = pty.frames();
+  // The first service sends the periodic configuration (once a second).
+  ASSERT_TRUE(driver.service(0.0));
+  got = pty.frames(1);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+  // A report from a chip that lost its configuration (a watchdog reset):
+  // the configuration goes again at once, within the second.
+  const auto serve_until_report = [&](std::uint64_t reports, double now) {
+    for (int i = 0; i < 1000 && driver.reports() < reports; ++i) {
+      ASSERT_TRUE(driver.service(now));
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ASSERT_EQ(driver.reports(), reports);
+  };
+  pty.report(0);
+  serve_until_report(1, 0.1);
+  EXPECT_EQ(driver.report().frames, 7u);
+  got = pty.frames(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+  // A configured chip's report: nothing more within the second.
   pty.report(MM_LINK_FLAG_CONFIGURED);
-  ASSERT_TRUE(driver.service(0.2));
-  EXPECT_TRUE(pty.frames().empty());
+  serve_until_report(2, 0.2);
+  EXPECT_TRUE(pty.frames(1, 50).empty());
   EXPECT_NE(driver.describe().find("7 frames taken"), std::string::npos) << driver.describe();
 }
 

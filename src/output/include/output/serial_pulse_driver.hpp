@@ -33,6 +33,7 @@ class SerialPulseDriver : public PulseDriver {
   std::string describe() const override;
 
   bool have_report() const { return reports_ > 0; }
+  std::uint64_t reports() const { return reports_; }
   const mm_link_report& report() const { return report_; }
   std::uint64_t frames_sent() const { return frames_sent_; }
   std::uint64_t write_failures() const { return write_failures_; }
