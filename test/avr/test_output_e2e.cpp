@@ -234,7 +234,10 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
 class PwmRecorder {
  public:
   PwmRecorder(lcm::LCM& lcm, const std::string& channel) : lcm_(lcm) {
-    lcm_.subscribe(channel, &PwmRecorder::on, this);
+    // LCM keeps 30 messages per subscription and drops the newest beyond
+    // them: a recorder thread that runs late on a loaded machine would lose
+    // messages, and their periods would look unmatched.
+    lcm_.subscribe(channel, &PwmRecorder::on, this)->setQueueCapacity(100000);
     thread_ = std::thread([this] {
       while (!stop_) lcm_.handleTimeout(20);
     });
