@@ -64,6 +64,23 @@ void write_new_key(const std::string& path);
 // Unix microseconds to the trailer's 10 us units since 2015-01-01.
 std::uint64_t timestamp_of(std::int64_t unix_us);
 
+// The HMAC's keyed state, computed once per key (an opaque copy of
+// libsodium's, wiped when destroyed): each message then costs the hash of
+// its own bytes only.
+class KeyedHash {
+ public:
+  explicit KeyedHash(const Key& key);
+  ~KeyedHash();
+  KeyedHash(const KeyedHash&) = default;
+  KeyedHash& operator=(const KeyedHash&) = default;
+  // The tag over channel, 0, payload, header (kTagBytes into tag).
+  void tag(const std::string& channel, const std::uint8_t* payload, std::size_t size,
+           const std::uint8_t* header, std::uint8_t* tag) const;
+
+ private:
+  alignas(16) std::array<unsigned char, 256> state_{};
+};
+
 class Signer {
  public:
   Signer(const Key& key, std::uint8_t link_id);
@@ -78,7 +95,7 @@ class Signer {
   std::uint8_t link_id() const { return link_id_; }
 
  private:
-  Key key_;
+  KeyedHash hash_;
   std::uint8_t link_id_;
   std::uint64_t last_ = 0;
 };
@@ -110,7 +127,7 @@ class Verifier {
  private:
   int channel_index(const std::string& channel);
 
-  Key key_;
+  KeyedHash hash_;
   std::uint64_t max_skew_;
   std::array<std::string, kMaxChannels> channels_{};
   int channel_count_ = 0;

@@ -22,23 +22,6 @@ void ensure_sodium() {
   if (sodium_init() < 0) throw KeyError("libsodium could not start (no random source)");
 }
 
-void tag_of(const std::uint8_t* key, const std::string& channel, const std::uint8_t* payload,
-            std::size_t size, const std::uint8_t* header, std::uint8_t* tag) {
-  crypto_auth_hmacsha256_state state;
-  crypto_auth_hmacsha256_init(&state, key, kKeyBytes);
-  crypto_auth_hmacsha256_update(&state, reinterpret_cast<const unsigned char*>(channel.data()),
-                                channel.size());
-  const unsigned char zero = 0;
-  crypto_auth_hmacsha256_update(&state, &zero, 1);
-  crypto_auth_hmacsha256_update(&state, payload, size);
-  crypto_auth_hmacsha256_update(&state, header, kHeaderBytes);
-  unsigned char full[crypto_auth_hmacsha256_BYTES];
-  crypto_auth_hmacsha256_final(&state, full);
-  std::memcpy(tag, full, kTagBytes);
-  sodium_memzero(full, sizeof full);
-  sodium_memzero(&state, sizeof state);
-}
-
 std::uint64_t read48(const std::uint8_t* p) {
   std::uint64_t v = 0;
   for (int i = 5; i >= 0; --i) v = (v << 8) | p[i];
@@ -48,6 +31,33 @@ std::uint64_t read48(const std::uint8_t* p) {
 }  // namespace
 
 Key::~Key() { sodium_memzero(bytes_.data(), bytes_.size()); }
+
+static_assert(sizeof(crypto_auth_hmacsha256_state) <= 256, "KeyedHash::state_ too small");
+
+KeyedHash::KeyedHash(const Key& key) {
+  ensure_sodium();
+  auto* state = reinterpret_cast<crypto_auth_hmacsha256_state*>(state_.data());
+  crypto_auth_hmacsha256_init(state, key.data(), kKeyBytes);
+}
+
+KeyedHash::~KeyedHash() { sodium_memzero(state_.data(), state_.size()); }
+
+void KeyedHash::tag(const std::string& channel, const std::uint8_t* payload, std::size_t size,
+                    const std::uint8_t* header, std::uint8_t* out) const {
+  crypto_auth_hmacsha256_state state;
+  std::memcpy(&state, state_.data(), sizeof state);
+  crypto_auth_hmacsha256_update(&state, reinterpret_cast<const unsigned char*>(channel.data()),
+                                channel.size());
+  const unsigned char zero = 0;
+  crypto_auth_hmacsha256_update(&state, &zero, 1);
+  crypto_auth_hmacsha256_update(&state, payload, size);
+  crypto_auth_hmacsha256_update(&state, header, kHeaderBytes);
+  unsigned char full[crypto_auth_hmacsha256_BYTES];
+  crypto_auth_hmacsha256_final(&state, full);
+  std::memcpy(out, full, kTagBytes);
+  sodium_memzero(full, sizeof full);
+  sodium_memzero(&state, sizeof state);
+}
 
 Key load_key(const std::string& path) {
   ensure_sodium();
@@ -112,9 +122,7 @@ std::uint64_t timestamp_of(std::int64_t unix_us) {
                                  kTimestampMax);
 }
 
-Signer::Signer(const Key& key, std::uint8_t link_id) : key_(key), link_id_(link_id) {
-  ensure_sodium();
-}
+Signer::Signer(const Key& key, std::uint8_t link_id) : hash_(key), link_id_(link_id) {}
 
 void Signer::sign(const std::string& channel, const std::uint8_t* payload, std::size_t size,
                   std::int64_t now_unix_us, std::uint8_t* out) {
@@ -124,7 +132,7 @@ void Signer::sign(const std::string& channel, const std::uint8_t* payload, std::
   std::memcpy(out, kMagic, 4);
   out[4] = link_id_;
   for (int i = 0; i < 6; ++i) out[5 + i] = static_cast<std::uint8_t>(ts >> (8 * i));
-  tag_of(key_.data(), channel, payload, size, out, out + kHeaderBytes);
+  hash_.tag(channel, payload, size, out, out + kHeaderBytes);
 }
 
 std::vector<std::uint8_t> Signer::signed_copy(const std::string& channel,
@@ -159,11 +167,9 @@ bool has_trailer(const std::uint8_t* data, std::size_t size) {
 }
 
 Verifier::Verifier(const Key& key, double max_skew_s)
-    : key_(key),
+    : hash_(key),
       max_skew_(static_cast<std::uint64_t>(std::max(0.0, max_skew_s) * 1e5)),
-      last_(256) {
-  ensure_sodium();
-}
+      last_(256) {}
 
 int Verifier::channel_index(const std::string& channel) {
   for (int i = 0; i < channel_count_; ++i)
@@ -188,7 +194,7 @@ Verdict Verifier::verify(const std::string& channel, const std::uint8_t* data, s
   *payload_size = n;
   const std::uint8_t* trailer = data + n;
   std::uint8_t expected[kTagBytes];
-  tag_of(key_.data(), channel, data, n, trailer, expected);
+  hash_.tag(channel, data, n, trailer, expected);
   const bool good = sodium_memcmp(expected, trailer + kHeaderBytes, kTagBytes) == 0;
   sodium_memzero(expected, sizeof expected);
   if (!good) return count(Verdict::kBadSignature);
