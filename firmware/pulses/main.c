@@ -152,7 +152,9 @@ static void apply_config(const mm_link_config* c) {
   g_have_sequence = 0;
   mm_rise_ports(c->count, &mm_isr_rise.port_d, &mm_isr_rise.port_b);
   mm_isr_rise.flags = (uint8_t)(1u << MM_EDGE_RISE);
-  mm_isr_rise.next_compare = 0; /* set by mm_isr_period_start */
+  /* The rise's next compare is never used: mm_isr_period_start sets the
+   * first fall's compare itself. */
+  mm_isr_rise.next_compare = 0;
   mm_isr_next = &mm_isr_rise;
   /* The first rise a little ahead; the interrupt takes it from there. */
   g_rise_at = (uint16_t)(TCNT1 + 400u - g_period_ticks);

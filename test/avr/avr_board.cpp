@@ -14,13 +14,8 @@ extern "C" {
 namespace motormix::avr {
 namespace {
 
-struct PinParam {
-  AvrBoard* board;
-  int channel;
-};
-
 void pin_changed(avr_irq_t*, std::uint32_t value, void* param) {
-  auto* p = static_cast<PinParam*>(param);
+  auto* p = static_cast<AvrBoard::PinParam*>(param);
   p->board->on_pin(p->channel, value != 0);
 }
 
@@ -34,9 +29,6 @@ void uart_xoff(avr_irq_t*, std::uint32_t, void* param) {
 void uart_xon(avr_irq_t*, std::uint32_t, void* param) {
   static_cast<AvrBoard*>(param)->on_xoff(false);
 }
-
-// One parameter block per board and channel, alive as long as the board.
-thread_local std::vector<std::unique_ptr<PinParam>> g_pin_params;
 
 }  // namespace
 
@@ -73,9 +65,9 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
   for (int ch = 0; ch < kChannels; ++ch) {
     const char port = ch < 6 ? 'D' : 'B';
     const int bit = ch < 6 ? ch + 2 : ch - 6;
-    g_pin_params.push_back(std::make_unique<PinParam>(PinParam{this, ch}));
+    pin_params_[ch] = {this, ch};
     avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(port), bit), pin_changed,
-                            g_pin_params.back().get());
+                            &pin_params_[ch]);
   }
 }
 
@@ -103,10 +95,8 @@ void AvrBoard::on_xoff(bool off) {
 bool AvrBoard::run_until(std::uint64_t cycle) {
   while (avr_->cycle < cycle) {
     if (!rx_.empty() && rx_.front().cycle <= avr_->cycle) feed_due_bytes();
-    const std::uint64_t before = avr_->cycle;
     const int state = avr_run(avr_);
     if (state == cpu_Done || state == cpu_Crashed) return false;
-    if (avr_->cycle < before) ++resets_;  // not expected: simavr keeps counting
   }
   return true;
 }

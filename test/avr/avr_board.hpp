@@ -8,7 +8,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -66,9 +65,13 @@ class AvrBoard {
   // Fault injection: clears the interrupt flag in SREG, as a firmware bug
   // that left interrupts off would.
   void disable_interrupts();
-  int resets_seen() const { return resets_; }
 
-  // Callbacks from simavr (public for the C trampolines).
+  // Callbacks from simavr (public for the C trampolines); a pin's
+  // notification hands back its PinParam.
+  struct PinParam {
+    AvrBoard* board;
+    int channel;
+  };
   void on_pin(int channel, bool high);
   void on_uart_out(std::uint8_t byte);
   void on_xoff(bool off);
@@ -94,7 +97,7 @@ class AvrBoard {
   std::vector<Pulse> pulses_;
   bool level_[kChannels] = {};
   std::uint64_t rise_[kChannels] = {};
-  int resets_ = 0;
+  PinParam pin_params_[kChannels] = {};
 };
 
 }  // namespace motormix::avr
