@@ -100,8 +100,17 @@ struct ReplayCommand {
   std::string out_log;
   bool every_input = false;
   double max_gap_s = 10.0;
+  bool verify = false;
 };
 int replay(const ReplayCommand& cmd);
+
+struct SignLogCommand {
+  CommonOptions common;
+  std::string in_log;
+  std::string out_log;
+  bool now = false;
+};
+int sign_log(const SignLogCommand& cmd);
 
 struct SimCommand {
   CommonOptions common;

@@ -123,6 +123,21 @@ int main(int argc, char** argv) {
                    "seconds between consecutive events beyond which time is discontinuous "
                    "(no cycles are run across; default 10)")
       ->check(CLI::Range(0.001, 86400.0));
+  replay_app->add_flag("--verify", replay_cmd.verify,
+                       "check every event's signature with security.key_file (per-channel "
+                       "report; exit 5 if any is refused) and mix as under security.mode require");
+
+  SignLogCommand sign_log_cmd;
+  CLI::App* sign_log_app = app.add_subcommand(
+      "sign-log", "copy a flight log with every event signed with security.key_file");
+  add_vehicle(sign_log_app, sign_log_cmd.common);
+  sign_log_app->add_option("in", sign_log_cmd.in_log, "input LCM event log")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sign_log_app->add_option("out", sign_log_cmd.out_log, "signed copy")->required();
+  sign_log_app->add_flag("--now", sign_log_cmd.now,
+                         "stamp the signatures from now (keeping the spacing), so that a live "
+                         "mixer takes the copy once when lcm-logplayer plays it");
 
   MonitorCommand monitor_cmd;
   CLI::App* monitor_app =
@@ -251,6 +266,7 @@ int main(int argc, char** argv) {
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);
+  if (sign_log_app->parsed()) return sign_log(sign_log_cmd);
   if (monitor_app->parsed()) return monitor(monitor_cmd);
   if (sim_app->parsed()) return sim(sim_cmd);
   if (test_app->parsed()) return motor_test(test_cmd);

@@ -3,9 +3,11 @@
 #include "bringup/motor_test_client.hpp"
 #include "node/wall_clock.hpp"
 
+#include <motormix/config/security.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/motor_test_t.hpp>
+#include <motormix/signing_policy.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -17,6 +19,7 @@
 #include <optional>
 #include <ostream>
 #include <thread>
+#include <vector>
 
 namespace motormix::bringup {
 
@@ -29,14 +32,20 @@ double seconds_since(Clock::time_point start) {
 }
 
 // The latest status seen, decoded inside the callback (nothing thrown out).
+// Under security: sign or require, only a status whose signature verifies
+// is believed (a forged "test running" must not keep the client waiting).
 struct StatusWatch {
+  signing::Policy* policy = nullptr;
   std::optional<mixer_status_t> latest;
   int statuses = 0;
-  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const signing::Inbound in = policy->check(channel, static_cast<const std::uint8_t*>(rbuf->data),
+                                              rbuf->data_size, node::wall_us());
+    if (!in.accept) return;
+    const int size = static_cast<int>(in.payload_size);
     mixer_status_t msg;
     try {
-      if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
-          static_cast<int>(rbuf->data_size)) {
+      if (msg.decode(rbuf->data, 0, size) == size) {
         latest = msg;
         ++statuses;
       }
@@ -46,14 +55,38 @@ struct StatusWatch {
   }
 };
 
-void send_test(lcm::LCM& lcm, const std::string& channel, int motor_1based, double throttle,
-               double seconds, std::int64_t utime) {
+// Publishes msg, signed when the configuration signs.
+template <typename Message>
+void publish(lcm::LCM& lcm, signing::Policy& policy, const std::string& channel,
+             const Message& msg) {
+  std::vector<std::uint8_t> buffer(static_cast<std::size_t>(msg.getEncodedSize()) +
+                                   signing::kTrailerBytes);
+  const int len = msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+  if (len <= 0) return;
+  const std::size_t size =
+      policy.seal(channel, buffer.data(), static_cast<std::size_t>(len), node::wall_us());
+  lcm.publish(channel, buffer.data(), static_cast<unsigned>(size));
+}
+
+void send_test(lcm::LCM& lcm, signing::Policy& policy, const std::string& channel, int motor_1based,
+               double throttle, double seconds, std::int64_t utime) {
   motor_test_t msg;
   msg.utime = utime;
   msg.motor = motor_1based;
   msg.throttle = static_cast<float>(throttle);
   msg.duration_s = static_cast<float>(seconds);
-  lcm.publish(channel, &msg);
+  publish(lcm, policy, channel, msg);
+}
+
+// The configuration's signing policy, or nothing (with the reason on err).
+std::optional<signing::Policy> policy_for(const config::Config& config, const char* command,
+                                          std::ostream& err) {
+  try {
+    return config::signing_policy(config);
+  } catch (const config::ConfigError& e) {
+    err << "motormix " << command << ": " << e.what() << "\n";
+    return std::nullopt;
+  }
 }
 
 // Enter on `fd`, polled without blocking: 1 a line, -1 end of input, 0 nothing yet.
@@ -91,12 +124,15 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
                              double throttle, double seconds, double wait_s,
                              const std::string& lcm_url, const std::atomic<bool>& interrupted,
                              std::ostream& out, std::ostream& err) {
+  std::optional<signing::Policy> policy = policy_for(config, "motor-test", err);
+  if (!policy) return ClientOutcome::kBusError;
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
     err << "motormix motor-test: cannot open the LCM bus\n";
     return ClientOutcome::kBusError;
   }
   StatusWatch watch;
+  watch.policy = &*policy;
   lcm.subscribe(config.channels.status, &StatusWatch::on_status, &watch);
   MotorTestClient client(motors, throttle, seconds, wait_s);
   const auto start = Clock::now();
@@ -114,7 +150,8 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
     using Kind = MotorTestClient::Action::Kind;
     switch (a.kind) {
       case Kind::kSend:
-        send_test(lcm, config.channels.motor_test, a.motor, a.throttle, a.seconds, a.utime);
+        send_test(lcm, *policy, config.channels.motor_test, a.motor, a.throttle, a.seconds,
+                  a.utime);
         break;
       case Kind::kSpinning:
         out << describe_motor(config, a.motor - 1) << ": spinning at " << throttle << " for "
@@ -133,7 +170,7 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
         err << "motormix motor-test: refused: " << loop::to_string(a.refusal) << "\n";
         return ClientOutcome::kRefused;
       case Kind::kStopped:
-        send_test(lcm, config.channels.motor_test, 0, 0.0, 0.0, a.utime);
+        send_test(lcm, *policy, config.channels.motor_test, 0, 0.0, 0.0, a.utime);
         err << "motormix motor-test: interrupted, test stopped\n";
         return ClientOutcome::kInterrupted;
     }
@@ -144,6 +181,8 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
                                   const std::string& lcm_url, int input_fd,
                                   const std::atomic<bool>& interrupted, std::ostream& out,
                                   std::ostream& err) {
+  std::optional<signing::Policy> policy = policy_for(config, "esc-calibrate", err);
+  if (!policy) return ClientOutcome::kBusError;
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
     err << "motormix esc-calibrate: cannot open the LCM bus\n";
@@ -151,7 +190,11 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
   }
   // Nothing else may drive the outputs: any status, or any motor_pwm_t
   // heard before this process publishes its own, is a mixer.
+  // Any status at all means a mixer runs, signed or not: here every one
+  // counts (mode off reads them all).
+  signing::Policy any_status;
   StatusWatch watch;
+  watch.policy = &any_status;
   int foreign_pwm = 0;
   bool publishing = false;
   struct PwmWatch {
@@ -215,7 +258,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
         msg.command[k] = static_cast<float>(o.command);
       }
       msg.armed = o.armed;
-      lcm.publish(config.channels.motor_pwm, &msg);
+      publish(lcm, *policy, config.channels.motor_pwm, msg);
       // Our own outputs come back on the same channel: from now on only a
       // status betrays another mixer.
       while (lcm.handleTimeout(0) > 0) {

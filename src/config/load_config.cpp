@@ -4,6 +4,7 @@
 #include "failure_detection_reader.hpp"
 #include "motor_loss_reader.hpp"
 #include "hardware_reader.hpp"
+#include "security_reader.hpp"
 #include "vehicle_physics_reader.hpp"
 #include "config/yaml_reader.hpp"
 
@@ -652,6 +653,7 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
   read_failure_detection(root.map("failure_detection"), root.has("failure_detection"), config);
   read_motor_loss(root.map("motor_loss"), config);
   read_hardware(root.map("hardware"), config);
+  read_security(root.map("security"), context.base_dir, config);
   if (config.status_rate_hz > config.loop_rate_hz) {
     std::ostringstream found;
     found << config.status_rate_hz << " with loop_rate_hz " << config.loop_rate_hz;

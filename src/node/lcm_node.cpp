@@ -5,9 +5,11 @@
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/matrix_export.hpp>
+#include <motormix/config/security.hpp>
+#include <motormix/signing_policy.hpp>
+#include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
 #include "node/messages.hpp"
-#include "latency_histogram.hpp"
 #include "realtime.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"
@@ -34,6 +36,7 @@
 #include <cstring>
 #include <fstream>
 #include <ostream>
+#include <utility>
 #include <vector>
 
 namespace motormix::node {
@@ -71,9 +74,10 @@ class Fd {
 
 class Node {
  public:
-  Node(const config::Config& config, lcm::LCM& lcm, const SocketDropsWatcher& drops,
-       std::ostream& log)
+  Node(const config::Config& config, signing::Policy policy, lcm::LCM& lcm,
+       const SocketDropsWatcher& drops, std::ostream& log)
       : config_(config),
+        policy_(std::move(policy)),
         drops_(drops),
         lcm_(lcm),
         log_(log),
@@ -82,12 +86,16 @@ class Node {
         compute_stats_(window_capacity(config)),
         wake_stats_(window_capacity(config)) {
     const int n = config.motors();
+    // Each buffer has room for a signature after the message.
+    const auto room = [](int encoded) {
+      return static_cast<std::size_t>(encoded) + signing::kTrailerBytes;
+    };
     size_pwm_message(pwm_msg_, n);
-    pwm_buffer_.resize(static_cast<std::size_t>(pwm_msg_.getEncodedSize()));
+    pwm_buffer_.resize(room(pwm_msg_.getEncodedSize()));
     status_msg_.num_motors = n;
-    status_buffer_.resize(static_cast<std::size_t>(status_msg_.getEncodedSize()));
+    status_buffer_.resize(room(status_msg_.getEncodedSize()));
     fill_motor_status_message(motor_status_msg_, 0, n, 0);
-    motor_status_buffer_.resize(static_cast<std::size_t>(motor_status_msg_.getEncodedSize()));
+    motor_status_buffer_.resize(room(motor_status_msg_.getEncodedSize()));
   }
 
   void subscribe() {
@@ -136,8 +144,8 @@ class Node {
     }
     if (r.detection_changed && r.detection.failed != 0) {
       log_ << "motormix: detected motor "
-           << config_.motor_names()[static_cast<std::size_t>(r.detection.motor)]
-           << " failed (" << to_string(r.detection.source) << ")" << std::endl;
+           << config_.motor_names()[static_cast<std::size_t>(r.detection.motor)] << " failed ("
+           << to_string(r.detection.source) << ")" << std::endl;
     }
     if (r.landing_changed) log_landing(r);
     if (r.failed != logged_failed_) {
@@ -218,13 +226,20 @@ class Node {
   // flood of bad input cannot flood the log.
   void warn_about_rejections(std::int64_t now_us) {
     const loop::Counters& c = loop_.counters();
-    const std::int64_t total = c.rejected();
+    const signing::PolicyCounts& sc = policy_.counts();
+    const std::int64_t total = c.rejected() + static_cast<std::int64_t>(sc.rejected());
     if (total == warned_total_ || now_us - last_warning_us_ < 1'000'000) return;
     log_ << "motormix: warning: " << total - warned_total_
          << " input messages rejected since the last warning (totals: undecodable "
          << c.rejected_decode << ", non-finite " << c.rejected_nonfinite << ", out of range "
          << c.rejected_range << ", out of order " << c.rejected_out_of_order << ", from the future "
-         << c.rejected_future << ", wrong size " << c.rejected_size << ")" << std::endl;
+         << c.rejected_future << ", wrong size " << c.rejected_size;
+    if (policy_.signs()) {
+      log_ << ", unsigned " << sc.rejected_unsigned << ", bad signature "
+           << sc.rejected_bad_signature << ", replayed " << sc.rejected_replayed
+           << ", stale signature " << sc.rejected_stale + sc.rejected_other;
+    }
+    log_ << ")" << std::endl;
     warned_total_ = total;
     last_warning_us_ = now_us;
   }
@@ -297,51 +312,82 @@ class Node {
     return now_us - waited;
   }
 
-  // No exception may leave an LCM callback: decoding reports failure as a
-  // value, and nothing else here throws.
-  bool receive(InputKind kind, const lcm::ReceiveBuffer* rbuf) {
-    const std::int64_t wall = wall_us();
-    return deliver_input(loop_, kind, rbuf->data, static_cast<int>(rbuf->data_size),
+  // No exception may leave an LCM callback: verifying and decoding report
+  // failure as values, and nothing else here throws.
+  //
+  // The signing policy first: a message it refuses (unsigned under
+  // `require`, a bad signature, a replay) is counted there and never
+  // decoded. The payload it passes on has no signature trailer.
+  std::size_t verified_size(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                            std::int64_t wall) {
+    const signing::Inbound in =
+        policy_.check(channel, static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size, wall);
+    return in.accept ? in.payload_size : kRefused;
+  }
+  bool deliver(InputKind kind, const lcm::ReceiveBuffer* rbuf, std::size_t size,
+               std::int64_t wall) {
+    return deliver_input(loop_, kind, rbuf->data, static_cast<int>(size),
                          received_us(rbuf, monotonic_us(), wall), wall);
   }
-  void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    receive(InputKind::kSetpoint, rbuf);
+  bool receive(InputKind kind, const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const std::int64_t wall = wall_us();
+    const std::size_t size = verified_size(rbuf, channel, wall);
+    return size != kRefused && deliver(kind, rbuf, size, wall);
   }
-  void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    if (receive(InputKind::kPid, rbuf)) new_pid_ = true;
+  void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    receive(InputKind::kSetpoint, rbuf, channel);
   }
-  void on_motor_status(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
+  void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    if (receive(InputKind::kPid, rbuf, channel)) new_pid_ = true;
+  }
+  void on_motor_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const std::int64_t wall = wall_us();
+    const std::size_t size = verified_size(rbuf, channel, wall);
+    if (size == kRefused) return;
     // Our own motor_status comes back to us over the bus: it is what the
     // detector already holds, and taken as a report it would outlive the
     // disarming that clears the detector's declarations.
     loop::MotorStatusSample sample;
-    if (decode_motor_status(rbuf->data, static_cast<int>(rbuf->data_size), sample) &&
+    if (decode_motor_status(rbuf->data, static_cast<int>(size), sample) &&
         std::find(own_status_utimes_.begin(), own_status_utimes_.end(), sample.utime) !=
             own_status_utimes_.end()) {
       return;
     }
-    receive(InputKind::kMotorStatus, rbuf);
+    deliver(InputKind::kMotorStatus, rbuf, size, wall);
   }
-  void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    receive(InputKind::kBattery, rbuf);
+  void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    receive(InputKind::kBattery, rbuf, channel);
   }
-  void on_esc_telemetry(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    receive(InputKind::kEscTelemetry, rbuf);
+  void on_esc_telemetry(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    receive(InputKind::kEscTelemetry, rbuf, channel);
   }
-  void on_attitude(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    receive(InputKind::kAttitude, rbuf);
+  void on_attitude(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    receive(InputKind::kAttitude, rbuf, channel);
   }
-  void on_motor_test(const lcm::ReceiveBuffer* rbuf, const std::string& /*channel*/) {
-    receive(InputKind::kMotorTest, rbuf);
+  void on_motor_test(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const std::int64_t wall = wall_us();
+    const std::size_t size = verified_size(rbuf, channel, wall);
+    // A request the signing policy refuses (unsigned under `require`) is
+    // not answered: only its sender could take the answer for its own.
+    if (size == kRefused) return;
+    deliver(InputKind::kMotorTest, rbuf, size, wall);
     motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
+  }
+
+  // Encodes, signs when the policy signs, publishes. The buffers were sized
+  // once with room for the signature: nothing is allocated here.
+  template <typename Message>
+  void publish(const std::string& channel, const Message& msg, std::vector<uint8_t>& buffer) {
+    const int len = msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+    if (len <= 0) return;
+    const std::size_t size =
+        policy_.seal(channel, buffer.data(), static_cast<std::size_t>(len), wall_us());
+    lcm_.publish(channel, buffer.data(), static_cast<unsigned>(size));
   }
 
   void publish_pwm(const loop::CycleResult& r) {
     fill_pwm_message(pwm_msg_, r, wall_us());
-    const int len = pwm_msg_.encode(pwm_buffer_.data(), 0, static_cast<int>(pwm_buffer_.size()));
-    if (len > 0) {
-      lcm_.publish(config_.channels.motor_pwm, pwm_buffer_.data(), static_cast<unsigned>(len));
-    }
+    publish(config_.channels.motor_pwm, pwm_msg_, pwm_buffer_);
   }
 
   void publish_motor_status(const loop::CycleResult& r) {
@@ -352,12 +398,7 @@ class Node {
     last_own_status_utime_ = utime;
     fill_motor_status_message(motor_status_msg_, r.failed, config_.motors(), utime);
     own_status_utimes_[own_status_next_++ % own_status_utimes_.size()] = utime;
-    const int len = motor_status_msg_.encode(motor_status_buffer_.data(), 0,
-                                             static_cast<int>(motor_status_buffer_.size()));
-    if (len > 0) {
-      lcm_.publish(config_.channels.motor_status, motor_status_buffer_.data(),
-                   static_cast<unsigned>(len));
-    }
+    publish(config_.channels.motor_status, motor_status_msg_, motor_status_buffer_);
   }
 
   void publish_status(const loop::CycleResult& r) {
@@ -369,15 +410,14 @@ class Node {
     timing.kernel_drops = drops_.latest();
     timing.wall_minus_loop_clock_us = wall_us() - monotonic_us();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
-                        wall_us());
-    const int len =
-        status_msg_.encode(status_buffer_.data(), 0, static_cast<int>(status_buffer_.size()));
-    if (len > 0) {
-      lcm_.publish(config_.channels.status, status_buffer_.data(), static_cast<unsigned>(len));
-    }
+                        wall_us(), InputSecurity{policy_.mode(), policy_.counts()});
+    publish(config_.channels.status, status_msg_, status_buffer_);
   }
 
+  static constexpr std::size_t kRefused = static_cast<std::size_t>(-1);
+
   const config::Config& config_;
+  signing::Policy policy_;
   const SocketDropsWatcher& drops_;
   lcm::LCM& lcm_;
   std::ostream& log_;
@@ -409,7 +449,7 @@ class Node {
   WindowStats period_stats_;
   WindowStats compute_stats_;
   WindowStats wake_stats_;
-  LatencyHistogram wake_run_;    // the whole run, for the timing report
+  LatencyHistogram wake_run_;  // the whole run, for the timing report
   LatencyHistogram period_run_;
 
   static std::size_t window_capacity(const config::Config& c) {
@@ -427,13 +467,24 @@ void log_summary(const config::Config& config, const std::string& url, std::ostr
       << "motormix: outputs '" << config.channels.motor_pwm << "' at " << config.loop_rate_hz
       << " Hz, status '" << config.channels.status << "' at " << config.status_rate_hz
       << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'\n";
-  if (!config.motor_loss_summary().empty()) log << "motormix: " << config.motor_loss_summary() << "\n";
+  if (!config.motor_loss_summary().empty())
+    log << "motormix: " << config.motor_loss_summary() << "\n";
+  log << "motormix: " << config::describe(config.security) << "\n";
   log << config::export_matrix(config, config::MatrixFormat::kTable) << std::flush;
 }
 
 }  // namespace
 
 int run_node(const config::Config& config, const RunOptions& options, std::ostream& log) {
+  // The key is read before anything reaches the bus: a key file that is
+  // missing or open to others stops the start, as a configuration error.
+  signing::Policy policy;
+  try {
+    policy = config::signing_policy(config);
+  } catch (const config::ConfigError& e) {
+    log << "motormix: " << e.what() << std::endl;
+    return 1;
+  }
   // Signals arrive through a descriptor so shutdown happens in the loop, not
   // in an async handler.
   sigset_t signals;
@@ -466,7 +517,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   }
   log_summary(config, options.lcm_url, log);
   const SocketDropsWatcher drops;
-  Node node(config, lcm, drops, log);
+  Node node(config, std::move(policy), lcm, drops, log);
   node.subscribe();  // starts LCM's receive thread
   // After every other thread has started: they keep the default scheduler,
   // and move off the loop's CPUs (realtime.hpp).

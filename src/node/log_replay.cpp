@@ -3,6 +3,7 @@
 #include <motormix/config/build_mixer.hpp>
 #include "loop/control_loop.hpp"
 #include "node/log_reader.hpp"
+#include "node/log_writer.hpp"
 #include "node/messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <vector>
@@ -17,58 +19,6 @@
 namespace motormix::node {
 
 namespace {
-
-// Writes LCM event logs in LCM's own format (see log_reader.hpp), byte for
-// byte what lcm::LogFile writes, through one large buffer: an event costs a
-// few copies instead of several stdio calls.
-class Writer {
- public:
-  explicit Writer(const std::string& path) : file_(std::fopen(path.c_str(), "wb")) {
-    if (file_ != nullptr) std::setvbuf(file_, nullptr, _IOFBF, kBufferBytes);
-  }
-  ~Writer() {
-    if (file_ != nullptr) std::fclose(file_);
-  }
-  Writer(const Writer&) = delete;
-  Writer& operator=(const Writer&) = delete;
-  bool good() const { return file_ != nullptr; }
-  // False if anything could not be written (disk full, I/O error).
-  bool close() {
-    if (file_ == nullptr) return false;
-    const bool ok = std::fflush(file_) == 0 && !std::ferror(file_);
-    const bool closed = std::fclose(file_) == 0;
-    file_ = nullptr;
-    return ok && closed;
-  }
-
-  template <typename Message>
-  void write(const std::string& channel, std::int64_t utime, const Message& msg) {
-    buffer_.resize(static_cast<std::size_t>(msg.getEncodedSize()));
-    msg.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
-    raw(channel, utime, buffer_.data(), static_cast<int>(buffer_.size()));
-  }
-  void raw(const std::string& channel, std::int64_t utime, const void* data, int size) {
-    std::uint8_t header[28];
-    put_be(header, 0xEDA1DA01U, 4);
-    put_be(header + 4, static_cast<std::uint64_t>(eventnum_++), 8);
-    put_be(header + 12, static_cast<std::uint64_t>(utime), 8);
-    put_be(header + 20, static_cast<std::uint32_t>(channel.size()), 4);
-    put_be(header + 24, static_cast<std::uint32_t>(size), 4);
-    std::fwrite(header, 1, sizeof header, file_);
-    std::fwrite(channel.data(), 1, channel.size(), file_);
-    std::fwrite(data, 1, static_cast<std::size_t>(size), file_);
-  }
-
- private:
-  static constexpr std::size_t kBufferBytes = 1 << 20;
-  static void put_be(std::uint8_t* out, std::uint64_t v, int bytes) {
-    for (int i = bytes - 1; i >= 0; --i, v >>= 8) out[i] = static_cast<std::uint8_t>(v & 0xFFU);
-  }
-
-  std::FILE* file_;
-  std::vector<std::uint8_t> buffer_;
-  std::int64_t eventnum_ = 0;
-};
 
 // Year 5138: no log is from later than this, and sums of such times with any
 // gap or tail stay far from the int64 limit.
@@ -114,7 +64,70 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     summary.skipped = in.skipped();
     return false;
   }
-  Writer out(out_path);
+  // Which input, if any, a channel carries (battery only when configured).
+  const auto input_kind = [&config](const std::string& channel) -> std::optional<InputKind> {
+    if (channel == config.channels.setpoint) return InputKind::kSetpoint;
+    if (channel == config.channels.pid) return InputKind::kPid;
+    if (channel == config.channels.motor_status) return InputKind::kMotorStatus;
+    if (config.battery && channel == config.channels.battery) return InputKind::kBattery;
+    if (channel == config.channels.motor_test) return InputKind::kMotorTest;
+    if (config.failure_detection && channel == config.channels.esc_telemetry) {
+      return InputKind::kEscTelemetry;
+    }
+    if (config.failure_detection && channel == config.channels.attitude) {
+      return InputKind::kAttitude;
+    }
+    return std::nullopt;
+  };
+  // Signatures: one policy per channel (a verifier keeps timestamps for a
+  // bounded number of channels; a log may hold more).
+  const config::Security& security = config.security;
+  const signing::Mode mode = options.verify ? signing::Mode::kRequire : security.mode;
+  std::optional<signing::Key> key;
+  if (mode != signing::Mode::kOff) {
+    if (security.key_file.empty()) {
+      log << "motormix replay: --verify needs the key: set security.key_file\n";
+      return false;
+    }
+    try {
+      key = signing::load_key(security.key_file);
+    } catch (const signing::KeyError& e) {
+      log << "motormix replay: security.key_file: " << e.what() << "\n";
+      return false;
+    }
+  }
+  std::map<std::string, signing::Policy> policies;
+  const auto policy_of = [&](const std::string& channel) -> signing::Policy& {
+    auto it = policies.find(channel);
+    if (it == policies.end()) {
+      it = policies
+               .emplace(channel, key ? signing::Policy(mode, *key,
+                                                       static_cast<std::uint8_t>(security.link_id),
+                                                       security.max_skew_s)
+                                     : signing::Policy())
+               .first;
+    }
+    return it->second;
+  };
+  // What the mixer's status reports: the input channels' counts together.
+  const auto input_security = [&]() {
+    InputSecurity sum;
+    sum.mode = mode;
+    for (const auto& [channel, policy] : policies) {
+      if (!input_kind(channel)) continue;
+      const signing::PolicyCounts& c = policy.counts();
+      sum.counts.signed_accepted += c.signed_accepted;
+      sum.counts.unsigned_accepted += c.unsigned_accepted;
+      sum.counts.rejected_unsigned += c.rejected_unsigned;
+      sum.counts.rejected_bad_signature += c.rejected_bad_signature;
+      sum.counts.rejected_replayed += c.rejected_replayed;
+      sum.counts.rejected_stale += c.rejected_stale;
+      sum.counts.rejected_other += c.rejected_other;
+    }
+    return sum;
+  };
+
+  LogWriter out(out_path);
   if (!out.good()) {
     log << "motormix replay: cannot write " << out_path << "\n";
     return false;
@@ -177,7 +190,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     }
     if (t >= next_status) {
       fill_status_message(status, r, add(totals, loop->counters()), LoopTiming{}, config.hash,
-                          config.motors(), t);
+                          config.motors(), t, input_security());
       out.write(config.channels.status, t, status);
       next_status = t + status_period_us;
     }
@@ -191,22 +204,6 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   const auto end_segment = [&](std::int64_t last) {
     run_ticks_until(last + tail_us);
     summary.duration_s += static_cast<double>(last + tail_us - segment_first) / 1e6;
-  };
-
-  // Which input, if any, a channel carries (battery only when configured).
-  const auto input_kind = [&config](const std::string& channel) -> std::optional<InputKind> {
-    if (channel == config.channels.setpoint) return InputKind::kSetpoint;
-    if (channel == config.channels.pid) return InputKind::kPid;
-    if (channel == config.channels.motor_status) return InputKind::kMotorStatus;
-    if (config.battery && channel == config.channels.battery) return InputKind::kBattery;
-    if (channel == config.channels.motor_test) return InputKind::kMotorTest;
-    if (config.failure_detection && channel == config.channels.esc_telemetry) {
-      return InputKind::kEscTelemetry;
-    }
-    if (config.failure_detection && channel == config.channels.attitude) {
-      return InputKind::kAttitude;
-    }
-    return std::nullopt;
   };
 
   start_segment(first_event->timestamp);
@@ -241,12 +238,23 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     }
     previous = ev->timestamp;
     run_ticks_until(ev->timestamp);
-    const int size = static_cast<int>(ev->data.size());
-    out.raw(ev->channel, ev->timestamp, ev->data.data(), size);
-    if (const std::optional<InputKind> kind = input_kind(ev->channel)) {
+    out.raw(ev->channel, ev->timestamp, ev->data.data(), static_cast<int>(ev->data.size()));
+    const std::optional<InputKind> kind = input_kind(ev->channel);
+    // The signing policy sees every input event, and with --verify every
+    // event, at the time the log received it.
+    signing::Inbound verdict;
+    verdict.accept = true;
+    verdict.payload_size = ev->data.size();
+    if (kind || options.verify) {
+      verdict = policy_of(ev->channel)
+                    .check(ev->channel, ev->data.data(), ev->data.size(), ev->timestamp);
+      if (!verdict.accept && options.verify) ++summary.unverified;
+    }
+    if (kind) {
       ++summary.input_events;
-      const bool accepted =
-          deliver_input(*loop, *kind, ev->data.data(), size, ev->timestamp, ev->timestamp);
+      const int size = static_cast<int>(verdict.payload_size);
+      const bool accepted = verdict.accept && deliver_input(*loop, *kind, ev->data.data(), size,
+                                                            ev->timestamp, ev->timestamp);
       if (options.cycle_on_every_input || (accepted && *kind == InputKind::kPid &&
                                            config.publish == config::PublishMode::kOnInput)) {
         cycle_at(ev->timestamp);
@@ -271,7 +279,13 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   }
   totals = add(totals, loop->counters());
   summary.failsafe_events = totals.failsafe_events;
-  summary.rejected = totals.rejected();
+  summary.rejected =
+      totals.rejected() + static_cast<std::int64_t>(input_security().counts.rejected());
+  if (options.verify) {
+    for (const auto& [channel, policy] : policies) {
+      summary.verification.push_back({channel, policy.counts()});
+    }
+  }
   summary.skipped = in.skipped();
   for (const SkippedRange& r : summary.skipped) {
     log << "motormix replay: warning: " << in_path << " is damaged: bytes " << r.begin << ".."

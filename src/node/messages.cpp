@@ -28,7 +28,7 @@ void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t
 
 void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
-                         std::int64_t utime) {
+                         std::int64_t utime, const InputSecurity& security) {
   s.utime = utime;
   s.state = static_cast<int8_t>(r.state);
   s.failsafe_reason = static_cast<int8_t>(r.reason);
@@ -67,6 +67,19 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.motor_status_received = c.motor_status_received;
   s.battery_received = c.battery_received;
   s.rejected_size = c.rejected_size;
+  static_assert(static_cast<int>(signing::Mode::kRequire) == mixer_status_t::SECURITY_REQUIRE &&
+                static_cast<int>(signing::Mode::kSign) == mixer_status_t::SECURITY_SIGN);
+  s.security_mode = static_cast<int8_t>(security.mode);
+  const auto count = [](std::uint64_t n) { return static_cast<int64_t>(n); };
+  s.signed_received = count(security.counts.signed_accepted);
+  s.unsigned_received = count(security.counts.unsigned_accepted);
+  s.rejected_unsigned = count(security.counts.rejected_unsigned);
+  s.rejected_bad_signature = count(security.counts.rejected_bad_signature);
+  s.rejected_replayed = count(security.counts.rejected_replayed);
+  // "other" (more signed channels than a verifier keeps) cannot happen in a
+  // mixer, which reads fewer channels than that; counted here all the same.
+  s.rejected_stale_signature =
+      count(security.counts.rejected_stale + security.counts.rejected_other);
   for (std::size_t i = 0; i < 4; ++i) {
     s.period_us[i] = timing.period_us[i];
     s.compute_us[i] = timing.compute_us[i];
@@ -75,8 +88,8 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.overruns = timing.overruns;
   s.kernel_drops = timing.kernel_drops;
   s.config_hash = static_cast<int64_t>(config_hash);
-  s.motor_test_state = r.motor_test >= 0 ? mixer_status_t::MOTOR_TEST_RUNNING
-                                         : mixer_status_t::MOTOR_TEST_NONE;
+  s.motor_test_state =
+      r.motor_test >= 0 ? mixer_status_t::MOTOR_TEST_RUNNING : mixer_status_t::MOTOR_TEST_NONE;
   s.motor_test_motor = static_cast<int8_t>(r.motor_test + 1);
   s.motor_test_throttle = static_cast<float>(r.motor_test_throttle);
   s.motor_test_request_utime = r.motor_test_request_utime;
@@ -215,9 +228,9 @@ bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& 
   out.count = msg.count;
   for (int i = 0; i < msg.count; ++i) {
     const auto k = static_cast<std::size_t>(i);
-    out.readings[k] = loop::EscReading{msg.motor[k],     msg.rpm[k],           msg.erpm[k],
-                                       msg.current_a[k], msg.voltage_v[k],     msg.temperature_c[k],
-                                       msg.consumption_mah[k]};
+    out.readings[k] = loop::EscReading{
+        msg.motor[k],     msg.rpm[k],           msg.erpm[k],           msg.current_a[k],
+        msg.voltage_v[k], msg.temperature_c[k], msg.consumption_mah[k]};
   }
   return true;
 }
@@ -255,7 +268,8 @@ bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, in
     case InputKind::kPid:
       return hand_over(loop::PidSample{}, decode_pid, &loop::ControlLoop::on_pid);
     case InputKind::kMotorStatus:
-      return hand_over(loop::MotorStatusSample{}, decode_motor_status, &loop::ControlLoop::on_motor_status);
+      return hand_over(loop::MotorStatusSample{}, decode_motor_status,
+                       &loop::ControlLoop::on_motor_status);
     case InputKind::kBattery:
       return hand_over(loop::BatterySample{}, decode_battery, &loop::ControlLoop::on_battery);
     case InputKind::kEscTelemetry:

@@ -6,6 +6,7 @@
 #include "output/serial_pulse_driver.hpp"
 #include "output/sysfs_pwm_driver.hpp"
 
+#include <motormix/config/security.hpp>
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 
@@ -24,6 +25,7 @@
 #include <limits>
 #include <memory>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace motormix::output {
@@ -83,8 +85,10 @@ struct TelemetryWire {
 
 class OutputNode {
  public:
-  OutputNode(const config::Config& config, lcm::LCM& lcm, PulseDriver& driver, std::ostream& log)
+  OutputNode(const config::Config& config, signing::Policy policy, lcm::LCM& lcm,
+             PulseDriver& driver, std::ostream& log)
       : config_(config),
+        policy_(std::move(policy)),
         lcm_(lcm),
         driver_(driver),
         log_(log),
@@ -118,8 +122,15 @@ class OutputNode {
     log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
          << " taken, " << undecodable_ << " undecodable, " << c.wrong_size << " wrong size, "
          << c.not_finite << " not finite, " << c.clamped << " values clamped, " << c.stale_events
-         << " times stale; " << write_failures_ << " hardware writes failed; "
-         << driver_.describe() << std::endl;
+         << " times stale; ";
+    if (policy_.signs()) {
+      const signing::PolicyCounts& sc = policy_.counts();
+      log_ << "signatures: " << sc.signed_accepted << " verified, " << sc.unsigned_accepted
+           << " unsigned taken, refused " << sc.rejected_unsigned << " unsigned, "
+           << sc.rejected_bad_signature << " bad, " << sc.rejected_replayed << " replayed, "
+           << sc.rejected_stale + sc.rejected_other << " stale; ";
+    }
+    log_ << write_failures_ << " hardware writes failed; " << driver_.describe() << std::endl;
   }
 
   void publish_telemetry(const TelemetryWire& wire, const KissReading& r) {
@@ -133,14 +144,23 @@ class OutputNode {
     msg.voltage_v = {static_cast<float>(r.voltage_v)};
     msg.temperature_c = {static_cast<float>(r.temperature_c)};
     msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
-    lcm_.publish(config_.channels.esc_telemetry, &msg);
+    std::uint8_t buffer[256];  // one reading: 53 bytes, and the signature
+    const int len = msg.encode(buffer, 0, static_cast<int>(sizeof buffer - signing::kTrailerBytes));
+    if (len <= 0) return;
+    const std::size_t size = policy_.seal(config_.channels.esc_telemetry, buffer,
+                                          static_cast<std::size_t>(len), wall_us());
+    lcm_.publish(config_.channels.esc_telemetry, buffer, static_cast<unsigned>(size));
   }
 
  private:
-  void on_motor_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    // Nothing here throws: a message that does not decode is counted.
+  void on_motor_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    // Nothing here throws: a message the signing policy refuses is counted
+    // there, one that does not decode here.
+    const signing::Inbound in = policy_.check(channel, static_cast<const std::uint8_t*>(rbuf->data),
+                                              rbuf->data_size, wall_us());
+    if (!in.accept) return;
     motormix::motor_pwm_t msg{};
-    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || msg.num_motors < 0 ||
+    if (msg.decode(rbuf->data, 0, static_cast<int>(in.payload_size)) < 0 || msg.num_motors < 0 ||
         msg.pwm.size() != static_cast<std::size_t>(msg.num_motors)) {
       ++undecodable_;
       return;
@@ -150,6 +170,7 @@ class OutputNode {
   }
 
   const config::Config& config_;
+  signing::Policy policy_;
   lcm::LCM& lcm_;
   PulseDriver& driver_;
   std::ostream& log_;
@@ -180,8 +201,10 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   }
   std::unique_ptr<PulseDriver> driver;
   std::vector<TelemetryWire> wires;
+  signing::Policy policy;
   try {
-    driver = make_driver(config);  // disarmed pulses from here on
+    policy = config::signing_policy(config);  // before any pulse: a bad key file stops here
+    driver = make_driver(config);             // disarmed pulses from here on
     for (const config::TelemetryPort& p : config.hardware.telemetry) {
       TelemetryWire w;
       w.port = p;
@@ -201,12 +224,13 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     close_wires();
     return 1;
   }
-  OutputNode node(config, lcm, *driver, log);
+  OutputNode node(config, std::move(policy), lcm, *driver, log);
   node.write_disarmed();
   log << "motormix output: " << config::to_string(config.hardware.driver) << " driver, "
       << config.motors() << " motors at " << config.hardware.pulse_rate_hz << " Hz; disarmed until "
       << config.channels.motor_pwm << " says armed (stale after "
       << config.hardware.motor_pwm_timeout_s * 1e3 << " ms)" << std::endl;
+  log << "motormix output: " << config::describe(config.security) << std::endl;
   if (options.disarm_only) {
     // Twice, a period apart, so a frame lost on the wire does not matter.
     driver->service(monotonic_s());

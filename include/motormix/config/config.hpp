@@ -7,6 +7,7 @@
 #include <motormix/config/failure_detection.hpp>
 #include <motormix/config/hardware.hpp>
 #include <motormix/config/motor_loss.hpp>
+#include <motormix/config/security.hpp>
 #include <motormix/config/vehicle_physics.hpp>
 #include <motormix/geometry.hpp>
 #include <motormix/legacy_budget_allocator.hpp>
@@ -126,6 +127,8 @@ struct Config {
   std::string motor_loss_off;
   // The `hardware:` section: what `motormix output` drives.
   Hardware hardware;
+  // The `security:` section: signing on the bus.
+  Security security;
   std::uint64_t hash = 0;  // of the configuration text and overrides, reported in status
 
   int motors() const { return static_cast<int>(mixing.rows()); }

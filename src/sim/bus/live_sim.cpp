@@ -1,19 +1,21 @@
 #include "sim/bus/live_sim.hpp"
 
-#include "node/wall_clock.hpp"
-#include "sim/bus/sim_log.hpp"
 #include "node/messages.hpp"
+#include "node/wall_clock.hpp"
 #include "sim/attitude_sensor.hpp"
+#include "sim/bus/sim_log.hpp"
 #include "sim/esc_telemetry_model.hpp"
 #include "sim/period.hpp"
 
 #include <motormix/battery_t.hpp>
 #include <motormix/config/build_mixer.hpp>
+#include <motormix/config/security.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/motor_status_t.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
+#include <motormix/signing_policy.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -21,6 +23,7 @@
 #include <cmath>
 #include <ostream>
 #include <thread>
+#include <vector>
 
 namespace motormix::sim {
 
@@ -32,6 +35,7 @@ using node::wall_us;
 // What the simulated ESCs last heard from the mixer. Decoding happens here,
 // inside the callback, and never throws out of it.
 struct MixerOutputs {
+  signing::Policy* policy = nullptr;  // security: what the sim takes from the mixer
   int motors = 0;
   MotorVector outputs;
   DirectionVector direction{};
@@ -48,11 +52,16 @@ struct MixerOutputs {
   DetectionSource detected_by = DetectionSource::kNone;
   std::int64_t detected_utime = 0;  // motormix's wall clock, microseconds
 
-  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  // The payload's size when the signing policy takes the message, else -1.
+  int verified(const lcm::ReceiveBuffer* rbuf, const std::string& channel) const {
+    const signing::Inbound in = policy->check(channel, static_cast<const std::uint8_t*>(rbuf->data),
+                                              rbuf->data_size, wall_us());
+    return in.accept ? static_cast<int>(in.payload_size) : -1;
+  }
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     motor_pwm_t msg;
-    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
-            static_cast<int>(rbuf->data_size) ||
-        msg.num_motors != motors) {
+    const int size = verified(rbuf, channel);
+    if (size < 0 || msg.decode(rbuf->data, 0, size) != size || msg.num_motors != motors) {
       ++rejected;
       return;
     }
@@ -72,12 +81,10 @@ struct MixerOutputs {
     any = true;
     ++accepted;
   }
-  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     mixer_status_t msg;
-    if (msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) !=
-        static_cast<int>(rbuf->data_size)) {
-      return;
-    }
+    const int size = verified(rbuf, channel);
+    if (size < 0 || msg.decode(rbuf->data, 0, size) != size) return;
     axis_limited = 0;
     for (int a = 0; a < kNumAxes; ++a) {
       if (msg.axis_limited[a]) axis_limited |= static_cast<std::uint8_t>(1U << a);
@@ -90,16 +97,39 @@ struct MixerOutputs {
   }
 };
 
-template <typename Message>
-void publish(lcm::LCM& lcm, const std::string& channel, const Message& msg) {
-  lcm.publish(channel, &msg);
-}
+// Publishes what the simulated vehicle and its controller send, signed
+// when the configuration signs (security:), as a user's controller would.
+class Publisher {
+ public:
+  Publisher(lcm::LCM& lcm, signing::Policy& policy) : lcm_(lcm), policy_(policy) {}
+  template <typename Message>
+  void operator()(const std::string& channel, const Message& msg) {
+    buffer_.resize(static_cast<std::size_t>(msg.getEncodedSize()) + signing::kTrailerBytes);
+    const int len = msg.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
+    if (len <= 0) return;
+    const std::size_t size =
+        policy_.seal(channel, buffer_.data(), static_cast<std::size_t>(len), wall_us());
+    lcm_.publish(channel, buffer_.data(), static_cast<unsigned>(size));
+  }
+
+ private:
+  lcm::LCM& lcm_;
+  signing::Policy& policy_;
+  std::vector<std::uint8_t> buffer_;
+};
 
 }  // namespace
 
 bool run_live(const config::Config& config_in, const Scenario& scenario, const LiveOptions& options,
               LiveResult& result, std::ostream& err) {
   const config::Config config = scenario_config(config_in, scenario);
+  signing::Policy policy;
+  try {
+    policy = config::signing_policy(config);
+  } catch (const config::ConfigError& e) {
+    err << "motormix sim: " << e.what() << "\n";
+    return false;
+  }
   lcm::LCM lcm(options.lcm_url);
   if (!lcm.good()) {
     err << "motormix sim: cannot open the LCM bus"
@@ -122,13 +152,16 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   if (!clock.failures().empty()) scorer.failure_at(clock.failures().front().at_s);
   DetectionScorer detections(clock.failures());
 
+  Publisher publish(lcm, policy);
   MixerOutputs mix;
+  mix.policy = &policy;
   mix.motors = config.motors();
   lcm.subscribe(config.channels.motor_pwm, &MixerOutputs::on_pwm, &mix);
   lcm.subscribe(config.channels.status, &MixerOutputs::on_status, &mix);
 
-  const SimulationPeriod periods(
-      config.loop_rate_hz, options.sim.duration_s > 0 ? options.sim.duration_s : scenario.duration_s);
+  const SimulationPeriod periods(config.loop_rate_hz, options.sim.duration_s > 0
+                                                          ? options.sim.duration_s
+                                                          : scenario.duration_s);
   const double period = periods.period_s;
   MessageSchedule schedule;
   const auto stale_after = std::chrono::duration<double>(
@@ -175,28 +208,28 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       sp.throttle = static_cast<float>(cmd.thrust);
       sp.yaw = static_cast<float>(cmd.yaw);
       sp.armed = cmd.armed;
-      publish(lcm, config.channels.setpoint, sp);
+      publish(config.channels.setpoint, sp);
       pid_t pid;
       pid.utime = now;
       pid.roll = static_cast<float>(cmd.roll);
       pid.pitch = static_cast<float>(cmd.pitch);
       pid.yaw = static_cast<float>(cmd.yaw);
-      publish(lcm, config.channels.pid, pid);
+      publish(config.channels.pid, pid);
     }
     if (schedule.battery_due(t)) {
       battery_t b;
       b.utime = now;
       b.voltage = static_cast<float>(vehicle.battery().terminal_v());
-      publish(lcm, config.channels.battery, b);
+      publish(config.channels.battery, b);
     }
     if (!wheeled) {
       const loop::EscTelemetrySample& esc = esc_telemetry.sample(t, now, vehicle, clock.health(t));
       if (esc.count > 0) {
         node::fill_esc_telemetry_message(esc_msg, esc);
-        publish(lcm, config.channels.esc_telemetry, esc_msg);
+        publish(config.channels.esc_telemetry, esc_msg);
       }
       node::fill_attitude_message(attitude_msg, attitude_sensor.sample(vehicle.body(), now));
-      publish(lcm, config.channels.attitude, attitude_msg);
+      publish(config.channels.attitude, attitude_msg);
     }
     const MotorMask detected =
         options.sim.undetected ? 0 : clock.detected(t, scenario.failure_detection_s);
@@ -205,10 +238,10 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       m.utime = now;
       m.num_motors = config.motors();
       for (int i = 0; i < m.num_motors; ++i) m.failed.push_back((detected >> i) & 1U);
-      publish(lcm, config.channels.motor_status, m);
+      publish(config.channels.motor_status, m);
     }
     fill_vehicle_state(state, vehicle, now);
-    publish(lcm, kVehicleStateChannel, state);
+    publish(kVehicleStateChannel, state);
 
     const bool fresh = mix.any && Clock::now() - mix.received <= stale_after;
     const bool armed = fresh && mix.armed;
@@ -224,7 +257,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
         mix.direction, fresh ? clock.health(t) : all_stopped, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) {
       fill_vehicle_state(state, vehicle, wall_us());  // the crash, for whoever listens
-      publish(lcm, kVehicleStateChannel, state);
+      publish(kVehicleStateChannel, state);
       break;
     }
   }

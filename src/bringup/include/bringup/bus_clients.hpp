@@ -18,7 +18,7 @@ namespace motormix::bringup {
 
 enum class ClientOutcome {
   kOk = 0,
-  kBusError,     // the LCM bus could not be opened
+  kBusError,     // the LCM bus could not be opened, or the key file (security:) read
   kNoAnswer,     // motor test: no mixer answered
   kRefused,      // the mixer refused the test, or calibration found a mixer running
   kAborted,      // calibration ended before the range was taught (outputs disarmed)

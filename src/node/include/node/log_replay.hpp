@@ -13,8 +13,16 @@
 // as the live node would see them arrive. The output log holds every input
 // event plus the produced motor_pwm_t and mixer_status_t. Deterministic: the
 // same log and configuration give the same bytes.
+//
+// Signatures (security:) are read as the live node reads them, the log's
+// receive time standing for the clock: under `require` an unsigned, forged
+// or replayed input is refused and counted, under `off` a signature is cut
+// off unread. The outputs the replay writes are not signed (they are made
+// offline, not sent). With ReplayOptions::verify every event on every
+// channel is checked as under `require` (see ChannelVerification).
 
 #include <motormix/config/config.hpp>
+#include <motormix/signing_policy.hpp>
 #include "node/log_reader.hpp"
 
 #include <array>
@@ -24,6 +32,16 @@
 #include <vector>
 
 namespace motormix::node {
+
+// What verifying a log found on one channel (ReplayOptions::verify). Per
+// link and channel, timestamps must increase through the log; a link's
+// first message must be stamped within security.max_skew_s of the time the
+// log recorded it (the signer's clock agreed with the recorder's). How old
+// the log itself is cannot be told from it: a log is a recording.
+struct ChannelVerification {
+  std::string channel;
+  signing::PolicyCounts counts;  // signed_accepted: verified; rejected_*: why not
+};
 
 struct ReplaySummary {
   double duration_s = 0.0;
@@ -43,6 +61,8 @@ struct ReplaySummary {
   std::int64_t discontinuities = 0;   // timestamps that jumped back or beyond max_gap_s
   std::int64_t skipped_events = 0;    // of those, single events skipped as damaged timestamps
   std::vector<SkippedRange> skipped;  // byte ranges of the input that held no valid event
+  std::vector<ChannelVerification> verification;  // ReplayOptions::verify: per channel, sorted
+  std::int64_t unverified = 0;  // ReplayOptions::verify: events (any channel) refused
   bool damaged() const { return !skipped.empty(); }
 };
 
@@ -56,6 +76,9 @@ struct ReplayOptions {
   // Largest forward step between consecutive events that is still time
   // passing; beyond it (or any step back) is a discontinuity.
   double max_gap_s = 10.0;
+  // Verify every event's signature with security.key_file, whatever
+  // security.mode says, and mix as under `require`.
+  bool verify = false;
 };
 
 // Returns false (with a message on `log`) if a log cannot be read or written.

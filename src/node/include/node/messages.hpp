@@ -4,13 +4,14 @@
 // messages' storage (sized once at set-up): no allocation per cycle.
 
 #include <motormix/config/config.hpp>
+#include <motormix/signing_policy.hpp>
 #include "loop/control_loop.hpp"
 
+#include <motormix/attitude_t.hpp>
 #include <motormix/battery_t.hpp>
+#include <motormix/esc_telemetry_t.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
-#include <motormix/attitude_t.hpp>
-#include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_status_t.hpp>
 #include <motormix/motor_test_t.hpp>
 #include <motormix/pid_t.hpp>
@@ -22,8 +23,8 @@
 namespace motormix::node {
 
 struct LoopTiming {
-  std::array<float, 4> period_us{};   // min, mean, max, p99
-  std::array<float, 4> compute_us{};  // min, mean, max, p99
+  std::array<float, 4> period_us{};        // min, mean, max, p99
+  std::array<float, 4> compute_us{};       // min, mean, max, p99
   std::array<float, 4> wake_latency_us{};  // min, mean, max, p99
   std::int64_t overruns = 0;
   std::int64_t kernel_drops = -1;  // own_udp_socket_drops(); -1: unknown
@@ -37,9 +38,15 @@ struct LoopTiming {
 void size_pwm_message(motor_pwm_t& msg, int motors);
 
 void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t utime);
+// What the signing policy decided about the inputs (security:).
+struct InputSecurity {
+  signing::Mode mode = signing::Mode::kOff;
+  signing::PolicyCounts counts;
+};
+
 void fill_status_message(mixer_status_t& msg, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
-                         std::int64_t utime);
+                         std::int64_t utime, const InputSecurity& security = InputSecurity{});
 
 // Decoded inputs, or nothing when the bytes are not a whole message of the
 // type (wrong type, truncated, trailing bytes).
