@@ -4,6 +4,7 @@
 
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/signing.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -11,6 +12,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -22,9 +24,12 @@ class BusRecorder {
  public:
   // keep_pwm = false: count motor_pwm_t messages and keep only the last one
   // (long runs: the soak would otherwise hold hundreds of thousands).
+  // A signed message is read as a reader that does not verify reads it (the
+  // trailer cut off); with `key`, every message is also verified and the
+  // ones that do not verify are counted (unverified()).
   BusRecorder(const std::string& pwm_channel, const std::string& status_channel,
-              bool keep_pwm = true)
-      : keep_pwm_(keep_pwm) {
+              bool keep_pwm = true, const signing::Key* key = nullptr)
+      : keep_pwm_(keep_pwm), verifier_(key ? std::make_unique<signing::Verifier>(*key) : nullptr) {
     lcm_.subscribe(pwm_channel, &BusRecorder::on_pwm, this)->setQueueCapacity(100000);
     lcm_.subscribe(status_channel, &BusRecorder::on_status, this)->setQueueCapacity(100000);
     thread_ = std::thread([this] {
@@ -79,18 +84,47 @@ class BusRecorder {
     std::lock_guard<std::mutex> lock(mutex_);
     return undecodable_;
   }
+  // Messages that carried a signature / that did not verify (with a key).
+  int signed_messages() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return signed_;
+  }
+  int unverified() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return unverified_;
+  }
 
  private:
   // Untyped subscriptions, decoded here: undecodable messages are counted
   // as failures of the test, not skipped by LCM with a line on stderr.
   template <typename Message>
-  static bool decode(const lcm::ReceiveBuffer* rbuf, Message& msg) {
-    return msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
-           static_cast<int>(rbuf->data_size);
+  bool decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel, Message& msg) {
+    const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+    std::size_t size = rbuf->data_size;
+    if (signing::has_trailer(data, size)) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++signed_;
+    }
+    if (verifier_) {
+      // Only this thread verifies; the count is read under the mutex.
+      const auto v = verifier_->verify(channel, data, size, wall_clock_us(), &size);
+      if (v != signing::Verdict::kSigned) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++unverified_;
+      }
+    } else if (signing::has_trailer(data, size)) {
+      size -= signing::kTrailerBytes;
+    }
+    return msg.decode(rbuf->data, 0, static_cast<int>(size)) == static_cast<int>(size);
   }
-  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  static std::int64_t wall_clock_us() {
+    return std::chrono::duration_cast<std::chrono::microseconds>(
+               std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  }
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     motor_pwm_t msg{};
-    const bool ok = decode(rbuf, msg);
+    const bool ok = decode(rbuf, channel, msg);
     std::lock_guard<std::mutex> lock(mutex_);
     if (!ok) {
       ++undecodable_;
@@ -104,9 +138,9 @@ class BusRecorder {
     }
     changed_.notify_all();
   }
-  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     mixer_status_t msg{};
-    const bool ok = decode(rbuf, msg);
+    const bool ok = decode(rbuf, channel, msg);
     std::lock_guard<std::mutex> lock(mutex_);
     if (ok) {
       status_.push_back(msg);
@@ -118,6 +152,9 @@ class BusRecorder {
   }
 
   const bool keep_pwm_;
+  std::unique_ptr<signing::Verifier> verifier_;
+  int signed_ = 0;
+  int unverified_ = 0;
   lcm::LCM lcm_;
   std::atomic<bool> stop_{false};
   std::mutex mutex_;

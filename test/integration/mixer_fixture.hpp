@@ -12,6 +12,7 @@
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
+#include <motormix/signing_policy.hpp>
 
 #include <gtest/gtest.h>
 
@@ -24,6 +25,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace motormix::test {
@@ -59,6 +61,10 @@ class Pilot {
   explicit Pilot(const config::Config& c) : c_(c) {}
   bool good() { return lcm_.good(); }
 
+  // From now on every message is signed by `policy` (a controller with the
+  // key, or one with another key).
+  void sign_with(signing::Policy policy) { policy_ = std::move(policy); }
+
   void send(bool armed, double throttle, double roll = 0.0) {
     // Taken before the pair is published: no receiver can hold either message
     // earlier. (A time taken after publishing is late by however long this
@@ -68,11 +74,11 @@ class Pilot {
     sp.utime = wall_us();
     sp.throttle = static_cast<float>(throttle);
     sp.armed = armed;
-    lcm_.publish(c_.channels.setpoint, &sp);
+    message(c_.channels.setpoint, sp);
     pid_t pid{};
     pid.utime = sp.utime;
     pid.roll = static_cast<float>(roll);
-    lcm_.publish(c_.channels.pid, &pid);
+    message(c_.channels.pid, pid);
     sent_[next_sent_++ % sent_.size()] = {sp.utime, started};
   }
   // The utime of the last pair sent (0 before the first).
@@ -90,9 +96,15 @@ class Pilot {
   void raw(const std::string& channel, const std::vector<std::uint8_t>& bytes) {
     lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
+  // Publishes m (signed when sign_with() was called); returns the bytes sent.
   template <typename Message>
-  void message(const std::string& channel, const Message& m) {
-    lcm_.publish(channel, &m);
+  std::vector<std::uint8_t> message(const std::string& channel, const Message& m) {
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()) +
+                                    signing::kTrailerBytes);
+    const int len = m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    bytes.resize(policy_.seal(channel, bytes.data(), static_cast<std::size_t>(len), wall_us()));
+    raw(channel, bytes);
+    return bytes;
   }
 
  private:
@@ -101,6 +113,7 @@ class Pilot {
     Clock::time_point started;
   };
   const config::Config& c_;
+  signing::Policy policy_;  // off unless sign_with()
   std::array<Sent, 64> sent_{};
   std::size_t next_sent_ = 0;
   lcm::LCM lcm_;
@@ -120,7 +133,8 @@ class MixerProcessTest : public ::testing::Test {
     std::vector<std::string> overrides = {"output.spool_up_s=0"};
     overrides.insert(overrides.end(), test_overrides.begin(), test_overrides.end());
     config_ = config::load_config_file(source_path(config_file), overrides);
-    bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status);
+    bus_ = std::make_unique<BusRecorder>(config_.channels.motor_pwm, config_.channels.status, true,
+                                         recorder_key_);
     pilot_ = std::make_unique<Pilot>(config_);
     // wrapper: a command the mixer runs under (e.g. `unshare -r`).
     std::vector<std::string> argv = wrapper;
@@ -282,6 +296,8 @@ class MixerProcessTest : public ::testing::Test {
   }
 
   config::Config config_;
+  // Set before start(): the recorder verifies every output with this key.
+  const signing::Key* recorder_key_ = nullptr;
   std::unique_ptr<BusRecorder> bus_;
   std::unique_ptr<Pilot> pilot_;
   std::unique_ptr<ChildProcess> mixer_;
