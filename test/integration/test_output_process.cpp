@@ -5,7 +5,9 @@
 //   a NaN is refused; armed=false disarms; a silent publisher disarms after
 //   the 50 ms timeout; SIGTERM disarms and exits 0;
 // - KISS telemetry frames from a generator, a third of them corrupted,
-//   come out as esc_telemetry_t, every good one and no bad one.
+//   come out as esc_telemetry_t, every good one and no bad one;
+// - under security.mode require, only a motor_pwm_t signed with the key
+//   moves a pin: unsigned, forged and replayed ones are refused and counted.
 
 #include "integration/process.hpp"
 #include "output/kiss_telemetry.hpp"
@@ -13,6 +15,7 @@
 
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/signing_policy.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -91,14 +94,30 @@ class OutputProcess : public ::testing::Test {
     }
     return -1.0;
   }
-  void publish(lcm::LCM& lcm, std::vector<float> pwm, bool armed) {
+  // The bytes of a motor_pwm_t, signed by `policy` unless it is off.
+  static std::vector<std::uint8_t> encoded(std::vector<float> pwm, bool armed,
+                                           signing::Policy& policy) {
     motormix::motor_pwm_t m{};
     m.num_motors = static_cast<std::int32_t>(pwm.size());
     m.pwm = std::move(pwm);
     m.command.assign(m.pwm.size(), 0.5f);
     m.direction.assign(m.pwm.size(), 0);
     m.armed = armed;
-    lcm.publish("MOTOR_PWM", &m);
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()) +
+                                    signing::kTrailerBytes);
+    const int len = m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    const auto now = std::chrono::duration_cast<std::chrono::microseconds>(
+                         std::chrono::system_clock::now().time_since_epoch())
+                         .count();
+    bytes.resize(policy.seal("MOTOR_PWM", bytes.data(), static_cast<std::size_t>(len), now));
+    return bytes;
+  }
+  static void send(lcm::LCM& lcm, const std::vector<std::uint8_t>& bytes) {
+    lcm.publish("MOTOR_PWM", bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+  void publish(lcm::LCM& lcm, std::vector<float> pwm, bool armed) {
+    signing::Policy unsigned_policy;
+    send(lcm, encoded(std::move(pwm), armed, unsigned_policy));
   }
 
   std::string root_, config_;
@@ -205,6 +224,57 @@ TEST_F(OutputProcess, KissTelemetryFromAWireComesOutAsEscTelemetry) {
     EXPECT_GE(m.voltage_v[0], 15.0f);
     EXPECT_LE(m.voltage_v[0], 16.0f);
   }
+}
+
+TEST_F(OutputProcess, UnderRequireOnlySignedMotorPwmMovesThePins) {
+  const std::string key_path = root_ + "/bus.key";
+  signing::write_new_key(key_path);
+  std::ofstream(config_, std::ios::app) << "security: {mode: require, key_file: bus.key}\n";
+  ChildProcess output({motormix_binary(), "output", "--config", config_}, root_ + "/output.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  ASSERT_GE(wait_duty(0, 1000000, 3000), 0.0) << "no disarmed duty at start";
+  signing::Policy mixer(signing::Mode::kRequire, signing::load_key(key_path), 1);
+  signing::Policy stranger(signing::Mode::kRequire, signing::Key{}, 1);
+  signing::Policy none;
+  // Signed earlier, sent later: a replay.
+  const std::vector<std::uint8_t> captured = encoded({1900, 1900, 1900, 1900}, true, mixer);
+  // Subscribed once a signed message moves a pin; then stale: disarmed.
+  for (int i = 0; i < 100 && duty(0) != 1400000; ++i) {
+    send(lcm, encoded({1400, 1400, 1400, 1400}, true, mixer));
+    std::this_thread::sleep_for(20ms);
+  }
+  ASSERT_EQ(duty(0), 1400000);
+  ASSERT_GE(wait_duty(0, 1000000, 500), 0.0);
+  for (int i = 0; i < 20; ++i) {
+    send(lcm, encoded({1600, 1600, 1600, 1600}, true, none));
+    send(lcm, encoded({1700, 1700, 1700, 1700}, true, stranger));
+    std::this_thread::sleep_for(2500us);
+  }
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(duty(0), 1000000) << "an unsigned or forged motor_pwm_t moved a pin";
+  // Signed with the key: taken.
+  send(lcm, encoded({1500, 1500, 1500, 1500}, true, mixer));
+  EXPECT_GE(wait_duty(0, 1500000, kApplyBoundMs), 0.0);
+  send(lcm, captured);
+  send(lcm, encoded({1501, 1501, 1501, 1501}, true, mixer));
+  EXPECT_GE(wait_duty(0, 1501000, kApplyBoundMs), 0.0);
+  // The replay came before the last good one: had it been taken, 1900
+  // would have been written in between; it is counted below.
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(3s), 0);
+  std::ifstream log(root_ + "/output.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  // Every signed one verified but the replay (how many it took to see the
+  // process subscribed varies; it is 3 more than that).
+  const auto at = text.rfind(
+      " verified, 0 unsigned taken, refused 20 unsigned, 20 bad, 1 replayed, "
+      "0 stale");
+  ASSERT_NE(at, std::string::npos) << text;
+  const auto from = text.rfind("signatures: ", at);
+  ASSERT_NE(from, std::string::npos) << text;
+  EXPECT_GE(std::stoi(text.substr(from + 12, at - from - 12)), 3) << text;
+  EXPECT_NE(text.find("security: require"), std::string::npos) << text;
 }
 
 }  // namespace
