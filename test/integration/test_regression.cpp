@@ -6,7 +6,11 @@
 // setpoint in force says so. Correspondence is by the inputs each output
 // names, never by wall-clock timing.
 //
-//   regression_tests --flight F --config C --golden G [--set key=value ...]
+// With --sign yes, the flight is signed first (`motormix sign-log --now`,
+// a fresh key) and the mixer runs under security.mode require: the outputs
+// must be the same golden ones, and no input refused.
+//
+//   regression_tests --flight F --config C --golden G [--sign yes] [--set key=value ...]
 
 #include "integration/bus_recorder.hpp"
 #include "integration/process.hpp"
@@ -14,6 +18,7 @@
 #include "test_support.hpp"
 
 #include <motormix/setpoint_t.hpp>
+#include <motormix/signing.hpp>
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -21,6 +26,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -36,6 +42,7 @@ struct Args {
   std::string config;
   std::string golden;
   std::vector<std::string> overrides;
+  bool sign = false;
 };
 Args g_args;
 
@@ -99,20 +106,46 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
   const char* flag = std::getenv("MOTORMIX_PRIVATE_BUS");
   ASSERT_TRUE(flag && std::string(flag) == "1") << "run through scripts/private-bus";
   const std::string config_path = source_path("config/" + g_args.config);
-  const std::string flight = source_path("test/data/flights/" + g_args.flight + ".lcmlog");
-  const config::Config config = config::load_config_file(config_path, g_args.overrides);
+  const std::string recorded = source_path("test/data/flights/" + g_args.flight + ".lcmlog");
+  std::string flight = recorded;
+  std::vector<std::string> overrides = g_args.overrides;
+  namespace fs = std::filesystem;
+  const fs::path dir =
+      fs::temp_directory_path() / ("motormix_regression_" + std::to_string(getpid()));
+  if (g_args.sign) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string key = (dir / "bus.key").string();
+    signing::write_new_key(key);
+    overrides.push_back("security.mode=require");
+    overrides.push_back("security.key_file=" + key);
+  }
+  const config::Config config = config::load_config_file(config_path, overrides);
   const Golden golden = read_golden(source_path("test/data/golden/" + g_args.golden + ".csv"));
   ASSERT_GT(golden.armed.size(), 100U);
-  const auto armed_by_setpoint = setpoint_armed(flight, config.channels.setpoint);
+  const auto armed_by_setpoint = setpoint_armed(recorded, config.channels.setpoint);
 
   BusRecorder bus(config.channels.motor_pwm, config.channels.status);
-  std::vector<std::string> argv = {motormix_binary(), "run", "--config", config_path};
-  for (const auto& o : g_args.overrides) {
-    argv.push_back("--set");
-    argv.push_back(o);
+  std::vector<std::string> sets;
+  for (const auto& o : overrides) {
+    sets.push_back("--set");
+    sets.push_back(o);
   }
+  std::vector<std::string> argv = {motormix_binary(), "run", "--config", config_path};
+  argv.insert(argv.end(), sets.begin(), sets.end());
   ChildProcess mixer(argv);
   ASSERT_TRUE(bus.wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s));
+  if (g_args.sign) {
+    // Stamped from now, so that the mixer takes the copy as fresh.
+    flight = (dir / "signed.lcmlog").string();
+    std::vector<std::string> sign = {motormix_binary(), "sign-log", "--now", "--config",
+                                     config_path};
+    sign.insert(sign.end(), sets.begin(), sets.end());
+    sign.push_back(recorded);
+    sign.push_back(flight);
+    ChildProcess signer(sign);
+    ASSERT_EQ(signer.wait_for(30s), 0);
+  }
   const long drops_before = udp_receive_buffer_drops();
   ASSERT_GE(drops_before, 0) << "cannot read Udp RcvbufErrors from /proc/net/snmp";
   ChildProcess player({"lcm-logplayer", "-s", std::to_string(kPlaybackSpeed), flight});
@@ -200,6 +233,18 @@ TEST(Regression, LiveReplayMatchesGoldenAndInvariants) {
                 unmatched, armed, kernel_drops);
   }
   EXPECT_EQ(compared + unmatched, armed);
+  const std::vector<mixer_status_t> status = bus.status();
+  ASSERT_FALSE(status.empty());
+  const mixer_status_t& last = status.back();
+  if (g_args.sign) {
+    EXPECT_EQ(last.security_mode, mixer_status_t::SECURITY_REQUIRE);
+    EXPECT_GT(last.signed_received, 0);
+    EXPECT_GT(bus.signed_messages(), 0) << "the mixer's outputs were not signed";
+    fs::remove_all(dir);
+  }
+  EXPECT_EQ(last.rejected_unsigned + last.rejected_bad_signature + last.rejected_replayed +
+                last.rejected_stale_signature,
+            0);
 }
 
 }  // namespace
@@ -215,6 +260,7 @@ int main(int argc, char** argv) {
     if (key == "--config") a.config = value;
     if (key == "--golden") a.golden = value;
     if (key == "--set") a.overrides.push_back(value);
+    if (key == "--sign") a.sign = value == "yes";
   }
   if (a.flight.empty() || a.config.empty() || a.golden.empty()) {
     std::fprintf(stderr,
