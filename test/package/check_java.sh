@@ -2,7 +2,8 @@
 # Checks the jar of the message types: one class per .lcm type, each an LCM
 # encodable with a fingerprint, loadable next to LCM's own lcm.jar; then the
 # way lcm-spy uses it: a flight replayed by motormix (C++ encoder) is read back
-# in Java and every event on the motormix channels decodes with its class.
+# in Java and every event on the motormix channels decodes with its class,
+# and so does every event of the same log signed.
 #   check_java.sh JAR LCM_JAR MOTORMIX CONFIG FLIGHT WORKDIR PWM_MIN PWM_MAX \
 #                 CHANNEL=TYPE... -- TYPE...
 set -euo pipefail
@@ -33,4 +34,11 @@ rm -rf "$work" && mkdir -p "$work"
   fail "DecodeLog.java does not compile against the jar"
 "$java" -cp "$jar_file:$lcm_jar:$work" DecodeLog "$work/replay.lcmlog" "$pwm_min" "$pwm_max" \
   "${channels[@]}" || fail "the replayed log does not decode with the jar's classes"
+# Signed (motormix sign-log): the signature trailer after each message is
+# never read by the classes, so the same log signed decodes the same.
+"$motormix" keygen "$work/bus.key" > /dev/null || fail "motormix keygen failed"
+"$motormix" sign-log --config "$config" --set "security.key_file=$work/bus.key" \
+  "$work/replay.lcmlog" "$work/signed.lcmlog" > /dev/null || fail "motormix sign-log failed"
+"$java" -cp "$jar_file:$lcm_jar:$work" DecodeLog "$work/signed.lcmlog" "$pwm_min" "$pwm_max" \
+  "${channels[@]}" || fail "the signed log does not decode with the jar's classes"
 echo "check_java: all checks passed"
