@@ -3,6 +3,7 @@
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
 #include <motormix/config/matrix_export.hpp>
+#include <motormix/config/security.hpp>
 #include "node/lcm_node.hpp"
 #include "node/log_replay.hpp"
 #include "node/log_signing.hpp"
@@ -350,6 +351,12 @@ int monitor(const MonitorCommand& cmd) {
     o.pwm_channel = config->channels.motor_pwm;
     o.motor_names = config->motor_names();
     o.output_unit = config->output_unit;
+    try {
+      o.policy = std::make_shared<signing::Policy>(config::signing_policy(*config));
+    } catch (const config::ConfigError& e) {
+      std::cerr << "motormix monitor: " << e.what() << "\n";
+      return kExitUsage;
+    }
   }
   if (!cmd.status_channel.empty()) o.status_channel = cmd.status_channel;
   if (!cmd.pwm_channel.empty()) o.pwm_channel = cmd.pwm_channel;

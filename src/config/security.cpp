@@ -47,12 +47,13 @@ std::string describe(const Security& s) {
   return "security: ?";
 }
 
-signing::Policy signing_policy(const Config& config) {
+signing::Policy signing_policy(const Config& config, int link_id_offset) {
   const Security& s = config.security;
   if (s.mode == signing::Mode::kOff) return signing::Policy();
   try {
     return signing::Policy(s.mode, signing::load_key(s.key_file),
-                           static_cast<std::uint8_t>(s.link_id), s.max_skew_s);
+                           static_cast<std::uint8_t>((s.link_id + link_id_offset) & 0xFF),
+                           s.max_skew_s);
   } catch (const signing::KeyError& e) {
     throw ConfigError(std::string("security.key_file: ") + e.what());
   }

@@ -207,9 +207,8 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
     << "\n";
   s << "wake-up   late us mean/p99/max " << fixed(st.wake_latency_us[1], 1) << "/"
     << fixed(st.wake_latency_us[3], 0) << "/" << fixed(st.wake_latency_us[2], 0)
-    << "   kernel drops " << (st.kernel_drops < 0 ? std::string("unknown")
-                                                     : std::to_string(st.kernel_drops))
-    << "\n";
+    << "   kernel drops "
+    << (st.kernel_drops < 0 ? std::string("unknown") : std::to_string(st.kernel_drops)) << "\n";
   s << "accepted  setpoint " << st.setpoint_received << "   pid " << st.pid_received
     << "   motor_status " << st.motor_status_received << "   battery " << st.battery_received;
   if (st.esc_telemetry_received > 0 || st.attitude_received > 0) {
@@ -219,6 +218,13 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   s << "rejected  undecodable " << st.rejected_decode << "   non-finite " << st.rejected_nonfinite
     << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "
     << st.rejected_future << "   size " << st.rejected_size << "\n";
+  if (st.security_mode != mixer_status_t::SECURITY_OFF) {
+    s << "signed    " << (st.security_mode == mixer_status_t::SECURITY_REQUIRE ? "require" : "sign")
+      << "   verified " << st.signed_received << "   unsigned taken " << st.unsigned_received
+      << "   refused: unsigned " << st.rejected_unsigned << "   bad signature "
+      << st.rejected_bad_signature << "   replayed " << st.rejected_replayed << "   stale "
+      << st.rejected_stale_signature << "\n";
+  }
   s << "events    failsafe " << st.failsafe_events << "   arming refused " << st.arming_refused
     << "   motor tests " << st.motor_tests_started << " (refused " << st.motor_tests_refused
     << ")\n";
@@ -227,28 +233,14 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
 
 namespace {
 
-// A whole message of the type, or nothing (the type's fingerprint and the
-// length must both match); never throws.
-template <typename Message>
-std::optional<Message> decode_message(const lcm::ReceiveBuffer* rbuf) {
-  Message m;
-  try {
-    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) ==
-        static_cast<int>(rbuf->data_size)) {
-      return m;
-    }
-  } catch (...) {
-  }
-  return std::nullopt;
-}
-
 class Listener {
  public:
-  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    status_at = keep(decode_message<mixer_status_t>(rbuf), status, status_at);
+  explicit Listener(signing::Policy* policy) : policy_(policy) {}
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    status_at = keep(decode_message<mixer_status_t>(rbuf, channel), status, status_at);
   }
-  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    pwm_at = keep(decode_message<motor_pwm_t>(rbuf), pwm, pwm_at);
+  void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    pwm_at = keep(decode_message<motor_pwm_t>(rbuf, channel), pwm, pwm_at);
   }
   MonitorSnapshot snapshot() const {
     MonitorSnapshot s;
@@ -267,6 +259,27 @@ class Listener {
   long undecodable = 0;
 
  private:
+  // A whole message of the type, or nothing (the type's fingerprint and the
+  // length must both match; the signing policy must take it); never throws.
+  template <typename Message>
+  std::optional<Message> decode_message(const lcm::ReceiveBuffer* rbuf,
+                                        const std::string& channel) {
+    const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+    const signing::Inbound in = policy_->check(
+        channel, static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size, wall);
+    if (!in.accept) return std::nullopt;
+    const int size = static_cast<int>(in.payload_size);
+    Message m;
+    try {
+      if (m.decode(rbuf->data, 0, size) == size) return m;
+    } catch (...) {
+    }
+    return std::nullopt;
+  }
+  signing::Policy* policy_;
+
   // Keeps a decoded message with its arrival time; counts one that was not.
   template <typename Message>
   Clock::time_point keep(std::optional<Message> decoded, std::optional<Message>& last,
@@ -298,7 +311,8 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
     if (signal_fd >= 0) close(signal_fd);
     return 1;
   }
-  Listener listener;
+  signing::Policy off;  // no key: a trailer is cut off unread
+  Listener listener(o.policy ? o.policy.get() : &off);
   lcm.subscribe(o.status_channel, &Listener::on_status, &listener);
   lcm.subscribe(o.pwm_channel, &Listener::on_pwm, &listener);
 

@@ -92,6 +92,16 @@ consumer_build consumer "$src/test/package/consumer" "$prefix"
 "$work/consumer/build/core_and_types"
 "$work/consumer/build/signing" | grep -q 'signing: signed' || fail "motormix::signing: not signed"
 
+step "find_package(motormix): the signed controller example (motormix::signing + lcmtypes)"
+consumer_build signed_controller "$src/examples/signed_controller" "$prefix"
+# Without a key it says so and exits 2 (it flies in the signed_controllers test).
+if "$work/signed_controller/build/signed_controller" --key "$work/no-such.key" \
+  2> "$work/signed_controller.err"; then
+  fail "signed_controller ran without a key"
+fi
+grep -q "cannot open the key file" "$work/signed_controller.err" ||
+  fail "signed_controller: $(cat "$work/signed_controller.err")"
+
 step "find_package(motormix): the README's embedding example (motormix::config)"
 consumer_build embedding "$src/examples/embedding" "$prefix"
 "$work/embedding/build/embed" "$prefix/share/motormix/config/quad_x.yaml" | tee "$work/embed.txt"

@@ -35,6 +35,12 @@ std::string describe(const Security& security);
 // The policy of config.security, its key read from the key file. Throws
 // ConfigError naming security.key_file and what is wrong with the file
 // (never the key). Mode off: a policy without a key (no file is read).
-signing::Policy signing_policy(const Config& config);
+// link_id_offset is added to security.link_id (mod 256): a second kind of
+// publisher under the same configuration (the simulated vehicle beside the
+// mixer, both publishing motor_status_t) signs as a link of its own.
+signing::Policy signing_policy(const Config& config, int link_id_offset = 0);
+
+// The link id the simulator on the bus signs as: security.link_id + 128.
+constexpr int kSimulatorLinkOffset = 128;
 
 }  // namespace motormix::config

@@ -125,7 +125,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   const config::Config config = scenario_config(config_in, scenario);
   signing::Policy policy;
   try {
-    policy = config::signing_policy(config);
+    // A link of its own: it publishes motor_status_t as the mixer does.
+    policy = config::signing_policy(config, config::kSimulatorLinkOffset);
   } catch (const config::ConfigError& e) {
     err << "motormix sim: " << e.what() << "\n";
     return false;

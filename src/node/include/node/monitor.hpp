@@ -10,8 +10,11 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <motormix/signing_policy.hpp>
 #include <optional>
 #include <string>
+
+#include <memory>
 #include <vector>
 
 namespace motormix::node {
@@ -26,6 +29,10 @@ struct MonitorOptions {
   double wait_s = 3.0;       // no status within this long: exit 1
   double duration_s = 0.0;   // live view: stop by itself after this long (0: until a signal)
   double refresh_hz = 10.0;  // live view redraws
+  // The configuration's signing policy (security:): under sign or require,
+  // a status or output that does not verify is not shown (counted as
+  // undecodable). Null: signatures are cut off unread.
+  std::shared_ptr<signing::Policy> policy;
 };
 
 // What the view is drawn from: the last status and outputs, and how old

@@ -6,6 +6,9 @@
 // setpoint_t and pid_t, on the configuration's channels. Motor outputs older
 // than the mixer's input timeout, or none yet, count as disarmed (the ESCs
 // stop). The run is bounded by the scenario's duration or `duration_s`.
+// With security.mode sign or require, everything it publishes is signed, as
+// link security.link_id + 128 (it publishes motor_status_t as the mixer
+// does), and what it reads from the mixer must verify as the mode says.
 
 #include "sim/lockstep.hpp"
 
