@@ -56,6 +56,19 @@ std::optional<config::Config> load_vehicle(const CommonOptions& common, const ch
   }
 }
 
+// --check: the security line, and the key read as the process would read it
+// (a key file that is missing or open to others fails the check).
+bool check_security(const config::Config& config, const char* command) {
+  std::cout << config::describe(config.security) << "\n";
+  try {
+    config::signing_policy(config);
+    return true;
+  } catch (const config::ConfigError& e) {
+    std::cerr << "motormix " << command << ": " << e.what() << "\n";
+    return false;
+  }
+}
+
 int run(const RunCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "run");
   if (!config) return kExitUsage;
@@ -80,6 +93,7 @@ int run(const RunCommand& cmd) {
       std::cout << "\n";
     }
     if (!config->motor_loss_summary().empty()) std::cout << config->motor_loss_summary() << "\n";
+    if (!check_security(*config, "run")) return kExitUsage;
     std::cout << "\n" << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
   }
@@ -112,7 +126,7 @@ int output(const OutputCommand& cmd) {
       std::cout << "; " << hw.sysfs.root << "/pwmchip" << hw.sysfs.chip;
     }
     std::cout << "; " << hw.telemetry.size() << " ESC telemetry wire(s)\n";
-    return kExitOk;
+    return check_security(*config, "output") ? kExitOk : kExitUsage;
   }
   output::OutputOptions options;
   options.lcm_url = cmd.lcm_url;
