@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace motormix::signing {
 
@@ -83,5 +84,19 @@ class Policy {
   std::unique_ptr<Verifier> verifier_;
   PolicyCounts counts_;
 };
+
+// Encodes an LCM message (anything with getEncodedSize() and encode(), as
+// lcm-gen makes them) into `buffer`, grown only when too small for it and a
+// trailer, and signs it when the policy signs. The bytes to publish are the
+// first ones returned; 0 when the message does not encode.
+template <typename Message>
+std::size_t encode_sealed(Policy& policy, const std::string& channel, const Message& msg,
+                          std::vector<std::uint8_t>& buffer, std::int64_t now_unix_us) {
+  const std::size_t need = static_cast<std::size_t>(msg.getEncodedSize()) + kTrailerBytes;
+  if (buffer.size() < need) buffer.resize(need);
+  const int len = msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+  if (len <= 0) return 0;
+  return policy.seal(channel, buffer.data(), static_cast<std::size_t>(len), now_unix_us);
+}
 
 }  // namespace motormix::signing

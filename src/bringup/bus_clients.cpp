@@ -59,13 +59,9 @@ struct StatusWatch {
 template <typename Message>
 void publish(lcm::LCM& lcm, signing::Policy& policy, const std::string& channel,
              const Message& msg) {
-  std::vector<std::uint8_t> buffer(static_cast<std::size_t>(msg.getEncodedSize()) +
-                                   signing::kTrailerBytes);
-  const int len = msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-  if (len <= 0) return;
-  const std::size_t size =
-      policy.seal(channel, buffer.data(), static_cast<std::size_t>(len), node::wall_us());
-  lcm.publish(channel, buffer.data(), static_cast<unsigned>(size));
+  std::vector<std::uint8_t> buffer;
+  const std::size_t size = signing::encode_sealed(policy, channel, msg, buffer, node::wall_us());
+  if (size > 0) lcm.publish(channel, buffer.data(), static_cast<unsigned>(size));
 }
 
 void send_test(lcm::LCM& lcm, signing::Policy& policy, const std::string& channel, int motor_1based,

@@ -378,11 +378,8 @@ class Node {
   // once with room for the signature: nothing is allocated here.
   template <typename Message>
   void publish(const std::string& channel, const Message& msg, std::vector<uint8_t>& buffer) {
-    const int len = msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-    if (len <= 0) return;
-    const std::size_t size =
-        policy_.seal(channel, buffer.data(), static_cast<std::size_t>(len), wall_us());
-    lcm_.publish(channel, buffer.data(), static_cast<unsigned>(size));
+    const std::size_t size = signing::encode_sealed(policy_, channel, msg, buffer, wall_us());
+    if (size > 0) lcm_.publish(channel, buffer.data(), static_cast<unsigned>(size));
   }
 
   void publish_pwm(const loop::CycleResult& r) {

@@ -144,12 +144,12 @@ class OutputNode {
     msg.voltage_v = {static_cast<float>(r.voltage_v)};
     msg.temperature_c = {static_cast<float>(r.temperature_c)};
     msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
-    std::uint8_t buffer[256];  // one reading: 53 bytes, and the signature
-    const int len = msg.encode(buffer, 0, static_cast<int>(sizeof buffer - signing::kTrailerBytes));
-    if (len <= 0) return;
-    const std::size_t size = policy_.seal(config_.channels.esc_telemetry, buffer,
-                                          static_cast<std::size_t>(len), wall_us());
-    lcm_.publish(config_.channels.esc_telemetry, buffer, static_cast<unsigned>(size));
+    const std::size_t size = signing::encode_sealed(policy_, config_.channels.esc_telemetry, msg,
+                                                    telemetry_buffer_, wall_us());
+    if (size > 0) {
+      lcm_.publish(config_.channels.esc_telemetry, telemetry_buffer_.data(),
+                   static_cast<unsigned>(size));
+    }
   }
 
  private:
@@ -171,6 +171,7 @@ class OutputNode {
 
   const config::Config& config_;
   signing::Policy policy_;
+  std::vector<std::uint8_t> telemetry_buffer_;  // grown once
   lcm::LCM& lcm_;
   PulseDriver& driver_;
   std::ostream& log_;

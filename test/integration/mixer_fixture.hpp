@@ -99,10 +99,8 @@ class Pilot {
   // Publishes m (signed when sign_with() was called); returns the bytes sent.
   template <typename Message>
   std::vector<std::uint8_t> message(const std::string& channel, const Message& m) {
-    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()) +
-                                    signing::kTrailerBytes);
-    const int len = m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    bytes.resize(policy_.seal(channel, bytes.data(), static_cast<std::size_t>(len), wall_us()));
+    std::vector<std::uint8_t> bytes;
+    bytes.resize(signing::encode_sealed(policy_, channel, m, bytes, wall_us()));
     raw(channel, bytes);
     return bytes;
   }

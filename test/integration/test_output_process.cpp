@@ -103,13 +103,11 @@ class OutputProcess : public ::testing::Test {
     m.command.assign(m.pwm.size(), 0.5f);
     m.direction.assign(m.pwm.size(), 0);
     m.armed = armed;
-    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()) +
-                                    signing::kTrailerBytes);
-    const int len = m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
     const auto now = std::chrono::duration_cast<std::chrono::microseconds>(
                          std::chrono::system_clock::now().time_since_epoch())
                          .count();
-    bytes.resize(policy.seal("MOTOR_PWM", bytes.data(), static_cast<std::size_t>(len), now));
+    std::vector<std::uint8_t> bytes;
+    bytes.resize(signing::encode_sealed(policy, "MOTOR_PWM", m, bytes, now));
     return bytes;
   }
   static void send(lcm::LCM& lcm, const std::vector<std::uint8_t>& bytes) {

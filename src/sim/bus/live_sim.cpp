@@ -104,12 +104,8 @@ class Publisher {
   Publisher(lcm::LCM& lcm, signing::Policy& policy) : lcm_(lcm), policy_(policy) {}
   template <typename Message>
   void operator()(const std::string& channel, const Message& msg) {
-    buffer_.resize(static_cast<std::size_t>(msg.getEncodedSize()) + signing::kTrailerBytes);
-    const int len = msg.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
-    if (len <= 0) return;
-    const std::size_t size =
-        policy_.seal(channel, buffer_.data(), static_cast<std::size_t>(len), wall_us());
-    lcm_.publish(channel, buffer_.data(), static_cast<unsigned>(size));
+    const std::size_t size = signing::encode_sealed(policy_, channel, msg, buffer_, wall_us());
+    if (size > 0) lcm_.publish(channel, buffer_.data(), static_cast<unsigned>(size));
   }
 
  private:
