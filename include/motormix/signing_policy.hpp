@@ -43,6 +43,17 @@ struct PolicyCounts {
     return rejected_unsigned + rejected_bad_signature + rejected_replayed + rejected_stale +
            rejected_other;
   }
+  // Several policies' counts together (one per channel, in the replay).
+  PolicyCounts& operator+=(const PolicyCounts& o) {
+    signed_accepted += o.signed_accepted;
+    unsigned_accepted += o.unsigned_accepted;
+    rejected_unsigned += o.rejected_unsigned;
+    rejected_bad_signature += o.rejected_bad_signature;
+    rejected_replayed += o.rejected_replayed;
+    rejected_stale += o.rejected_stale;
+    rejected_other += o.rejected_other;
+    return *this;
+  }
 };
 
 // One incoming message's fate.

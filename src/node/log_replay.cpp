@@ -114,15 +114,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     InputSecurity sum;
     sum.mode = mode;
     for (const auto& [channel, policy] : policies) {
-      if (!input_kind(channel)) continue;
-      const signing::PolicyCounts& c = policy.counts();
-      sum.counts.signed_accepted += c.signed_accepted;
-      sum.counts.unsigned_accepted += c.unsigned_accepted;
-      sum.counts.rejected_unsigned += c.rejected_unsigned;
-      sum.counts.rejected_bad_signature += c.rejected_bad_signature;
-      sum.counts.rejected_replayed += c.rejected_replayed;
-      sum.counts.rejected_stale += c.rejected_stale;
-      sum.counts.rejected_other += c.rejected_other;
+      if (input_kind(channel)) sum.counts += policy.counts();
     }
     return sum;
   };
