@@ -11,16 +11,11 @@
 
 #include <unistd.h>
 
-#include <atomic>
-#include <csignal>
 #include <iostream>
 
 namespace motormix::app {
 
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_interrupt(int) { g_interrupted = true; }
 
 int exit_code(bringup::ClientOutcome outcome) {
   switch (outcome) {
@@ -55,10 +50,13 @@ int motor_test(const MotorTestCommand& cmd) {
     motors.push_back(m);
   }
   if (cmd.parse_only) return kExitOk;
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  bus::ShutdownSignals signals;
+  if (!signals.good()) {
+    std::cerr << "motormix motor-test: " << signals.error() << "\n";
+    return kExitRuntime;
+  }
   return exit_code(bringup::run_motor_test(*config, motors, cmd.throttle, cmd.seconds, cmd.wait_s,
-                                           cmd.lcm_url, g_interrupted, std::cout, std::cerr));
+                                           cmd.lcm_url, signals, std::cout, std::cerr));
 }
 
 int esc_calibrate(const EscCalibrateCommand& cmd) {
@@ -73,14 +71,17 @@ int esc_calibrate(const EscCalibrateCommand& cmd) {
     std::cerr << "motormix esc-calibrate: refused: " << why << "\n";
     return kExitUsage;
   }
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  bus::ShutdownSignals signals;
+  if (!signals.good()) {
+    std::cerr << "motormix esc-calibrate: " << signals.error() << "\n";
+    return kExitRuntime;
+  }
   bringup::EscCalibrationTiming timing;
   timing.listen_s = cmd.listen_s;
   timing.timeout_s = cmd.timeout_s;
   timing.min_seconds = cmd.min_seconds;
-  return exit_code(bringup::run_esc_calibration(*config, timing, cmd.lcm_url, STDIN_FILENO,
-                                                g_interrupted, std::cout, std::cerr));
+  return exit_code(bringup::run_esc_calibration(*config, timing, cmd.lcm_url, STDIN_FILENO, signals,
+                                                std::cout, std::cerr));
 }
 
 }  // namespace motormix::app

@@ -219,6 +219,11 @@ int sim(const SimCommand& cmd) {
       j["pwm_received"] = result.pwm_received;
       j["pwm_rejected"] = result.pwm_rejected;
       j["statuses_received"] = result.statuses_received;
+      const bus::Refusals& refused = result.refused;
+      j["refused"] = {{"signature", refused.signature},   {"truncated", refused.truncated},
+                      {"trailing", refused.trailing},     {"wrong_type", refused.wrong_type},
+                      {"bad_length", refused.bad_length}, {"undecodable", refused.undecodable}};
+      j["interrupted"] = result.interrupted;
       add_detections(j, result.sim, *config);
       add_spin(j, result.sim, *config, result.sim.failures);
       outcomes = result.sim.failures;

@@ -1,7 +1,10 @@
 #include "bringup/bus_clients.hpp"
 
 #include "bringup/motor_test_client.hpp"
-#include "node/wall_clock.hpp"
+#include "bus/clock.hpp"
+#include "bus/policy_or_error.hpp"
+#include "bus/receive.hpp"
+#include "bus/sealed_publisher.hpp"
 
 #include <motormix/config/security.hpp>
 #include <motormix/mixer_status_t.hpp>
@@ -31,58 +34,32 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// The latest status seen, decoded inside the callback (nothing thrown out).
-// Under security: sign or require, only a status whose signature verifies
-// is believed (a forged "test running" must not keep the client waiting).
+// The latest status seen, taken through the bus's guard inside the callback
+// (nothing thrown out, refusals counted by reason). Under security: sign or
+// require, only a status whose signature verifies is believed (a forged
+// "test running" must not keep the client waiting).
 struct StatusWatch {
   signing::Policy* policy = nullptr;
   std::optional<mixer_status_t> latest;
   int statuses = 0;
+  bus::Refusals refused;
+  mixer_status_t msg{};
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const signing::Inbound in = policy->check(channel, static_cast<const std::uint8_t*>(rbuf->data),
-                                              rbuf->data_size, node::wall_us());
-    if (!in.accept) return;
-    const int size = static_cast<int>(in.payload_size);
-    mixer_status_t msg;
-    try {
-      if (msg.decode(rbuf->data, 0, size) == size) {
-        latest = msg;
-        ++statuses;
-      }
-    } catch (...) {
-      // undecodable: not a status
-    }
+    if (bus::receive(*policy, rbuf, channel, bus::wall_us(), msg, refused) != bus::Refusal::kNone)
+      return;
+    latest = msg;
+    ++statuses;
   }
 };
 
-// Publishes msg, signed when the configuration signs.
-template <typename Message>
-void publish(lcm::LCM& lcm, signing::Policy& policy, const std::string& channel,
-             const Message& msg) {
-  std::vector<std::uint8_t> buffer;
-  const std::size_t size = signing::encode_sealed(policy, channel, msg, buffer, node::wall_us());
-  if (size > 0) lcm.publish(channel, buffer.data(), static_cast<unsigned>(size));
-}
-
-void send_test(lcm::LCM& lcm, signing::Policy& policy, const std::string& channel, int motor_1based,
+void send_test(bus::SealedPublisher& publisher, const std::string& channel, int motor_1based,
                double throttle, double seconds, std::int64_t utime) {
   motor_test_t msg;
   msg.utime = utime;
   msg.motor = motor_1based;
   msg.throttle = static_cast<float>(throttle);
   msg.duration_s = static_cast<float>(seconds);
-  publish(lcm, policy, channel, msg);
-}
-
-// The configuration's signing policy, or nothing (with the reason on err).
-std::optional<signing::Policy> policy_for(const config::Config& config, const char* command,
-                                          std::ostream& err) {
-  try {
-    return config::signing_policy(config);
-  } catch (const config::ConfigError& e) {
-    err << "motormix " << command << ": " << e.what() << "\n";
-    return std::nullopt;
-  }
+  publisher.publish(channel, msg);
 }
 
 // Enter on `fd`, polled without blocking: 1 a line, -1 end of input, 0 nothing yet.
@@ -118,22 +95,23 @@ std::string describe_motor(const config::Config& config, int motor) {
 
 ClientOutcome run_motor_test(const config::Config& config, const std::vector<int>& motors,
                              double throttle, double seconds, double wait_s,
-                             const std::string& lcm_url, const std::atomic<bool>& interrupted,
+                             const std::string& lcm_url, bus::ShutdownSignals& signals,
                              std::ostream& out, std::ostream& err) {
-  std::optional<signing::Policy> policy = policy_for(config, "motor-test", err);
+  std::optional<signing::Policy> policy = bus::policy_or_error(config, "motor-test", err);
   if (!policy) return ClientOutcome::kBusError;
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
     err << "motormix motor-test: cannot open the LCM bus\n";
     return ClientOutcome::kBusError;
   }
+  bus::SealedPublisher publisher(lcm, *policy);
   StatusWatch watch;
   watch.policy = &*policy;
   lcm.subscribe(config.channels.status, &StatusWatch::on_status, &watch);
   MotorTestClient client(motors, throttle, seconds, wait_s);
   const auto start = Clock::now();
   for (;;) {
-    if (interrupted) client.on_interrupt();
+    if (signals.requested()) client.on_interrupt();
     std::optional<MotorTestAnswer> answer;
     if (watch.latest) {
       answer =
@@ -142,12 +120,11 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
                           watch.latest->motor_test_state == mixer_status_t::MOTOR_TEST_RUNNING};
     }
     const MotorTestClient::Action a =
-        client.step(seconds_since(start), node::wall_us(), answer ? &*answer : nullptr);
+        client.step(seconds_since(start), bus::wall_us(), answer ? &*answer : nullptr);
     using Kind = MotorTestClient::Action::Kind;
     switch (a.kind) {
       case Kind::kSend:
-        send_test(lcm, *policy, config.channels.motor_test, a.motor, a.throttle, a.seconds,
-                  a.utime);
+        send_test(publisher, config.channels.motor_test, a.motor, a.throttle, a.seconds, a.utime);
         break;
       case Kind::kSpinning:
         out << describe_motor(config, a.motor - 1) << ": spinning at " << throttle << " for "
@@ -166,7 +143,7 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
         err << "motormix motor-test: refused: " << loop::to_string(a.refusal) << "\n";
         return ClientOutcome::kRefused;
       case Kind::kStopped:
-        send_test(lcm, *policy, config.channels.motor_test, 0, 0.0, 0.0, a.utime);
+        send_test(publisher, config.channels.motor_test, 0, 0.0, 0.0, a.utime);
         err << "motormix motor-test: interrupted, test stopped\n";
         return ClientOutcome::kInterrupted;
     }
@@ -175,9 +152,9 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
 
 ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibrationTiming& timing,
                                   const std::string& lcm_url, int input_fd,
-                                  const std::atomic<bool>& interrupted, std::ostream& out,
+                                  bus::ShutdownSignals& signals, std::ostream& out,
                                   std::ostream& err) {
-  std::optional<signing::Policy> policy = policy_for(config, "esc-calibrate", err);
+  std::optional<signing::Policy> policy = bus::policy_or_error(config, "esc-calibrate", err);
   if (!policy) return ClientOutcome::kBusError;
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
@@ -188,6 +165,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
   // heard before this process publishes its own, is a mixer.
   // Any status at all means a mixer runs, signed or not: here every one
   // counts (mode off reads them all).
+  bus::SealedPublisher publisher(lcm, *policy);
   signing::Policy any_status;
   StatusWatch watch;
   watch.policy = &any_status;
@@ -222,7 +200,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
     while (lcm.handleTimeout(0) > 0) {
     }
     if (watch.statuses > 0 || foreign_pwm > 0) calibration.on_mixer_heard();
-    if (interrupted) calibration.on_interrupt();
+    if (signals.requested()) calibration.on_interrupt();
     if (calibration.phase() == EscCalibration::Phase::kMaximum) {
       const int line = line_ready(input_fd);
       if (line > 0) calibration.on_enter();
@@ -247,14 +225,14 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
     }
     if (o.publish) {
       publishing = true;
-      msg.utime = node::wall_us();
+      msg.utime = bus::wall_us();
       for (int i = 0; i < msg.num_motors; ++i) {
         const auto k = static_cast<std::size_t>(i);
         msg.pwm[k] = static_cast<float>((*o.pwm)[k]);
         msg.command[k] = static_cast<float>(o.command);
       }
       msg.armed = o.armed;
-      publish(lcm, *policy, config.channels.motor_pwm, msg);
+      publisher.publish(config.channels.motor_pwm, msg);
       // Our own outputs come back on the same channel: from now on only a
       // status betrays another mixer.
       while (lcm.handleTimeout(0) > 0) {
@@ -272,7 +250,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       out << "Done: outputs disarmed." << std::endl;
       return ClientOutcome::kOk;
     case EscCalibration::Outcome::kRefused:
-      if (interrupted) {
+      if (signals.requested()) {
         err << "motormix esc-calibrate: interrupted while listening; nothing was sent\n";
         return ClientOutcome::kInterrupted;
       }
@@ -282,7 +260,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       return ClientOutcome::kRefused;
     default:
       err << "motormix esc-calibrate: " << calibration.reason() << "; outputs disarmed\n";
-      return interrupted ? ClientOutcome::kInterrupted : ClientOutcome::kAborted;
+      return signals.requested() ? ClientOutcome::kInterrupted : ClientOutcome::kAborted;
   }
 }
 

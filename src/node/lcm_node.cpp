@@ -1,7 +1,10 @@
 #include "node/lcm_node.hpp"
 
 #include <nlohmann/json.hpp>
-#include "node/wall_clock.hpp"
+#include "bus/clock.hpp"
+#include "bus/policy_or_error.hpp"
+#include "bus/sealed_publisher.hpp"
+#include "bus/shutdown_signals.hpp"
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/matrix_export.hpp>
@@ -25,7 +28,6 @@
 #include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
-#include <sys/signalfd.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
 
@@ -35,6 +37,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <ostream>
 #include <utility>
 #include <vector>
@@ -50,12 +53,9 @@ constexpr int kQueueCapacity = 1000;
 // flood on the inputs cannot starve the output.
 constexpr int kMaxMessagesPerDrain = 1000;
 
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-std::int64_t monotonic_us() { return monotonic_ns() / 1000; }
+using bus::monotonic_ns;
+using bus::monotonic_us;
+using bus::wall_us;
 
 // Owns a file descriptor.
 class Fd {
@@ -80,22 +80,20 @@ class Node {
         policy_(std::move(policy)),
         drops_(drops),
         lcm_(lcm),
+        publisher_(lcm, policy_),
         log_(log),
         loop_(config, config::build_mixer(config)),
         period_stats_(window_capacity(config)),
         compute_stats_(window_capacity(config)),
         wake_stats_(window_capacity(config)) {
     const int n = config.motors();
-    // Each buffer has room for a signature after the message.
-    const auto room = [](int encoded) {
-      return static_cast<std::size_t>(encoded) + signing::kTrailerBytes;
-    };
+    // One buffer, with room for the largest message and a signature.
     size_pwm_message(pwm_msg_, n);
-    pwm_buffer_.resize(room(pwm_msg_.getEncodedSize()));
     status_msg_.num_motors = n;
-    status_buffer_.resize(room(status_msg_.getEncodedSize()));
     fill_motor_status_message(motor_status_msg_, 0, n, 0);
-    motor_status_buffer_.resize(room(motor_status_msg_.getEncodedSize()));
+    for (const int size : {pwm_msg_.getEncodedSize(), status_msg_.getEncodedSize(),
+                           motor_status_msg_.getEncodedSize()})
+      publisher_.reserve(static_cast<std::size_t>(size));
   }
 
   void subscribe() {
@@ -374,17 +372,9 @@ class Node {
     motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
   }
 
-  // Encodes, signs when the policy signs, publishes. The buffers were sized
-  // once with room for the signature: nothing is allocated here.
-  template <typename Message>
-  void publish(const std::string& channel, const Message& msg, std::vector<uint8_t>& buffer) {
-    const std::size_t size = signing::encode_sealed(policy_, channel, msg, buffer, wall_us());
-    if (size > 0) lcm_.publish(channel, buffer.data(), static_cast<unsigned>(size));
-  }
-
   void publish_pwm(const loop::CycleResult& r) {
     fill_pwm_message(pwm_msg_, r, wall_us());
-    publish(config_.channels.motor_pwm, pwm_msg_, pwm_buffer_);
+    publisher_.publish(config_.channels.motor_pwm, pwm_msg_);
   }
 
   void publish_motor_status(const loop::CycleResult& r) {
@@ -395,7 +385,7 @@ class Node {
     last_own_status_utime_ = utime;
     fill_motor_status_message(motor_status_msg_, r.failed, config_.motors(), utime);
     own_status_utimes_[own_status_next_++ % own_status_utimes_.size()] = utime;
-    publish(config_.channels.motor_status, motor_status_msg_, motor_status_buffer_);
+    publisher_.publish(config_.channels.motor_status, motor_status_msg_);
   }
 
   void publish_status(const loop::CycleResult& r) {
@@ -408,7 +398,7 @@ class Node {
     timing.wall_minus_loop_clock_us = wall_us() - monotonic_us();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
                         wall_us(), InputSecurity{policy_.mode(), policy_.counts()});
-    publish(config_.channels.status, status_msg_, status_buffer_);
+    publisher_.publish(config_.channels.status, status_msg_);
   }
 
   static constexpr std::size_t kRefused = static_cast<std::size_t>(-1);
@@ -417,14 +407,12 @@ class Node {
   signing::Policy policy_;
   const SocketDropsWatcher& drops_;
   lcm::LCM& lcm_;
+  bus::SealedPublisher publisher_;  // signs with policy_ when it signs
   std::ostream& log_;
   loop::ControlLoop loop_;
   motor_pwm_t pwm_msg_;
   mixer_status_t status_msg_;
-  std::vector<uint8_t> pwm_buffer_;
-  std::vector<uint8_t> status_buffer_;
   motor_status_t motor_status_msg_;
-  std::vector<uint8_t> motor_status_buffer_;
   // The utimes of the motor_status messages this process published lately.
   std::array<std::int64_t, 8> own_status_utimes_{};
   std::size_t own_status_next_ = 0;
@@ -475,28 +463,18 @@ void log_summary(const config::Config& config, const std::string& url, std::ostr
 int run_node(const config::Config& config, const RunOptions& options, std::ostream& log) {
   // The key is read before anything reaches the bus: a key file that is
   // missing or open to others stops the start, as a configuration error.
-  signing::Policy policy;
-  try {
-    policy = config::signing_policy(config);
-  } catch (const config::ConfigError& e) {
-    log << "motormix: " << e.what() << std::endl;
-    return 1;
-  }
+  std::optional<signing::Policy> policy = bus::policy_or_error(config, "run", log);
+  if (!policy) return 1;
   // Signals arrive through a descriptor so shutdown happens in the loop, not
   // in an async handler.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGHUP);
-  if (sigprocmask(SIG_BLOCK, &signals, nullptr) != 0) {
-    log << "motormix: cannot block signals: " << std::strerror(errno) << std::endl;
+  bus::ShutdownSignals signals;
+  if (!signals.good()) {
+    log << "motormix run: " << signals.error() << std::endl;
     return 1;
   }
-  Fd signal_fd(signalfd(-1, &signals, SFD_CLOEXEC));
   Fd timer_fd(timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC));
-  if (signal_fd.get() < 0 || timer_fd.get() < 0) {
-    log << "motormix: cannot create signal or timer descriptor: " << std::strerror(errno)
+  if (timer_fd.get() < 0) {
+    log << "motormix: cannot create the loop's timer descriptor: " << std::strerror(errno)
         << std::endl;
     return 1;
   }
@@ -514,7 +492,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   }
   log_summary(config, options.lcm_url, log);
   const SocketDropsWatcher drops;
-  Node node(config, std::move(policy), lcm, drops, log);
+  Node node(config, std::move(*policy), lcm, drops, log);
   node.subscribe();  // starts LCM's receive thread
   // After every other thread has started: they keep the default scheduler,
   // and move off the loop's CPUs (realtime.hpp).
@@ -536,7 +514,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   }
 
   pollfd fds[3] = {
-      {lcm.getFileno(), POLLIN, 0}, {timer_fd.get(), POLLIN, 0}, {signal_fd.get(), POLLIN, 0}};
+      {lcm.getFileno(), POLLIN, 0}, {timer_fd.get(), POLLIN, 0}, {signals.fd(), POLLIN, 0}};
   long long cycles = 0;
   std::int64_t ticks = 0;  // timer periods elapsed
   // Written once at the end, whichever way the loop ends.
@@ -558,11 +536,9 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
       log << "motormix: poll failed: " << std::strerror(errno) << std::endl;
       return finish(1);
     }
-    if (fds[2].revents & POLLIN) {
-      signalfd_siginfo info{};
-      [[maybe_unused]] const ssize_t got = read(signal_fd.get(), &info, sizeof info);
-      log << "motormix: signal " << info.ssi_signo << ", publishing disarmed outputs and exiting"
-          << std::endl;
+    if ((fds[2].revents & POLLIN) && signals.take() != 0) {
+      log << "motormix: signal " << signals.last_signal()
+          << ", publishing disarmed outputs and exiting" << std::endl;
       return finish(0);
     }
     const std::int64_t woke_ns = monotonic_ns();

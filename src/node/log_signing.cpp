@@ -1,7 +1,7 @@
 #include "node/log_signing.hpp"
 
 #include "node/log_writer.hpp"
-#include "node/wall_clock.hpp"
+#include "bus/clock.hpp"
 
 #include <motormix/signing.hpp>
 
@@ -37,7 +37,7 @@ bool sign_log(const config::Config& config, const std::string& in_path, const st
     log << "motormix sign-log: cannot write " << out_path << "\n";
     return false;
   }
-  const std::int64_t now = wall_us();
+  const std::int64_t now = bus::wall_us();
   std::int64_t first = -1;
   std::vector<std::uint8_t> buffer;
   while (const LogEventView* ev = in.next()) {

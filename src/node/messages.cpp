@@ -1,7 +1,8 @@
 #include "node/messages.hpp"
 
+#include "bus/receive.hpp"
+
 #include <algorithm>
-#include <cstring>
 
 namespace motormix::node {
 
@@ -153,13 +154,12 @@ void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors
 }
 
 namespace {
+// The bus's one guard: fingerprint, array length against the bytes, the
+// whole payload consumed, nothing thrown.
 template <typename Message>
 bool decode_whole(const void* data, int size, Message& msg) {
-  try {
-    return msg.decode(data, 0, size) == size;
-  } catch (...) {
-    return false;
-  }
+  return size >= 0 &&
+         bus::decode_exact(data, static_cast<std::size_t>(size), msg) == bus::Refusal::kNone;
 }
 }  // namespace
 
@@ -171,15 +171,6 @@ bool decode_setpoint(const void* data, int size, loop::SetpointSample& out) {
 }
 
 bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out) {
-  // fingerprint (8) + utime (8) + num_motors (4, big-endian) + one byte per motor.
-  constexpr int kHeader = 20;
-  if (data == nullptr || size < kHeader) return false;
-  const auto* bytes = static_cast<const unsigned char*>(data);
-  const std::uint32_t raw = (std::uint32_t{bytes[16]} << 24) | (std::uint32_t{bytes[17]} << 16) |
-                            (std::uint32_t{bytes[18]} << 8) | std::uint32_t{bytes[19]};
-  std::int32_t n = 0;
-  std::memcpy(&n, &raw, sizeof n);
-  if (n < 0 || n > kMaxMotors || size != kHeader + n) return false;
   motor_status_t msg{};
   if (!decode_whole(data, size, msg)) return false;
   out = loop::MotorStatusSample{msg.utime, msg.num_motors, 0};
@@ -203,25 +194,8 @@ bool decode_pid(const void* data, int size, loop::PidSample& out) {
   return true;
 }
 
-namespace {
-// The big-endian int32 at `offset` (an array length), as LCM encodes it.
-std::int32_t length_at(const void* data, int offset) {
-  const auto* b = static_cast<const unsigned char*>(data) + offset;
-  const std::uint32_t raw = (std::uint32_t{b[0]} << 24) | (std::uint32_t{b[1]} << 16) |
-                            (std::uint32_t{b[2]} << 8) | std::uint32_t{b[3]};
-  std::int32_t n = 0;
-  std::memcpy(&n, &raw, sizeof n);
-  return n;
-}
-}  // namespace
-
 bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out) {
-  // fingerprint (8) + utime (8) + count (4), then per reading one int8 and
-  // six floats.
-  constexpr int kHeader = 20, kPerReading = 1 + 6 * 4;
-  if (data == nullptr || size < kHeader) return false;
-  const std::int32_t n = length_at(data, 16);
-  if (n < 0 || n > loop::kMaxEscReadings || size != kHeader + n * kPerReading) return false;
+  static_assert(bus::WireShape<esc_telemetry_t>::kMaxLength <= loop::kMaxEscReadings);
   esc_telemetry_t msg{};
   if (!decode_whole(data, size, msg)) return false;
   out.utime = msg.utime;

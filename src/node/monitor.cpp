@@ -1,12 +1,13 @@
 #include "node/monitor.hpp"
 
+#include "bus/clock.hpp"
+#include "bus/shutdown_signals.hpp"
 #include "loop/control_loop.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
 #include <poll.h>
 #include <signal.h>
-#include <sys/signalfd.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -215,6 +216,13 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
     s << "   esc_telemetry " << st.esc_telemetry_received << "   attitude " << st.attitude_received;
   }
   s << "\n";
+  if (snap.refused.refused() > 0) {
+    const bus::Refusals& r = snap.refused;
+    s << "monitor   refused " << r.refused() << " messages here: signature " << r.signature
+      << "   truncated " << r.truncated << "   trailing " << r.trailing << "   wrong type "
+      << r.wrong_type << "   bad length " << r.bad_length << "   undecodable " << r.undecodable
+      << "\n";
+  }
   s << "rejected  undecodable " << st.rejected_decode << "   non-finite " << st.rejected_nonfinite
     << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "
     << st.rejected_future << "   size " << st.rejected_size << "\n";
@@ -236,11 +244,27 @@ namespace {
 class Listener {
  public:
   explicit Listener(signing::Policy* policy) : policy_(policy) {}
+  // Nothing thrown out of either callback (bus::receive); a message refused
+  // is counted by reason and leaves the last good one on the screen.
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    status_at = keep(decode_message<mixer_status_t>(rbuf, channel), status, status_at);
+    if (bus::receive(*policy_, rbuf, channel, bus::wall_us(), status_msg_, refused_) !=
+        bus::Refusal::kNone)
+      return;
+    // The view draws one row per motor: a count no mixer has is refused.
+    if (status_msg_.num_motors < 1 || status_msg_.num_motors > kMaxMotors) {
+      --refused_.taken;
+      refused_.count(bus::Refusal::kBadLength);
+      return;
+    }
+    status = status_msg_;
+    status_at = Clock::now();
   }
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    pwm_at = keep(decode_message<motor_pwm_t>(rbuf, channel), pwm, pwm_at);
+    if (bus::receive(*policy_, rbuf, channel, bus::wall_us(), pwm_msg_, refused_) !=
+        bus::Refusal::kNone)
+      return;
+    pwm = pwm_msg_;
+    pwm_at = Clock::now();
   }
   MonitorSnapshot snapshot() const {
     MonitorSnapshot s;
@@ -249,6 +273,7 @@ class Listener {
     const auto now = Clock::now();
     s.status_age_s = std::chrono::duration<double>(now - status_at).count();
     s.pwm_age_s = std::chrono::duration<double>(now - pwm_at).count();
+    s.refused = refused_;
     return s;
   }
 
@@ -256,59 +281,26 @@ class Listener {
   std::optional<motor_pwm_t> pwm;
   Clock::time_point status_at;
   Clock::time_point pwm_at;
-  long undecodable = 0;
 
  private:
-  // A whole message of the type, or nothing (the type's fingerprint and the
-  // length must both match; the signing policy must take it); never throws.
-  template <typename Message>
-  std::optional<Message> decode_message(const lcm::ReceiveBuffer* rbuf,
-                                        const std::string& channel) {
-    const auto wall = std::chrono::duration_cast<std::chrono::microseconds>(
-                          std::chrono::system_clock::now().time_since_epoch())
-                          .count();
-    const signing::Inbound in = policy_->check(
-        channel, static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size, wall);
-    if (!in.accept) return std::nullopt;
-    const int size = static_cast<int>(in.payload_size);
-    Message m;
-    try {
-      if (m.decode(rbuf->data, 0, size) == size) return m;
-    } catch (...) {
-    }
-    return std::nullopt;
-  }
   signing::Policy* policy_;
-
-  // Keeps a decoded message with its arrival time; counts one that was not.
-  template <typename Message>
-  Clock::time_point keep(std::optional<Message> decoded, std::optional<Message>& last,
-                         Clock::time_point at) {
-    if (!decoded) {
-      ++undecodable;
-      return at;
-    }
-    last = std::move(decoded);
-    return Clock::now();
-  }
+  mixer_status_t status_msg_{};
+  motor_pwm_t pwm_msg_{};
+  bus::Refusals refused_;
 };
 
 }  // namespace
 
 int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGHUP);
-  sigprocmask(SIG_BLOCK, &signals, nullptr);
-  const int signal_fd = signalfd(-1, &signals, SFD_CLOEXEC);
-
+  bus::ShutdownSignals signals;
+  if (!signals.good()) {
+    log << "motormix monitor: " << signals.error() << "\n";
+    return 1;
+  }
   lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
     log << "motormix monitor: cannot open LCM" << (o.lcm_url.empty() ? "" : " at " + o.lcm_url)
         << " (see docs/troubleshooting.md)\n";
-    if (signal_fd >= 0) close(signal_fd);
     return 1;
   }
   signing::Policy off;  // no key: a trailer is cut off unread
@@ -339,16 +331,15 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
       next_draw = now + std::chrono::duration_cast<Clock::duration>(refresh);
     }
     if (!o.once && o.duration_s > 0.0 && elapsed >= o.duration_s) break;
-    pollfd fds[2] = {{lcm.getFileno(), POLLIN, 0}, {signal_fd, POLLIN, 0}};
-    if (poll(fds, signal_fd >= 0 ? 2 : 1, 20) > 0) {
+    pollfd fds[2] = {{lcm.getFileno(), POLLIN, 0}, {signals.fd(), POLLIN, 0}};
+    if (poll(fds, 2, 20) > 0) {
       if (fds[0].revents & POLLIN) {
         for (int i = 0; i < 1000 && lcm.handleTimeout(0) > 0; ++i) {
         }
       }
-      if (signal_fd >= 0 && (fds[1].revents & POLLIN)) break;
+      if ((fds[1].revents & POLLIN) && signals.take() != 0) break;
     }
   }
-  if (signal_fd >= 0) close(signal_fd);
   return rc;
 }
 

@@ -35,6 +35,19 @@ bool OutputGate::accept(const float* pwm, int count, bool armed, double now_s) {
       return false;
     }
   }
+  // Clamping makes sense for a value a little outside the range (another
+  // range on the mixer's side, rounding); one further out than the range is
+  // wide (1e30, a sign error) is no command to approximate.
+  if (armed) {
+    for (int i = 0; i < count; ++i) {
+      const PulseRange& r = ranges_[static_cast<std::size_t>(i)];
+      const double span = std::max(r.high - r.low, 1.0);
+      if (pwm[i] < r.low - span || pwm[i] > r.high + span) {
+        ++counters_.out_of_range;
+        return false;
+      }
+    }
+  }
   for (int i = 0; i < count; ++i) {
     const PulseRange& r = ranges_[static_cast<std::size_t>(i)];
     double v = pwm[i];

@@ -6,6 +6,12 @@
 #include "output/serial_pulse_driver.hpp"
 #include "output/sysfs_pwm_driver.hpp"
 
+#include "bus/clock.hpp"
+#include "bus/policy_or_error.hpp"
+#include "bus/receive.hpp"
+#include "bus/sealed_publisher.hpp"
+#include "bus/shutdown_signals.hpp"
+
 #include <motormix/config/security.hpp>
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
@@ -13,7 +19,6 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <poll.h>
-#include <sys/signalfd.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
 #include <algorithm>
@@ -24,6 +29,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -36,15 +42,8 @@ constexpr double kTickS = 0.005;       // the gate is checked this often without
 constexpr double kKeepAliveS = 0.020;  // and the hardware written at least this often
 constexpr double kStatusEveryS = 5.0;
 
-double monotonic_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-std::int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
+using bus::monotonic_s;
+using bus::wall_us;
 
 std::vector<PulseRange> ranges_of(const config::Config& config) {
   std::vector<PulseRange> out;
@@ -90,6 +89,7 @@ class OutputNode {
       : config_(config),
         policy_(std::move(policy)),
         lcm_(lcm),
+        publisher_(lcm, policy_),
         driver_(driver),
         log_(log),
         gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s),
@@ -120,9 +120,12 @@ class OutputNode {
   void status_line() {
     const GateCounters& c = gate_.counters();
     log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
-         << " taken, " << undecodable_ << " undecodable, " << c.wrong_size << " wrong size, "
-         << c.not_finite << " not finite, " << c.clamped << " values clamped, " << c.stale_events
-         << " times stale; ";
+         << " taken, refused " << refusals_.malformed() << " malformed (" << refusals_.truncated
+         << " truncated, " << refusals_.trailing << " trailing bytes, " << refusals_.wrong_type
+         << " wrong type, " << refusals_.bad_length << " bad length, " << refusals_.undecodable
+         << " undecodable), " << c.wrong_size << " wrong size, " << c.out_of_range
+         << " out of range, " << c.not_finite << " not finite, " << c.clamped << " values clamped, "
+         << c.stale_events << " times stale; ";
     if (policy_.signs()) {
       const signing::PolicyCounts& sc = policy_.counts();
       log_ << "signatures: " << sc.signed_accepted << " verified, " << sc.unsigned_accepted
@@ -144,42 +147,34 @@ class OutputNode {
     msg.voltage_v = {static_cast<float>(r.voltage_v)};
     msg.temperature_c = {static_cast<float>(r.temperature_c)};
     msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
-    const std::size_t size = signing::encode_sealed(policy_, config_.channels.esc_telemetry, msg,
-                                                    telemetry_buffer_, wall_us());
-    if (size > 0) {
-      lcm_.publish(config_.channels.esc_telemetry, telemetry_buffer_.data(),
-                   static_cast<unsigned>(size));
-    }
+    publisher_.publish(config_.channels.esc_telemetry, msg);
   }
 
  private:
+  // Nothing here throws (bus::receive): a message the signing policy
+  // refuses is counted there, one that is not a whole motor_pwm_t in
+  // refusals_, and neither reaches the gate.
   void on_motor_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    // Nothing here throws: a message the signing policy refuses is counted
-    // there, one that does not decode here.
-    const signing::Inbound in = policy_.check(channel, static_cast<const std::uint8_t*>(rbuf->data),
-                                              rbuf->data_size, wall_us());
-    if (!in.accept) return;
-    motormix::motor_pwm_t msg{};
-    if (msg.decode(rbuf->data, 0, static_cast<int>(in.payload_size)) < 0 || msg.num_motors < 0 ||
-        msg.pwm.size() != static_cast<std::size_t>(msg.num_motors)) {
-      ++undecodable_;
+    if (bus::receive(policy_, rbuf, channel, wall_us(), pwm_msg_, refusals_) != bus::Refusal::kNone)
       return;
-    }
     const double now = monotonic_s();
-    if (gate_.accept(msg.pwm.data(), msg.num_motors, msg.armed, now)) step(now, true);
+    if (gate_.accept(pwm_msg_.pwm.data(), pwm_msg_.num_motors, pwm_msg_.armed, now))
+      step(now, true);
   }
 
   const config::Config& config_;
   signing::Policy policy_;
-  std::vector<std::uint8_t> telemetry_buffer_;  // grown once
   lcm::LCM& lcm_;
+  bus::SealedPublisher publisher_;  // signs with policy_ when it signs
   PulseDriver& driver_;
   std::ostream& log_;
   OutputGate gate_;
   std::vector<double> values_;
   GateState state_ = GateState::kStarting;
   double last_write_s_ = -1e9;
-  std::uint64_t undecodable_ = 0, write_failures_ = 0;
+  motormix::motor_pwm_t pwm_msg_{};  // decoded into, its arrays reused
+  bus::Refusals refusals_;
+  std::uint64_t write_failures_ = 0;
 };
 
 }  // namespace
@@ -191,21 +186,18 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
         << std::endl;
     return 1;
   }
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGHUP);
-  if (sigprocmask(SIG_BLOCK, &signals, nullptr) != 0) {
-    log << "motormix output: cannot block signals: " << std::strerror(errno) << std::endl;
+  bus::ShutdownSignals signals;  // from here on SIGTERM is read in the loop
+  if (!signals.good()) {
+    log << "motormix output: " << signals.error() << std::endl;
     return 1;
   }
+  // Before any pulse: a bad key file stops here.
+  std::optional<signing::Policy> policy = bus::policy_or_error(config, "output", log);
+  if (!policy) return 1;
   std::unique_ptr<PulseDriver> driver;
   std::vector<TelemetryWire> wires;
-  signing::Policy policy;
   try {
-    policy = config::signing_policy(config);  // before any pulse: a bad key file stops here
-    driver = make_driver(config);             // disarmed pulses from here on
+    driver = make_driver(config);  // disarmed pulses from here on
     for (const config::TelemetryPort& p : config.hardware.telemetry) {
       TelemetryWire w;
       w.port = p;
@@ -225,7 +217,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     close_wires();
     return 1;
   }
-  OutputNode node(config, std::move(policy), lcm, *driver, log);
+  OutputNode node(config, std::move(*policy), lcm, *driver, log);
   node.write_disarmed();
   log << "motormix output: " << config::to_string(config.hardware.driver) << " driver, "
       << config.motors() << " motors at " << config.hardware.pulse_rate_hz << " Hz; disarmed until "
@@ -242,19 +234,18 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   }
   node.subscribe();
 
-  const int signal_fd = signalfd(-1, &signals, SFD_CLOEXEC);
   const int timer_fd = timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
   itimerspec spec{};
   spec.it_interval.tv_nsec = static_cast<long>(kTickS * 1e9);
   spec.it_value.tv_nsec = static_cast<long>(kTickS * 1e9);
-  if (signal_fd < 0 || timer_fd < 0 || timerfd_settime(timer_fd, 0, &spec, nullptr) != 0) {
-    log << "motormix output: cannot create the timer or signal descriptor: " << std::strerror(errno)
+  if (timer_fd < 0 || timerfd_settime(timer_fd, 0, &spec, nullptr) != 0) {
+    log << "motormix output: cannot create the timer descriptor: " << std::strerror(errno)
         << std::endl;
     close_wires();
     return 1;
   }
   std::vector<pollfd> fds = {
-      {lcm.getFileno(), POLLIN, 0}, {timer_fd, POLLIN, 0}, {signal_fd, POLLIN, 0}};
+      {lcm.getFileno(), POLLIN, 0}, {timer_fd, POLLIN, 0}, {signals.fd(), POLLIN, 0}};
   for (const TelemetryWire& w : wires) fds.push_back({w.fd, POLLIN, 0});
   const double start = monotonic_s();
   double next_status = start + kStatusEveryS;
@@ -266,11 +257,9 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
       code = 1;
       break;
     }
-    if (fds[2].revents & POLLIN) {
-      signalfd_siginfo info{};
-      [[maybe_unused]] const ssize_t got = read(signal_fd, &info, sizeof info);
-      log << "motormix output: signal " << info.ssi_signo << ", writing disarmed pulses and exiting"
-          << std::endl;
+    if ((fds[2].revents & POLLIN) && signals.take() != 0) {
+      log << "motormix output: signal " << signals.last_signal()
+          << ", writing disarmed pulses and exiting" << std::endl;
       break;
     }
     if (fds[0].revents & POLLIN) lcm.handle();
@@ -307,7 +296,6 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   node.status_line();
   close_wires();
   ::close(timer_fd);
-  ::close(signal_fd);
   return code;
 }
 

@@ -38,7 +38,7 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   pwm.pwm = {2000.0F, 1000.0F, 1500.0F};
   pwm.direction = {0, 0, 0};
   pwm.armed = 1;
-  node::MonitorSnapshot snap{st, pwm, 0.05, 0.01};
+  node::MonitorSnapshot snap{st, pwm, 0.05, 0.01, {}};
   node::MonitorOptions o;
   o.motor_names = {"FL", "FR", "RR"};
   const std::string view = node::render_monitor(snap, o, 10);
@@ -61,7 +61,7 @@ TEST(MonitorView, SaysWhenNothingOrOldStatusArrived) {
   EXPECT_TRUE(has(node::render_monitor(node::MonitorSnapshot{}, o), "no mixer_status"));
   mixer_status_t st{};
   st.num_motors = 1;
-  node::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0};
+  node::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0, {}};
   const std::string view = node::render_monitor(old, o);
   EXPECT_TRUE(has(view, "STATUS STALE")) << view;
   EXPECT_TRUE(has(view, "m1")) << view;

@@ -73,6 +73,12 @@ TEST(OutputGate, ClampsArmedValuesAndRefusesWrongSizesAndNonFiniteValues) {
   EXPECT_FALSE(gate.accept(nan, 4, true, 0.01));
   EXPECT_FALSE(gate.accept(inf, 4, true, 0.01));
   EXPECT_FALSE(gate.accept(wide, 3, true, 0.01));
+  // Further out than the range is wide: refused, not clamped to full thrust.
+  const float huge[4] = {1500, 1e30f, 1500, 1500};
+  const float below[4] = {1500, 1500, 1500, -1e30f};
+  EXPECT_FALSE(gate.accept(huge, 4, true, 0.01));
+  EXPECT_FALSE(gate.accept(below, 4, true, 0.01));
+  EXPECT_EQ(gate.counters().out_of_range, 2u);
   EXPECT_EQ(gate.counters().not_finite, 2u);
   EXPECT_EQ(gate.counters().wrong_size, 1u);
   // The refused ones changed nothing, and did not keep the stream alive.

@@ -1,7 +1,11 @@
 #include "sim/bus/live_sim.hpp"
 
+#include "bus/clock.hpp"
+#include "bus/policy_or_error.hpp"
+#include "bus/receive.hpp"
+#include "bus/sealed_publisher.hpp"
+#include "bus/shutdown_signals.hpp"
 #include "node/messages.hpp"
-#include "node/wall_clock.hpp"
 #include "sim/attitude_sensor.hpp"
 #include "sim/bus/sim_log.hpp"
 #include "sim/esc_telemetry_model.hpp"
@@ -21,6 +25,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <ostream>
 #include <thread>
 #include <vector>
@@ -30,7 +35,7 @@ namespace motormix::sim {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using node::wall_us;
+using bus::wall_us;
 
 // What the simulated ESCs last heard from the mixer. Decoding happens here,
 // inside the callback, and never throws out of it.
@@ -52,16 +57,16 @@ struct MixerOutputs {
   DetectionSource detected_by = DetectionSource::kNone;
   std::int64_t detected_utime = 0;  // motormix's wall clock, microseconds
 
-  // The payload's size when the signing policy takes the message, else -1.
-  int verified(const lcm::ReceiveBuffer* rbuf, const std::string& channel) const {
-    const signing::Inbound in = policy->check(channel, static_cast<const std::uint8_t*>(rbuf->data),
-                                              rbuf->data_size, wall_us());
-    return in.accept ? static_cast<int>(in.payload_size) : -1;
-  }
+  // Both callbacks take messages through the bus's guard (bus::receive):
+  // nothing thrown out of them, every refusal counted by reason.
+  bus::Refusals refused;
+  motor_pwm_t pwm_msg{};
+  mixer_status_t status_msg{};
+
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    motor_pwm_t msg;
-    const int size = verified(rbuf, channel);
-    if (size < 0 || msg.decode(rbuf->data, 0, size) != size || msg.num_motors != motors) {
+    const motor_pwm_t& msg = pwm_msg;
+    if (bus::receive(*policy, rbuf, channel, wall_us(), pwm_msg, refused) != bus::Refusal::kNone ||
+        msg.num_motors != motors) {
       ++rejected;
       return;
     }
@@ -82,9 +87,9 @@ struct MixerOutputs {
     ++accepted;
   }
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    mixer_status_t msg;
-    const int size = verified(rbuf, channel);
-    if (size < 0 || msg.decode(rbuf->data, 0, size) != size) return;
+    const mixer_status_t& msg = status_msg;
+    if (bus::receive(*policy, rbuf, channel, wall_us(), status_msg, refused) != bus::Refusal::kNone)
+      return;
     axis_limited = 0;
     for (int a = 0; a < kNumAxes; ++a) {
       if (msg.axis_limited[a]) axis_limited |= static_cast<std::uint8_t>(1U << a);
@@ -97,34 +102,20 @@ struct MixerOutputs {
   }
 };
 
-// Publishes what the simulated vehicle and its controller send, signed
-// when the configuration signs (security:), as a user's controller would.
-class Publisher {
- public:
-  Publisher(lcm::LCM& lcm, signing::Policy& policy) : lcm_(lcm), policy_(policy) {}
-  template <typename Message>
-  void operator()(const std::string& channel, const Message& msg) {
-    const std::size_t size = signing::encode_sealed(policy_, channel, msg, buffer_, wall_us());
-    if (size > 0) lcm_.publish(channel, buffer_.data(), static_cast<unsigned>(size));
-  }
-
- private:
-  lcm::LCM& lcm_;
-  signing::Policy& policy_;
-  std::vector<std::uint8_t> buffer_;
-};
-
 }  // namespace
 
 bool run_live(const config::Config& config_in, const Scenario& scenario, const LiveOptions& options,
               LiveResult& result, std::ostream& err) {
   const config::Config config = scenario_config(config_in, scenario);
-  signing::Policy policy;
-  try {
-    // A link of its own: it publishes motor_status_t as the mixer does.
-    policy = config::signing_policy(config, config::kSimulatorLinkOffset);
-  } catch (const config::ConfigError& e) {
-    err << "motormix sim: " << e.what() << "\n";
+  // A link of its own: it publishes motor_status_t as the mixer does.
+  std::optional<signing::Policy> maybe_policy =
+      bus::policy_or_error(config, "sim", err, config::kSimulatorLinkOffset);
+  if (!maybe_policy) return false;
+  signing::Policy& policy = *maybe_policy;
+  // SIGTERM / Ctrl-C end the flight early; its result is still written.
+  bus::ShutdownSignals signals;
+  if (!signals.good()) {
+    err << "motormix sim: " << signals.error() << "\n";
     return false;
   }
   lcm::LCM lcm(options.lcm_url);
@@ -149,7 +140,10 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   if (!clock.failures().empty()) scorer.failure_at(clock.failures().front().at_s);
   DetectionScorer detections(clock.failures());
 
-  Publisher publish(lcm, policy);
+  bus::SealedPublisher publisher(lcm, policy);
+  const auto publish = [&publisher](const std::string& channel, const auto& msg) {
+    publisher.publish(channel, msg);
+  };
   MixerOutputs mix;
   mix.policy = &policy;
   mix.motors = config.motors();
@@ -172,6 +166,12 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   const auto start = Clock::now();
   vehicle_state_t state;
   for (std::int64_t k = 0; k < periods.cycles; ++k) {
+    if (signals.requested()) {
+      err << "motormix sim: signal " << signals.last_signal() << ", stopping the flight at "
+          << periods.start_of(k) << " s\n";
+      result.interrupted = true;
+      break;
+    }
     const auto due = start + std::chrono::duration_cast<Clock::duration>(
                                  std::chrono::duration<double>(static_cast<double>(k) * period));
     // Serve the bus until this cycle is due.
@@ -265,6 +265,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   r.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   result.pwm_received = mix.accepted;
   result.pwm_rejected = mix.rejected;
+  result.refused = mix.refused;
   result.statuses_received = mix.statuses;
   return true;
 }

@@ -7,9 +7,10 @@
 
 #include "bringup/esc_calibration.hpp"
 
+#include "bus/shutdown_signals.hpp"
+
 #include <motormix/config/config.hpp>
 
-#include <atomic>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -28,17 +29,17 @@ enum class ClientOutcome {
 // "motor 2 (front_left), front left, CW": where a motor is and how it spins.
 std::string describe_motor(const config::Config& config, int motor);
 
-// Spins each of `motors` (0-based) in turn. `interrupted` is set by the
-// caller's signal handler.
+// Spins each of `motors` (0-based) in turn. A signal on `signals` (held by
+// the caller from before the bus opens) stops the test and sends the stop.
 ClientOutcome run_motor_test(const config::Config& config, const std::vector<int>& motors,
                              double throttle, double seconds, double wait_s,
-                             const std::string& lcm_url, const std::atomic<bool>& interrupted,
+                             const std::string& lcm_url, bus::ShutdownSignals& signals,
                              std::ostream& out, std::ostream& err);
 
 // The calibration sequence; the user's Enter is read from `input_fd`.
 ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibrationTiming& timing,
                                   const std::string& lcm_url, int input_fd,
-                                  const std::atomic<bool>& interrupted, std::ostream& out,
+                                  bus::ShutdownSignals& signals, std::ostream& out,
                                   std::ostream& err);
 
 }  // namespace motormix::bringup

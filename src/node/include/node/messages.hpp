@@ -49,16 +49,15 @@ void fill_status_message(mixer_status_t& msg, const loop::CycleResult& r, const 
                          std::int64_t utime, const InputSecurity& security = InputSecurity{});
 
 // Decoded inputs, or nothing when the bytes are not a whole message of the
-// type (wrong type, truncated, trailing bytes).
+// type: each goes through the bus's guard (bus/receive.hpp), so a wrong
+// fingerprint, an array length that is negative, over the type's largest or
+// not what the bytes hold, a truncated message or trailing bytes decode as
+// nothing, before any array is sized, and nothing throws.
 bool decode_setpoint(const void* data, int size, loop::SetpointSample& out);
 bool decode_pid(const void* data, int size, loop::PidSample& out);
-// A motor_status_t is checked for a plausible length before it is decoded,
-// so a hostile num_motors cannot make the decoder allocate gigabytes.
-// Lengths other than 0..kMaxMotors decode as nothing.
 bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out);
 bool decode_battery(const void* data, int size, loop::BatterySample& out);
 bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out);
-// Length checked before decoding, as motor_status: count 1..kMaxEscReadings.
 bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out);
 bool decode_attitude(const void* data, int size, loop::AttitudeSample& out);
 

@@ -5,6 +5,8 @@
 // escape codes. The view itself is a pure function of the last messages,
 // so it is tested without a bus.
 
+#include "bus/receive.hpp"
+
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 
@@ -30,8 +32,8 @@ struct MonitorOptions {
   double duration_s = 0.0;   // live view: stop by itself after this long (0: until a signal)
   double refresh_hz = 10.0;  // live view redraws
   // The configuration's signing policy (security:): under sign or require,
-  // a status or output that does not verify is not shown (counted as
-  // undecodable). Null: signatures are cut off unread.
+  // a status or output that does not verify is not shown (counted, as
+  // "signature"). Null: signatures are cut off unread.
   std::shared_ptr<signing::Policy> policy;
 };
 
@@ -42,6 +44,9 @@ struct MonitorSnapshot {
   std::optional<motor_pwm_t> pwm;
   double status_age_s = 0.0;
   double pwm_age_s = 0.0;
+  // What the monitor itself refused on both channels, by reason (bus::receive;
+  // a status whose num_motors is outside 1..16 counts as a bad length).
+  bus::Refusals refused;
 };
 
 // The whole screen as text (no escape codes); `width` columns for the bars.

@@ -4,8 +4,10 @@
 // Disarmed values at start, when the mixer says armed=false, and when the
 // last accepted message is older than the timeout; armed values clamped
 // into each motor's range and counted when they were outside it. A message
-// of the wrong size or with a non-finite value is refused and counted, and
-// changes nothing (the timeout then disarms if no good one follows).
+// of the wrong size, with a non-finite value, or armed with a value further
+// outside its motor's range than the range is wide (1e30) is refused and
+// counted, and changes nothing (the timeout then disarms if no good one
+// follows).
 
 #include <array>
 #include <cstdint>
@@ -34,6 +36,7 @@ struct GateCounters {
   std::uint64_t wrong_size = 0;    // num_motors is not the configured motor count
   std::uint64_t not_finite = 0;    // a NaN or infinite pwm value
   std::uint64_t clamped = 0;       // armed values outside the motor's range (per value)
+  std::uint64_t out_of_range = 0;  // armed messages with a value further out than the range is wide
   std::uint64_t stale_events = 0;  // times the stream went older than the timeout
 };
 

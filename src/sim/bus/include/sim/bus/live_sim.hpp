@@ -10,6 +10,7 @@
 // link security.link_id + 128 (it publishes motor_status_t as the mixer
 // does), and what it reads from the mixer must verify as the mode says.
 
+#include "bus/receive.hpp"
 #include "sim/lockstep.hpp"
 
 #include <iosfwd>
@@ -26,8 +27,10 @@ struct LiveOptions {
 struct LiveResult {
   SimResult sim;
   std::int64_t pwm_received = 0;       // motor_pwm_t accepted from the mixer
-  std::int64_t pwm_rejected = 0;       // undecodable, wrong size or not finite
+  std::int64_t pwm_rejected = 0;       // refused by the bus's guard, wrong size or not finite
   std::int64_t statuses_received = 0;  // mixer_status_t (its unallocated demand feeds anti-windup)
+  bus::Refusals refused;               // on both channels, by reason (bus::receive)
+  bool interrupted = false;            // SIGTERM / SIGINT / SIGHUP ended the flight early
   bool bus_ok = true;
 };
 

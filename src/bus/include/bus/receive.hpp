@@ -1,0 +1,167 @@
+#pragma once
+// The one way a motormix process takes a message off the bus.
+//
+//   1. the signing policy's verdict (security:), before anything else is
+//      read: a refused message is counted there, by reason;
+//   2. the type's fingerprint;
+//   3. the array length, if the type has one, checked against the bytes
+//      received: within 0..the type's largest, and exactly as many bytes as
+//      it says (nothing short, nothing trailing) before any vector is sized;
+//   4. LCM's decoder, whose exceptions are caught, and which must consume
+//      the whole payload.
+// Nothing here throws and nothing is allocated beyond the message's own
+// arrays, sized from a length already checked. Every refusal has a reason,
+// counted by the caller's Refusals.
+
+#include "bus/wire_shape.hpp"
+
+#include <motormix/signing_policy.hpp>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+namespace motormix::bus {
+
+enum class Refusal : std::uint8_t {
+  kNone,         // taken
+  kSignature,    // the signing policy refused it (its counts say why)
+  kTruncated,    // fewer bytes than the type (or its length field) needs; empty
+  kTrailing,     // more bytes than the type (or its length field) says
+  kWrongType,    // another type's fingerprint
+  kBadLength,    // an array length below 0 or above the type's largest
+  kUndecodable,  // LCM's decoder failed or threw all the same
+};
+const char* to_string(Refusal r);
+
+// How many messages were taken and refused, by reason.
+struct Refusals {
+  std::uint64_t taken = 0;
+  std::uint64_t signature = 0;
+  std::uint64_t truncated = 0;
+  std::uint64_t trailing = 0;
+  std::uint64_t wrong_type = 0;
+  std::uint64_t bad_length = 0;
+  std::uint64_t undecodable = 0;
+  void count(Refusal r);
+  // Refused for what the bytes are (everything but the signature).
+  std::uint64_t malformed() const {
+    return truncated + trailing + wrong_type + bad_length + undecodable;
+  }
+  std::uint64_t refused() const { return signature + malformed(); }
+  Refusals& operator+=(const Refusals& o);
+};
+
+namespace detail {
+
+// The big-endian int32 at `offset`, as LCM encodes an array length.
+inline std::int32_t int32_at(const std::uint8_t* b) {
+  const std::uint32_t raw = (std::uint32_t{b[0]} << 24) | (std::uint32_t{b[1]} << 16) |
+                            (std::uint32_t{b[2]} << 8) | std::uint32_t{b[3]};
+  std::int32_t n = 0;
+  std::memcpy(&n, &raw, sizeof n);
+  return n;
+}
+
+inline std::int64_t int64_at(const std::uint8_t* b) {
+  std::uint64_t raw = 0;
+  for (int i = 0; i < 8; ++i) raw = (raw << 8) | b[i];
+  std::int64_t v = 0;
+  std::memcpy(&v, &raw, sizeof v);
+  return v;
+}
+
+// The encoded size of a message of the type with `n` array elements:
+// the fixed part and the bytes per element are measured once from the
+// generated encoder, so they cannot drift from the .lcm file.
+template <typename Message>
+struct MeasuredSize {
+  int fixed = 0;
+  int per_element = 0;
+  MeasuredSize() {
+    Message m{};
+    if constexpr (WireShape<Message>::kHasLength) {
+      WireShape<Message>::size(m, 0);
+      fixed = m.getEncodedSize();
+      WireShape<Message>::size(m, 1);
+      per_element = m.getEncodedSize() - fixed;
+    } else {
+      fixed = m.getEncodedSize();
+    }
+  }
+  static const MeasuredSize& get() {
+    static const MeasuredSize measured;  // once, before the first cycle needs it
+    return measured;
+  }
+};
+
+}  // namespace detail
+
+// Checks the bytes of one message (no signature trailer) as the type's;
+// Refusal::kNone when `decode` may be called on exactly these bytes.
+template <typename Message>
+Refusal check_wire(const void* data, std::size_t size) noexcept {
+  const auto& measured = detail::MeasuredSize<Message>::get();
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  if (data == nullptr || size < 8) return Refusal::kTruncated;
+  if (detail::int64_at(bytes) != Message::getHash()) return Refusal::kWrongType;
+  std::size_t expected = static_cast<std::size_t>(measured.fixed);
+  if constexpr (WireShape<Message>::kHasLength) {
+    constexpr auto kAt = static_cast<std::size_t>(WireShape<Message>::kLengthOffset);
+    if (size < kAt + 4) return Refusal::kTruncated;
+    const std::int32_t n = detail::int32_at(bytes + kAt);
+    if (n < 0 || n > WireShape<Message>::kMaxLength) return Refusal::kBadLength;
+    expected += static_cast<std::size_t>(n) * static_cast<std::size_t>(measured.per_element);
+  }
+  if (size < expected) return Refusal::kTruncated;
+  if (size > expected) return Refusal::kTrailing;
+  return Refusal::kNone;
+}
+
+// Decodes `size` bytes (no trailer) into `out` after check_wire; never
+// throws. `out` is unspecified unless kNone is returned.
+template <typename Message>
+Refusal decode_exact(const void* data, std::size_t size, Message& out) noexcept {
+  const Refusal wire = check_wire<Message>(data, size);
+  if (wire != Refusal::kNone) return wire;
+  try {
+    const int n = static_cast<int>(size);
+    return out.decode(data, 0, n) == n ? Refusal::kNone : Refusal::kUndecodable;
+  } catch (...) {
+    return Refusal::kUndecodable;
+  }
+}
+
+// The signing policy's verdict, then decode_exact; counted in `counts`.
+// `now_unix_us` is this host's wall clock (the replay passes the log's time).
+template <typename Message>
+Refusal receive(signing::Policy& policy, const std::string& channel, const void* data,
+                std::size_t size, std::int64_t now_unix_us, Message& out,
+                Refusals& counts) noexcept {
+  Refusal r = Refusal::kSignature;
+  try {
+    const signing::Inbound in =
+        policy.check(channel, static_cast<const std::uint8_t*>(data), size, now_unix_us);
+    if (in.accept) r = decode_exact(data, in.payload_size, out);
+  } catch (...) {
+    r = Refusal::kUndecodable;  // the policy does not throw; nothing escapes all the same
+  }
+  counts.count(r);
+  return r;
+}
+
+// The same for what an LCM callback is handed.
+template <typename Message>
+Refusal receive(signing::Policy& policy, const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                std::int64_t now_unix_us, Message& out, Refusals& counts) noexcept {
+  if (rbuf == nullptr) {
+    counts.count(Refusal::kTruncated);
+    return Refusal::kTruncated;
+  }
+  return receive(policy, channel, rbuf->data, rbuf->data_size, now_unix_us, out, counts);
+}
+
+}  // namespace motormix::bus

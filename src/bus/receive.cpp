@@ -1,0 +1,62 @@
+#include "bus/receive.hpp"
+
+namespace motormix::bus {
+
+const char* to_string(Refusal r) {
+  switch (r) {
+    case Refusal::kNone:
+      return "taken";
+    case Refusal::kSignature:
+      return "signature";
+    case Refusal::kTruncated:
+      return "truncated";
+    case Refusal::kTrailing:
+      return "trailing bytes";
+    case Refusal::kWrongType:
+      return "wrong type";
+    case Refusal::kBadLength:
+      return "bad length";
+    case Refusal::kUndecodable:
+      return "undecodable";
+  }
+  return "unknown";
+}
+
+void Refusals::count(Refusal r) {
+  switch (r) {
+    case Refusal::kNone:
+      ++taken;
+      return;
+    case Refusal::kSignature:
+      ++signature;
+      return;
+    case Refusal::kTruncated:
+      ++truncated;
+      return;
+    case Refusal::kTrailing:
+      ++trailing;
+      return;
+    case Refusal::kWrongType:
+      ++wrong_type;
+      return;
+    case Refusal::kBadLength:
+      ++bad_length;
+      return;
+    case Refusal::kUndecodable:
+      ++undecodable;
+      return;
+  }
+}
+
+Refusals& Refusals::operator+=(const Refusals& o) {
+  taken += o.taken;
+  signature += o.signature;
+  truncated += o.truncated;
+  trailing += o.trailing;
+  wrong_type += o.wrong_type;
+  bad_length += o.bad_length;
+  undecodable += o.undecodable;
+  return *this;
+}
+
+}  // namespace motormix::bus
