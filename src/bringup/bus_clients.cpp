@@ -52,6 +52,18 @@ struct StatusWatch {
   }
 };
 
+// Says on the way out what the client refused to read, if anything.
+struct RefusalReport {
+  const bus::Refusals& refused;
+  const std::string& channel;
+  const char* who;
+  std::ostream& err;
+  ~RefusalReport() {
+    if (refused.refused() > 0)
+      err << "motormix " << who << ": " << channel << ": " << bus::describe(refused) << "\n";
+  }
+};
+
 void send_test(bus::SealedPublisher& publisher, const std::string& channel, int motor_1based,
                double throttle, double seconds, std::int64_t utime) {
   motor_test_t msg;
@@ -107,6 +119,7 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
   bus::SealedPublisher publisher(lcm, *policy);
   StatusWatch watch;
   watch.policy = &*policy;
+  const RefusalReport report{watch.refused, config.channels.status, "motor-test", err};
   lcm.subscribe(config.channels.status, &StatusWatch::on_status, &watch);
   MotorTestClient client(motors, throttle, seconds, wait_s);
   const auto start = Clock::now();
@@ -169,6 +182,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
   signing::Policy any_status;
   StatusWatch watch;
   watch.policy = &any_status;
+  const RefusalReport report{watch.refused, config.channels.status, "esc-calibrate", err};
   int foreign_pwm = 0;
   bool publishing = false;
   struct PwmWatch {

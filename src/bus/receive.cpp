@@ -59,4 +59,12 @@ Refusals& Refusals::operator+=(const Refusals& o) {
   return *this;
 }
 
+std::string describe(const Refusals& r) {
+  return std::to_string(r.refused()) + " refused: " + std::to_string(r.signature) + " signature, " +
+         std::to_string(r.truncated) + " truncated, " + std::to_string(r.trailing) +
+         " trailing bytes, " + std::to_string(r.wrong_type) + " wrong type, " +
+         std::to_string(r.bad_length) + " bad length, " + std::to_string(r.undecodable) +
+         " undecodable";
+}
+
 }  // namespace motormix::bus

@@ -218,10 +218,7 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   s << "\n";
   if (snap.refused.refused() > 0) {
     const bus::Refusals& r = snap.refused;
-    s << "monitor   refused " << r.refused() << " messages here: signature " << r.signature
-      << "   truncated " << r.truncated << "   trailing " << r.trailing << "   wrong type "
-      << r.wrong_type << "   bad length " << r.bad_length << "   undecodable " << r.undecodable
-      << "\n";
+    s << "monitor   " << bus::describe(r) << " here\n";
   }
   s << "rejected  undecodable " << st.rejected_decode << "   non-finite " << st.rejected_nonfinite
     << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "

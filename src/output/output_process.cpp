@@ -120,12 +120,9 @@ class OutputNode {
   void status_line() {
     const GateCounters& c = gate_.counters();
     log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
-         << " taken, refused " << refusals_.malformed() << " malformed (" << refusals_.truncated
-         << " truncated, " << refusals_.trailing << " trailing bytes, " << refusals_.wrong_type
-         << " wrong type, " << refusals_.bad_length << " bad length, " << refusals_.undecodable
-         << " undecodable), " << c.wrong_size << " wrong size, " << c.out_of_range
-         << " out of range, " << c.not_finite << " not finite, " << c.clamped << " values clamped, "
-         << c.stale_events << " times stale; ";
+         << " taken, " << bus::describe(refusals_) << "; " << c.wrong_size << " wrong size, "
+         << c.out_of_range << " out of range, " << c.not_finite << " not finite, " << c.clamped
+         << " values clamped, " << c.stale_events << " times stale; ";
     if (policy_.signs()) {
       const signing::PolicyCounts& sc = policy_.counts();
       log_ << "signatures: " << sc.signed_accepted << " verified, " << sc.unsigned_accepted

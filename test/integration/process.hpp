@@ -28,7 +28,7 @@ class ChildProcess {
   std::optional<int> wait_for(std::chrono::milliseconds timeout);
 
  private:
-  pid_t pid_ = -1;
+  ::pid_t pid_ = -1;
   bool reaped_ = false;
   int status_ = 0;
 };

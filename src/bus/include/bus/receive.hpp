@@ -54,6 +54,9 @@ struct Refusals {
   std::uint64_t refused() const { return signature + malformed(); }
   Refusals& operator+=(const Refusals& o);
 };
+// "7 refused: 0 signature, 2 truncated, 1 trailing bytes, 1 wrong type,
+// 3 bad length, 0 undecodable": the one wording every process logs.
+std::string describe(const Refusals& r);
 
 namespace detail {
 
