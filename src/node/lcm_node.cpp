@@ -83,6 +83,7 @@ class Node {
         publisher_(lcm, policy_),
         log_(log),
         loop_(config, config::build_mixer(config)),
+        routes_(config, loop_),
         period_stats_(window_capacity(config)),
         compute_stats_(window_capacity(config)),
         wake_stats_(window_capacity(config)) {
@@ -97,26 +98,8 @@ class Node {
   }
 
   void subscribe() {
-    lcm_.subscribe(config_.channels.setpoint, &Node::on_setpoint, this)
-        ->setQueueCapacity(kQueueCapacity);
-    lcm_.subscribe(config_.channels.pid, &Node::on_pid, this)->setQueueCapacity(kQueueCapacity);
-    lcm_.subscribe(config_.channels.motor_status, &Node::on_motor_status, this)
-        ->setQueueCapacity(kQueueCapacity);
-    if (config_.battery) {
-      lcm_.subscribe(config_.channels.battery, &Node::on_battery, this)
-          ->setQueueCapacity(kQueueCapacity);
-    }
-    if (loop_.reads_esc_telemetry()) {
-      lcm_.subscribe(config_.channels.esc_telemetry, &Node::on_esc_telemetry, this)
-          ->setQueueCapacity(kQueueCapacity);
-    }
-    if (loop_.reads_attitude()) {
-      lcm_.subscribe(config_.channels.attitude, &Node::on_attitude, this)
-          ->setQueueCapacity(kQueueCapacity);
-    }
-    // Read even when disabled, so a refused request is answered.
-    lcm_.subscribe(config_.channels.motor_test, &Node::on_motor_test, this)
-        ->setQueueCapacity(kQueueCapacity);
+    for (const auto& [channel, kind] : routes_.channels())
+      lcm_.subscribe(channel, &Node::on_input, this)->setQueueCapacity(kQueueCapacity);
   }
 
   void drain() {
@@ -327,49 +310,41 @@ class Node {
     return deliver_input(loop_, kind, rbuf->data, static_cast<int>(size),
                          received_us(rbuf, monotonic_us(), wall), wall);
   }
-  bool receive(InputKind kind, const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const std::int64_t wall = wall_us();
-    const std::size_t size = verified_size(rbuf, channel, wall);
-    return size != kRefused && deliver(kind, rbuf, size, wall);
-  }
-  void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    receive(InputKind::kSetpoint, rbuf, channel);
-  }
-  void on_pid(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (receive(InputKind::kPid, rbuf, channel)) new_pid_ = true;
-  }
-  void on_motor_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const std::int64_t wall = wall_us();
-    const std::size_t size = verified_size(rbuf, channel, wall);
-    if (size == kRefused) return;
-    // Our own motor_status comes back to us over the bus: it is what the
-    // detector already holds, and taken as a report it would outlive the
-    // disarming that clears the detector's declarations.
-    loop::MotorStatusSample sample;
-    if (decode_motor_status(rbuf->data, static_cast<int>(size), sample) &&
-        std::find(own_status_utimes_.begin(), own_status_utimes_.end(), sample.utime) !=
-            own_status_utimes_.end()) {
-      return;
-    }
-    deliver(InputKind::kMotorStatus, rbuf, size, wall);
-  }
-  void on_battery(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    receive(InputKind::kBattery, rbuf, channel);
-  }
-  void on_esc_telemetry(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    receive(InputKind::kEscTelemetry, rbuf, channel);
-  }
-  void on_attitude(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    receive(InputKind::kAttitude, rbuf, channel);
-  }
-  void on_motor_test(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  // Every input channel's callback: routed by the one table the replay
+  // uses too (InputRoutes).
+  void on_input(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const std::optional<InputKind> kind = routes_.kind(channel);
+    if (!kind) return;
     const std::int64_t wall = wall_us();
     const std::size_t size = verified_size(rbuf, channel, wall);
     // A request the signing policy refuses (unsigned under `require`) is
     // not answered: only its sender could take the answer for its own.
     if (size == kRefused) return;
-    deliver(InputKind::kMotorTest, rbuf, size, wall);
-    motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
+    switch (*kind) {
+      case InputKind::kPid:
+        if (deliver(*kind, rbuf, size, wall)) new_pid_ = true;
+        return;
+      case InputKind::kMotorStatus: {
+        // Our own motor_status comes back to us over the bus: it is what the
+        // detector already holds, and taken as a report it would outlive the
+        // disarming that clears the detector's declarations.
+        loop::MotorStatusSample sample;
+        if (decode_motor_status(rbuf->data, static_cast<int>(size), sample) &&
+            std::find(own_status_utimes_.begin(), own_status_utimes_.end(), sample.utime) !=
+                own_status_utimes_.end()) {
+          return;
+        }
+        deliver(*kind, rbuf, size, wall);
+        return;
+      }
+      case InputKind::kMotorTest:
+        deliver(*kind, rbuf, size, wall);
+        motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
+        return;
+      default:
+        deliver(*kind, rbuf, size, wall);
+        return;
+    }
   }
 
   void publish_pwm(const loop::CycleResult& r) {
@@ -410,6 +385,7 @@ class Node {
   bus::SealedPublisher publisher_;  // signs with policy_ when it signs
   std::ostream& log_;
   loop::ControlLoop loop_;
+  const InputRoutes routes_;  // which input each subscribed channel carries
   motor_pwm_t pwm_msg_;
   mixer_status_t status_msg_;
   motor_status_t motor_status_msg_;

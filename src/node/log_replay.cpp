@@ -64,21 +64,10 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     summary.skipped = in.skipped();
     return false;
   }
-  // Which input, if any, a channel carries (battery only when configured).
-  const auto input_kind = [&config](const std::string& channel) -> std::optional<InputKind> {
-    if (channel == config.channels.setpoint) return InputKind::kSetpoint;
-    if (channel == config.channels.pid) return InputKind::kPid;
-    if (channel == config.channels.motor_status) return InputKind::kMotorStatus;
-    if (config.battery && channel == config.channels.battery) return InputKind::kBattery;
-    if (channel == config.channels.motor_test) return InputKind::kMotorTest;
-    if (config.failure_detection && channel == config.channels.esc_telemetry) {
-      return InputKind::kEscTelemetry;
-    }
-    if (config.failure_detection && channel == config.channels.attitude) {
-      return InputKind::kAttitude;
-    }
-    return std::nullopt;
-  };
+  // Which input, if any, a channel carries: the node's routing, for a loop
+  // of this configuration (each segment's loop reads the same channels).
+  const InputRoutes routes(config, loop::ControlLoop(config, config::build_mixer(config)));
+  const auto input_kind = [&routes](const std::string& channel) { return routes.kind(channel); };
   // Signatures: one policy per channel (a verifier keeps timestamps for a
   // bounded number of channels; a log may hold more).
   const config::Security& security = config.security;

@@ -1,7 +1,7 @@
 #include "node/log_signing.hpp"
 
-#include "node/log_writer.hpp"
 #include "bus/clock.hpp"
+#include "node/log_writer.hpp"
 
 #include <motormix/signing.hpp>
 

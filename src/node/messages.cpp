@@ -226,6 +226,24 @@ bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out) {
   return true;
 }
 
+InputRoutes::InputRoutes(const config::Config& config, const loop::ControlLoop& loop) {
+  const config::Channels& c = config.channels;
+  channels_ = {{c.setpoint, InputKind::kSetpoint},
+               {c.pid, InputKind::kPid},
+               {c.motor_status, InputKind::kMotorStatus}};
+  if (config.battery) channels_.emplace_back(c.battery, InputKind::kBattery);
+  if (loop.reads_esc_telemetry()) channels_.emplace_back(c.esc_telemetry, InputKind::kEscTelemetry);
+  if (loop.reads_attitude()) channels_.emplace_back(c.attitude, InputKind::kAttitude);
+  channels_.emplace_back(c.motor_test, InputKind::kMotorTest);
+}
+
+std::optional<InputKind> InputRoutes::kind(const std::string& channel) const {
+  for (const auto& [name, kind] : channels_) {
+    if (name == channel) return kind;
+  }
+  return std::nullopt;
+}
+
 bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, int size,
                    std::int64_t now_us, std::int64_t wall_us) {
   // Decodes into `sample` and hands it over with `on`; undecodable bytes are counted.

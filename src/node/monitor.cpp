@@ -236,6 +236,10 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   return s.str();
 }
 
+bool monitor_shows(const mixer_status_t& status) {
+  return status.num_motors >= 1 && status.num_motors <= kMaxMotors;
+}
+
 namespace {
 
 class Listener {
@@ -247,8 +251,7 @@ class Listener {
     if (bus::receive(*policy_, rbuf, channel, bus::wall_us(), status_msg_, refused_) !=
         bus::Refusal::kNone)
       return;
-    // The view draws one row per motor: a count no mixer has is refused.
-    if (status_msg_.num_motors < 1 || status_msg_.num_motors > kMaxMotors) {
+    if (!monitor_shows(status_msg_)) {
       --refused_.taken;
       refused_.count(bus::Refusal::kBadLength);
       return;

@@ -298,9 +298,9 @@ TEST_F(HostileMixer, RunStaysDisarmedCountsEveryRefusalAndStillArms) {
 
 TEST_F(HostileBus, MonitorStaysUpCountsEveryRefusalAndShowsAGoodStatus) {
   const std::string screen = dir_ + "/screen.txt";
-  ChildProcess monitor(shell(std::string(motormix_binary()) +
-                             " monitor --duration 60 --wait 60 > " + screen),
-                       dir_ + "/monitor.log");
+  ChildProcess monitor(
+      shell(std::string(motormix_binary()) + " monitor --duration 60 --wait 60 > " + screen),
+      dir_ + "/monitor.log");
   std::this_thread::sleep_for(300ms);  // subscribed
   auto status_variants = hostile_variants<mixer_status_t>(status_of(4));
   // Whole messages whose motor count no mixer has: one row per motor.
@@ -334,10 +334,10 @@ TEST_F(HostileBus, MonitorStaysUpCountsEveryRefusalAndShowsAGoodStatus) {
 
 TEST_F(HostileBus, LiveSimStaysUpCountsEveryRefusalAndTakesAGoodOutput) {
   const std::string out = dir_ + "/sim.json";
-  ChildProcess sim(shell(std::string(motormix_binary()) + " sim --lcm --config " +
-                         source_path("config/quad_x.yaml") +
-                         " --scenario hover --duration 60 --json > " + out),
-                   dir_ + "/sim.log");
+  ChildProcess sim(
+      shell(std::string(motormix_binary()) + " sim --lcm --config " +
+            source_path("config/quad_x.yaml") + " --scenario hover --duration 60 --json > " + out),
+      dir_ + "/sim.log");
   std::this_thread::sleep_for(500ms);  // subscribed
   const auto pwm_variants = hostile_variants<motor_pwm_t>(
       armed_pwm(1900.0F), [](motor_pwm_t& m, float v) { m.pwm.assign(m.pwm.size(), v); });
@@ -371,10 +371,10 @@ TEST_F(HostileBus, LiveSimStaysUpCountsEveryRefusalAndTakesAGoodOutput) {
 TEST_F(HostileBus, MotorTestIgnoresHostileStatusesTakesTheMixersAnswerAndStopsOnSigterm) {
   const std::string err = dir_ + "/motor-test.log";
   const std::string outp = dir_ + "/motor-test.out";
-  ChildProcess client(shell(std::string(motormix_binary()) + " motor-test --config " +
-                            source_path("config/quad_x.yaml") +
-                            " --motor 1 --seconds 30 --wait 30 > " + outp),
-                      err);
+  ChildProcess client(
+      shell(std::string(motormix_binary()) + " motor-test --config " +
+            source_path("config/quad_x.yaml") + " --motor 1 --seconds 30 --wait 30 > " + outp),
+      err);
   // The request it sends, to answer like a mixer would.
   struct Requests {
     std::mutex m;

@@ -19,6 +19,10 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace motormix::node {
 
@@ -79,6 +83,22 @@ enum class InputKind : std::uint8_t {
   kMotorTest,
   kEscTelemetry,
   kAttitude
+};
+
+// Which input each channel carries for this loop: the one routing the node
+// (what it subscribes to, how it hands a message over) and the offline
+// replay (what it delivers) share. Battery only when configured; ESC
+// telemetry and attitude only when the loop reads them (failure detection's
+// sources, the spin landing); motor tests always (a refused request is
+// still answered). Built once; kind() allocates nothing.
+class InputRoutes {
+ public:
+  InputRoutes(const config::Config& config, const loop::ControlLoop& loop);
+  std::optional<InputKind> kind(const std::string& channel) const;
+  const std::vector<std::pair<std::string, InputKind>>& channels() const { return channels_; }
+
+ private:
+  std::vector<std::pair<std::string, InputKind>> channels_;
 };
 
 // Decodes one input message of `kind` and hands it to the loop, which counts

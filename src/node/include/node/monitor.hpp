@@ -49,6 +49,10 @@ struct MonitorSnapshot {
   bus::Refusals refused;
 };
 
+// Whether the monitor draws a status: one row per motor, so a count no mixer
+// has (outside 1..16) is refused (counted as a bad length).
+bool monitor_shows(const mixer_status_t& status);
+
 // The whole screen as text (no escape codes); `width` columns for the bars.
 std::string render_monitor(const MonitorSnapshot& snapshot, const MonitorOptions& options,
                            int bar_width = 30);
