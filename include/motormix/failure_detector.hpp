@@ -9,9 +9,13 @@
 //   each motor's ratio is compared with the median ratio of the motors
 //   reporting, so a sagging battery moves them all and triggers nothing.
 //   One ESC going silent while the others keep reporting is a failure too,
-//   unless the rates source runs: then the rates decide (a dead telemetry
-//   wire is not a dead motor, and stopping a working motor is as bad as a
-//   miss).
+//   but only where stopping that motor costs nothing the vehicle needs
+//   (silence_declares: six rotors or more, which keep every axis without
+//   it) and the rates source does not run. A dead telemetry wire is not a
+//   dead motor: on a quad, stopping a working motor hands a healthy vehicle
+//   to the spin landing (or to the ground), so there silence is flagged
+//   (telemetry_silent) and never declared, whatever the sources; with the
+//   rates source the rates decide.
 // - rates: the angular acceleration the body rates show, times the inertia,
 //   against the torque the commanded thrusts give (each motor's thrust
 //   followed through the motor's lag, minus the rotational drag and the
@@ -86,6 +90,10 @@ struct FailureDetectorSettings {
   double rpm_ratio = 0.6;             // rpm below this fraction of the median ratio: suspect
   double current_ratio = 0.35;        // current below this fraction of the median ratio: suspect
   int min_reporting = 3;              // motors with fresh telemetry needed for a median
+  // Whether an ESC that goes silent while most others report is declared
+  // on that alone (without the rates source). The configuration sets it
+  // for six rotors or more; a quad never stops a motor for a silent wire.
+  bool silence_declares = false;
 
   // Rates.
   // Torque (N m, body FRD) of each motor at full thrust fraction: column i.
@@ -117,8 +125,8 @@ struct Detection {
   DetectionSource source = DetectionSource::kNone;
   int motor = -1;
   std::int64_t at_us = 0;
-  // Motors whose telemetry is stale while others report (not declared when
-  // the rates source runs): for the status.
+  // Motors whose telemetry is stale while others report (declared only with
+  // silence_declares and without the rates source): for the status.
   MotorMask telemetry_silent = 0;
 };
 

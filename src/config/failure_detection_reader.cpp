@@ -14,6 +14,8 @@ constexpr double kGravity = 9.80665;
 // The outputs-only source needs this many rotors: with fewer, the vehicle
 // does not live through the second it takes to decide.
 constexpr int kOutputsMinRotors = 6;
+// Rotors from which losing one leaves every axis held (hexa, octo).
+constexpr int kReallocatingRotors = 6;
 // Default smallest rates residual judged, as a fraction of the smallest
 // torque one motor gives at hover: gusts and model error stay below it.
 constexpr double kMinResidualOfHoverTorque = 0.3;
@@ -98,6 +100,10 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   s.rpm_ratio = telemetry.number("rpm_ratio", 0.7, 0.05, 0.95);
   s.current_ratio = telemetry.number("current_ratio", 0.4, 0.05, 0.95);
   s.min_reporting = static_cast<int>(telemetry.number("min_reporting", 3, 2, kMaxMotors));
+  // A silent ESC is stopped on that alone only where the rest keep every
+  // axis: six rotors or more. A quad gives up yaw and altitude for a motor
+  // it stops, so a dead wire there must never look like a dead motor.
+  s.silence_declares = s.motors >= kReallocatingRotors;
   s.min_motor_thrust = section.number("min_motor_thrust", 0.08, 0.0, 0.9);
   telemetry.finish();
 

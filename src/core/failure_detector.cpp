@@ -208,7 +208,9 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
         (kind[k] == 1 && rpm_median > 0 && ratio[k] >= s_.rpm_ratio * rpm_median) ||
         (kind[k] == 2 && current_median > 0 && ratio[k] >= s_.current_ratio * current_median);
   }
-  const bool rates_decide = uses(DetectorSources::kRates);
+  // Silence alone stops a motor only where that costs nothing the vehicle
+  // needs, and never when the rates can tell a dead motor from a dead wire.
+  const bool silence_declares = s_.silence_declares && !uses(DetectorSources::kRates);
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (has(excluded, i)) continue;
@@ -228,7 +230,7 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
       declare(i, DetectionSource::kTelemetry, now_us);
       return;
     }
-    if (accumulate(silent_suspicion_[k], silent && !rates_decide, dt, s_.telemetry_persist_s)) {
+    if (accumulate(silent_suspicion_[k], silent && silence_declares, dt, s_.telemetry_persist_s)) {
       declare(i, DetectionSource::kTelemetrySilent, now_us);
       return;
     }

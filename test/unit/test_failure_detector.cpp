@@ -29,6 +29,7 @@ FailureDetectorSettings hexa(std::uint8_t sources) {
   FailureDetectorSettings s;
   s.motors = 6;
   s.sources = sources;
+  s.silence_declares = true;  // as the configuration sets it for six rotors
   s.torque_per_thrust.setZero(3, 6);
   for (int i = 0; i < 6; ++i) {
     const double a = (30.0 + 60.0 * i) * 3.14159265358979 / 180.0;
@@ -113,26 +114,33 @@ TEST(FailureDetector, NothingIsDeclaredWhileNotAllowed) {
             static_cast<std::int64_t>(d.settings().telemetry_persist_s * 1e6) - kCycleUs);
 }
 
-TEST(FailureDetector, ASilentEscIsAFailureOnlyWithoutTheRatesSource) {
-  for (const bool with_rates : {false, true}) {
-    SCOPED_TRACE(with_rates ? "telemetry and rates" : "telemetry alone");
-    const std::uint8_t sources =
-        bits(DetectorSources::kTelemetry) | (with_rates ? bits(DetectorSources::kRates) : 0);
-    FailureDetector d(hexa(sources));
-    for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
-      MotorVector actual = hover(6);
-      for (int i = 0; i < 6; ++i) {
-        if (i != 5 || t < 300'000) d.on_telemetry(i, kFullRpm * std::sqrt(actual[i]), NAN, t);
+TEST(FailureDetector, ASilentEscIsAFailureOnlyWhereStoppingItCostsNothingAndWithoutRates) {
+  // silence_declares: what the configuration sets for six rotors or more;
+  // a quad's setting (false) never declares silence, whatever the sources.
+  for (const bool silence_declares : {true, false}) {
+    for (const bool with_rates : {false, true}) {
+      SCOPED_TRACE(std::string(with_rates ? "telemetry and rates" : "telemetry alone") +
+                   (silence_declares ? ", silence may declare" : ", silence never declares"));
+      const std::uint8_t sources =
+          bits(DetectorSources::kTelemetry) | (with_rates ? bits(DetectorSources::kRates) : 0);
+      FailureDetectorSettings settings = hexa(sources);
+      settings.silence_declares = silence_declares;
+      FailureDetector d(settings);
+      for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+        MotorVector actual = hover(6);
+        for (int i = 0; i < 6; ++i) {
+          if (i != 5 || t < 300'000) d.on_telemetry(i, kFullRpm * std::sqrt(actual[i]), NAN, t);
+        }
+        d.on_rates(Eigen::Vector3d::Zero(), t, t);  // a steady hover
+        d.update(hover(6), 0, true, t);
       }
-      d.on_rates(Eigen::Vector3d::Zero(), t, t);  // a steady hover
-      d.update(hover(6), 0, true, t);
-    }
-    if (with_rates) {
-      EXPECT_EQ(d.detection().failed, 0U);
-      EXPECT_EQ(d.detection().telemetry_silent, MotorMask{1} << 5);
-    } else {
-      EXPECT_EQ(d.detection().failed, MotorMask{1} << 5);
-      EXPECT_EQ(d.detection().source, DetectionSource::kTelemetrySilent);
+      if (with_rates || !silence_declares) {
+        EXPECT_EQ(d.detection().failed, 0U);
+        EXPECT_EQ(d.detection().telemetry_silent, MotorMask{1} << 5);  // flagged for the status
+      } else {
+        EXPECT_EQ(d.detection().failed, MotorMask{1} << 5);
+        EXPECT_EQ(d.detection().source, DetectionSource::kTelemetrySilent);
+      }
     }
   }
 }
