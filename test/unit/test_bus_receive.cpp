@@ -105,6 +105,23 @@ TEST(BusReceive, AGoodMessageDecodesWhole) {
   EXPECT_EQ(bus::receive(off, "MOTOR_PWM", nullptr, 0, 0, got, counts), bus::Refusal::kTruncated);
 }
 
+TEST(BusReceive, AReusedMessageTakesTheNewLengthEvenZero) {
+  // lcm-gen's decoder does not touch the arrays when the length is 0.
+  signing::Policy off;
+  bus::Refusals counts;
+  motor_pwm_t reused{};
+  const auto four = test::encode_plain(good_pwm(4));
+  const auto none = test::encode_plain(good_pwm(0));
+  ASSERT_EQ(bus::receive(off, "P", four.data(), four.size(), 0, reused, counts),
+            bus::Refusal::kNone);
+  ASSERT_EQ(bus::receive(off, "P", none.data(), none.size(), 0, reused, counts),
+            bus::Refusal::kNone);
+  EXPECT_EQ(reused.num_motors, 0);
+  EXPECT_TRUE(reused.pwm.empty());
+  EXPECT_TRUE(reused.command.empty());
+  EXPECT_TRUE(reused.direction.empty());
+}
+
 TEST(BusReceive, TheSignatureIsJudgedFirst) {
   std::array<std::uint8_t, signing::kKeyBytes> bytes{};
   for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7 + 1);

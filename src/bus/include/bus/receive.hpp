@@ -103,34 +103,51 @@ struct MeasuredSize {
 
 }  // namespace detail
 
-// Checks the bytes of one message (no signature trailer) as the type's;
-// Refusal::kNone when `decode` may be called on exactly these bytes.
+namespace detail {
+// check_wire, also giving the array length read (0 for a type without).
 template <typename Message>
-Refusal check_wire(const void* data, std::size_t size) noexcept {
-  const auto& measured = detail::MeasuredSize<Message>::get();
+Refusal check_wire_length(const void* data, std::size_t size, std::int32_t& length) noexcept {
+  const auto& measured = MeasuredSize<Message>::get();
   const auto* bytes = static_cast<const std::uint8_t*>(data);
+  length = 0;
   if (data == nullptr || size < 8) return Refusal::kTruncated;
-  if (detail::int64_at(bytes) != Message::getHash()) return Refusal::kWrongType;
+  if (int64_at(bytes) != Message::getHash()) return Refusal::kWrongType;
   std::size_t expected = static_cast<std::size_t>(measured.fixed);
   if constexpr (WireShape<Message>::kHasLength) {
     constexpr auto kAt = static_cast<std::size_t>(WireShape<Message>::kLengthOffset);
     if (size < kAt + 4) return Refusal::kTruncated;
-    const std::int32_t n = detail::int32_at(bytes + kAt);
+    const std::int32_t n = int32_at(bytes + kAt);
     if (n < 0 || n > WireShape<Message>::kMaxLength) return Refusal::kBadLength;
     expected += static_cast<std::size_t>(n) * static_cast<std::size_t>(measured.per_element);
+    length = n;
   }
   if (size < expected) return Refusal::kTruncated;
   if (size > expected) return Refusal::kTrailing;
   return Refusal::kNone;
 }
+}  // namespace detail
+
+// Checks the bytes of one message (no signature trailer) as the type's;
+// Refusal::kNone when `decode` may be called on exactly these bytes.
+template <typename Message>
+Refusal check_wire(const void* data, std::size_t size) noexcept {
+  std::int32_t length = 0;
+  return detail::check_wire_length<Message>(data, size, length);
+}
 
 // Decodes `size` bytes (no trailer) into `out` after check_wire; never
-// throws. `out` is unspecified unless kNone is returned.
+// throws. `out` is unspecified unless kNone is returned. Its arrays are
+// sized from the checked length first: lcm-gen's decoder leaves them alone
+// when the length is 0, so a reused message would keep the last one's
+// elements (found by fuzz_output_reader). Reusing `out` allocates nothing
+// once its arrays have held the largest length.
 template <typename Message>
 Refusal decode_exact(const void* data, std::size_t size, Message& out) noexcept {
-  const Refusal wire = check_wire<Message>(data, size);
+  std::int32_t length = 0;
+  const Refusal wire = detail::check_wire_length<Message>(data, size, length);
   if (wire != Refusal::kNone) return wire;
   try {
+    if constexpr (WireShape<Message>::kHasLength) WireShape<Message>::size(out, length);
     const int n = static_cast<int>(size);
     return out.decode(data, 0, n) == n ? Refusal::kNone : Refusal::kUndecodable;
   } catch (...) {
