@@ -41,6 +41,12 @@ namespace {
 constexpr double kTickS = 0.005;       // the gate is checked this often without input
 constexpr double kKeepAliveS = 0.020;  // and the hardware written at least this often
 constexpr double kStatusEveryS = 5.0;
+// LCM's receive queue keeps 30 messages by default and drops the newest
+// when full: for the process that moves the pins the newest is the one that
+// matters. Deep enough for any burst, and drained whole at every wake-up
+// (bounded, so a flood cannot starve the failsafe timer).
+constexpr int kQueueCapacity = 1000;
+constexpr int kMaxMessagesPerDrain = 1000;
 
 using bus::monotonic_s;
 using bus::wall_us;
@@ -95,7 +101,10 @@ class OutputNode {
         gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s),
         values_(static_cast<std::size_t>(config.motors())) {}
 
-  void subscribe() { lcm_.subscribe(config_.channels.motor_pwm, &OutputNode::on_motor_pwm, this); }
+  void subscribe() {
+    lcm_.subscribe(config_.channels.motor_pwm, &OutputNode::on_motor_pwm, this)
+        ->setQueueCapacity(kQueueCapacity);
+  }
 
   // Decides and writes when something changed or the hardware is due.
   void step(double now, bool message) {
@@ -215,6 +224,10 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     return 1;
   }
   OutputNode node(config, std::move(*policy), lcm, *driver, log);
+  // Subscribed before the first disarmed write: nothing is handled until
+  // the loop below, and a publisher that sees the pins disarmed knows its
+  // messages are heard from then on.
+  if (!options.disarm_only) node.subscribe();
   node.write_disarmed();
   log << "motormix output: " << config::to_string(config.hardware.driver) << " driver, "
       << config.motors() << " motors at " << config.hardware.pulse_rate_hz << " Hz; disarmed until "
@@ -229,7 +242,6 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     close_wires();
     return 0;
   }
-  node.subscribe();
 
   const int timer_fd = timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC);
   itimerspec spec{};
@@ -259,7 +271,10 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
           << ", writing disarmed pulses and exiting" << std::endl;
       break;
     }
-    if (fds[0].revents & POLLIN) lcm.handle();
+    if (fds[0].revents & POLLIN) {
+      for (int i = 0; i < kMaxMessagesPerDrain && lcm.handleTimeout(0) > 0; ++i) {
+      }
+    }
     const double now = monotonic_s();
     if (fds[1].revents & POLLIN) {
       std::uint64_t expirations = 0;

@@ -191,6 +191,9 @@ TEST_F(HostileBus, OutputKeepsItsPinsDisarmedCountsEveryRefusalAndTakesAGoodMess
   const std::string log = dir_ + "/output.log";
   ChildProcess output({motormix_binary(), "output", "--config", config}, log);
   ASSERT_TRUE(wait_duty(kDisarmedNs, 5000ms)) << read_file(log);
+  // Subscribed before that write; LCM's receive thread joins the group a
+  // moment later.
+  std::this_thread::sleep_for(300ms);
 
   const auto variants = hostile_variants<motor_pwm_t>(
       armed_pwm(1900.0F), [](motor_pwm_t& m, float v) { m.pwm.assign(m.pwm.size(), v); });

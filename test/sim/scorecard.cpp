@@ -16,6 +16,7 @@
 
 #include "reference/px4_sequential_desaturation.hpp"
 #include "sim/lockstep.hpp"
+#include "sim/result_json.hpp"
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
@@ -204,20 +205,8 @@ nlohmann::json run_cell(const std::string& source, const Cell& cell, int seeds) 
     worst.speed_error_rms_mps = std::max(worst.speed_error_rms_mps, r.speed_error_rms_mps);
     worst.yaw_rate_error_rms_dps = std::max(worst.yaw_rate_error_rms_dps, r.yaw_rate_error_rms_dps);
   }
-  out["crashed"] = worst.crashed;
-  if (worst.crashed) {
-    out["crash_reason"] = worst.crash_reason;
-    out["crash_time_s"] = worst.crash_time_s;
-  }
-  out["attitude_error_rms_deg"] = worst.attitude_error_rms_deg;
-  out["attitude_error_max_deg"] = worst.attitude_error_max_deg;
-  out["yaw_error_rms_deg"] = worst.yaw_error_rms_deg;
-  out["altitude_loss_m"] = worst.altitude_loss_m;
-  out["saturated_fraction"] = worst.saturated_fraction;
-  if (wheeled) {
-    out["speed_error_rms_mps"] = worst.speed_error_rms_mps;
-    out["yaw_rate_error_rms_dps"] = worst.yaw_rate_error_rms_dps;
-  }
+  // The worst over the seeds, named and computed as motormix sim names them.
+  out.update(flight_errors_json(worst, wheeled));
   if (!cell.c.detect.empty()) {
     out["detected_ms"] = detected_ms;
     out["detection_missed"] = missed;
@@ -242,7 +231,8 @@ std::vector<Case> cases(const std::string& source, const std::vector<std::string
       out.push_back({v, "drive", -1, false, ""});
       continue;
     }
-    for (const char* s : {"hover", "steps", "flips", "battery_sag", "gusts"}) out.push_back({v, s, -1, false, ""});
+    for (const char* s : {"hover", "steps", "flips", "battery_sag", "gusts"})
+      out.push_back({v, s, -1, false, ""});
     for (int m = 0; m < c.motors(); ++m) {
       out.push_back({v, "motor_out", m, false, ""});
       out.push_back({v, "motor_out", m, true, ""});
@@ -286,7 +276,8 @@ std::vector<std::string> target_misses(const std::vector<nlohmann::json>& result
   for (const nlohmann::json& r : results) {
     if (r.contains("skipped")) {
       // A configuration error (a renamed strategy, say) must not pass as a skip.
-      if (!r.value("expected_skip", false)) misses.push_back("skipped: " + describe(r) + ": " + r.dump());
+      if (!r.value("expected_skip", false))
+        misses.push_back("skipped: " + describe(r) + ": " + r.dump());
       continue;
     }
     const std::string v = r["vehicle"], c = r["column"], s = r["scenario"];
@@ -380,11 +371,12 @@ int main(int argc, char** argv) {
   if (!check) return 0;
   std::size_t target_cells = 0;
   std::vector<std::string> misses = target_misses(results, target_cells);
-  const bool every_vehicle = std::find(vehicles.begin(), vehicles.end(), "hexa_x") != vehicles.end() &&
-                             std::find(vehicles.begin(), vehicles.end(), "octo_x") != vehicles.end();
+  const bool every_vehicle =
+      std::find(vehicles.begin(), vehicles.end(), "hexa_x") != vehicles.end() &&
+      std::find(vehicles.begin(), vehicles.end(), "octo_x") != vehicles.end();
   if (every_vehicle && target_cells != kTargetCells) {
-    misses.push_back("checked " + std::to_string(target_cells) + " motor-out target cells, expected " +
-                     std::to_string(kTargetCells));
+    misses.push_back("checked " + std::to_string(target_cells) +
+                     " motor-out target cells, expected " + std::to_string(kTargetCells));
   }
   for (const std::string& m : misses) std::cout << "MISSED " << m << "\n";
   std::cout << (misses.empty() ? "every target met" : "targets missed") << " in " << results.size()
