@@ -4,6 +4,7 @@
 #include <motormix/config/load_config.hpp>
 #include <motormix/config/matrix_export.hpp>
 #include <motormix/config/security.hpp>
+#include "node/describe.hpp"
 #include "node/lcm_node.hpp"
 #include "node/log_replay.hpp"
 #include "node/log_signing.hpp"
@@ -59,7 +60,6 @@ std::optional<config::Config> load_vehicle(const CommonOptions& common, const ch
 // --check: the security line, and the key read as the process would read it
 // (a key file that is missing or open to others fails the check).
 bool check_security(const config::Config& config, const char* command) {
-  std::cout << config::describe(config.security) << "\n";
   try {
     config::signing_policy(config);
     return true;
@@ -73,27 +73,14 @@ int run(const RunCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "run");
   if (!config) return kExitUsage;
   if (cmd.check_only) {
+    // The key first: a configuration whose key cannot be read is not valid.
+    if (!check_security(*config, "run")) return kExitUsage;
     std::cout << "config "
               << (cmd.common.preset.empty() ? cmd.common.config_path
                                             : "of preset " + cmd.common.preset)
               << " is valid: " << config->motors() << " motors, strategy "
               << config::to_string(config->strategy) << "\n";
-    if (config->failure_detection) {
-      const FailureDetectorSettings& d = config->failure_detection->detector;
-      std::cout << "failure detection:";
-      if ((d.sources & static_cast<std::uint8_t>(DetectorSources::kTelemetry)) != 0) {
-        std::cout << " telemetry (" << config->channels.esc_telemetry << ")";
-      }
-      if ((d.sources & static_cast<std::uint8_t>(DetectorSources::kRates)) != 0) {
-        std::cout << " rates (" << config->channels.attitude << ")";
-      }
-      if ((d.sources & static_cast<std::uint8_t>(DetectorSources::kOutputs)) != 0) {
-        std::cout << " outputs";
-      }
-      std::cout << "\n";
-    }
-    if (!config->motor_loss_summary().empty()) std::cout << config->motor_loss_summary() << "\n";
-    if (!check_security(*config, "run")) return kExitUsage;
+    for (const std::string& line : node::describe_run(*config)) std::cout << line << "\n";
     std::cout << "\n" << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
   }
@@ -113,6 +100,8 @@ int output(const OutputCommand& cmd) {
     return kExitUsage;
   }
   if (cmd.check_only) {
+    // The key first: a configuration whose key cannot be read is not valid.
+    if (!check_security(*config, "output")) return kExitUsage;
     const config::Hardware& hw = config->hardware;
     std::cout << "hardware: " << config::to_string(hw.driver) << ", " << config->motors()
               << " motors at " << hw.pulse_rate_hz
@@ -126,7 +115,8 @@ int output(const OutputCommand& cmd) {
       std::cout << "; " << hw.sysfs.root << "/pwmchip" << hw.sysfs.chip;
     }
     std::cout << "; " << hw.telemetry.size() << " ESC telemetry wire(s)\n";
-    return check_security(*config, "output") ? kExitOk : kExitUsage;
+    std::cout << config::describe(config->security) << "\n";
+    return kExitOk;
   }
   output::OutputOptions options;
   options.lcm_url = cmd.lcm_url;

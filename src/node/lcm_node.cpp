@@ -13,6 +13,7 @@
 #include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
 #include "node/messages.hpp"
+#include "node/run_log.hpp"
 #include "realtime.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"
@@ -128,9 +129,9 @@ class Node {
            << config_.motor_names()[static_cast<std::size_t>(r.detection.motor)] << " failed ("
            << to_string(r.detection.source) << ")" << std::endl;
     }
-    if (r.landing_changed) log_landing(r);
+    if (r.landing_changed) log_landing(log_, config_, r);
     if (r.failed != logged_failed_) {
-      log_failures(r);
+      log_failures(log_, config_, r);
       logged_failed_ = r.failed;
     }
     // What the detector found goes out on motor_status at once, then at
@@ -160,47 +161,6 @@ class Node {
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
       warn_about_rejections(now_us);
     }
-  }
-
-  void log_landing(const loop::CycleResult& r) {
-    const auto name = [&](int m) {
-      return m >= 0 ? config_.motor_names()[static_cast<std::size_t>(m)] : std::string("?");
-    };
-    switch (r.landing.state) {
-      case loop::LandingState::kDescending:
-        log_ << "motormix: motor " << name(r.landing.motor)
-             << " failed: yaw given up, landing spinning on the other three" << std::endl;
-        break;
-      case loop::LandingState::kLanded:
-        log_ << "motormix: spin landing touched down: disarmed (arm again only after a "
-                "disarmed setpoint)"
-             << std::endl;
-        break;
-      case loop::LandingState::kNoAttitude:
-        log_ << "motormix: motor " << name(r.landing.motor) << " failed and no fresh attitude on "
-             << config_.channels.attitude << ": no spin landing, mixing as before" << std::endl;
-        break;
-      case loop::LandingState::kOff:
-        log_ << "motormix: spin landing ended" << std::endl;
-        break;
-    }
-  }
-
-  void log_failures(const loop::CycleResult& r) {
-    log_ << "motormix: failed motors:";
-    if (r.failed == 0) log_ << " none";
-    for (int i = 0; i < config_.motors(); ++i) {
-      if ((r.failed >> i) & 1U) log_ << " " << config_.motor_names()[static_cast<std::size_t>(i)];
-    }
-    log_ << " (" << to_string(r.failure);
-    if (r.failure != FailureHandling::kNone) {
-      log_ << "; axes held:";
-      for (int a = 0; a < kNumAxes; ++a) {
-        if ((r.held >> a) & 1U) log_ << " " << kAxisNames[static_cast<std::size_t>(a)];
-      }
-      if (r.held == 0) log_ << " none promised";
-    }
-    log_ << ")" << std::endl;
   }
 
   // At most one line per second, and only when something was rejected: a
@@ -417,22 +377,6 @@ class Node {
     return static_cast<std::size_t>(c.loop_rate_hz / c.status_rate_hz) * 2 + 64;
   }
 };
-
-void log_summary(const config::Config& config, const std::string& url, std::ostream& log) {
-  log << "motormix: vehicle '" << config.name << "', " << config.motors() << " motors ("
-      << config.description() << "), strategy " << to_string(config.strategy) << "\n"
-      << "motormix: inputs '" << config.channels.setpoint << "' (setpoint, timeout "
-      << config.inputs.setpoint_timeout_s * 1e3 << " ms), '" << config.channels.pid
-      << "' (pid, timeout " << config.inputs.pid_timeout_s * 1e3 << " ms), yaw from "
-      << to_string(config.inputs.yaw_source) << "\n"
-      << "motormix: outputs '" << config.channels.motor_pwm << "' at " << config.loop_rate_hz
-      << " Hz, status '" << config.channels.status << "' at " << config.status_rate_hz
-      << " Hz, lcm url '" << (url.empty() ? "(default)" : url) << "'\n";
-  if (!config.motor_loss_summary().empty())
-    log << "motormix: " << config.motor_loss_summary() << "\n";
-  log << "motormix: " << config::describe(config.security) << "\n";
-  log << config::export_matrix(config, config::MatrixFormat::kTable) << std::flush;
-}
 
 }  // namespace
 

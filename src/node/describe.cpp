@@ -1,0 +1,41 @@
+#include "node/describe.hpp"
+
+#include <motormix/config/security.hpp>
+
+#include <sstream>
+
+namespace motormix::node {
+
+std::vector<std::string> describe_run(const config::Config& c) {
+  std::vector<std::string> lines;
+  std::ostringstream s;
+  s << "vehicle '" << c.name << "', " << c.motors() << " motors (" << c.description()
+    << "), strategy " << to_string(c.strategy);
+  lines.push_back(s.str());
+  s.str("");
+  s << "inputs '" << c.channels.setpoint << "' (setpoint, timeout "
+    << c.inputs.setpoint_timeout_s * 1e3 << " ms), '" << c.channels.pid << "' (pid, timeout "
+    << c.inputs.pid_timeout_s * 1e3 << " ms), yaw from " << to_string(c.inputs.yaw_source);
+  lines.push_back(s.str());
+  s.str("");
+  s << "outputs '" << c.channels.motor_pwm << "' at " << c.loop_rate_hz << " Hz, status '"
+    << c.channels.status << "' at " << c.status_rate_hz << " Hz";
+  lines.push_back(s.str());
+  if (c.failure_detection) {
+    const FailureDetectorSettings& d = c.failure_detection->detector;
+    const auto uses = [&d](DetectorSources source) {
+      return (d.sources & static_cast<std::uint8_t>(source)) != 0;
+    };
+    s.str("");
+    s << "failure detection:";
+    if (uses(DetectorSources::kTelemetry)) s << " telemetry (" << c.channels.esc_telemetry << ")";
+    if (uses(DetectorSources::kRates)) s << " rates (" << c.channels.attitude << ")";
+    if (uses(DetectorSources::kOutputs)) s << " outputs";
+    lines.push_back(s.str());
+  }
+  if (!c.motor_loss_summary().empty()) lines.push_back(c.motor_loss_summary());
+  lines.push_back(config::describe(c.security));
+  return lines;
+}
+
+}  // namespace motormix::node
