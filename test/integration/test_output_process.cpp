@@ -244,21 +244,35 @@ TEST_F(OutputProcess, UnderRequireOnlySignedMotorPwmMovesThePins) {
   }
   ASSERT_EQ(duty(0), 1400000);
   ASSERT_GE(wait_duty(0, 1000000, 500), 0.0);
+  // Each refused message is looked for at once, in every channel: a taken
+  // one is written in its callback, and read here within the 50 ms before
+  // the staleness timeout would disarm the pins again (a check after the
+  // timeout passes whether or not the verdict was obeyed).
+  int moved = 0;
+  const auto pins_moved = [&] {
+    int n = 0;
+    for (int c = 0; c < 4; ++c) n += duty(c) != 1000000 ? 1 : 0;
+    return n;
+  };
   for (int i = 0; i < 20; ++i) {
     send(lcm, encoded({1600, 1600, 1600, 1600}, true, none));
+    std::this_thread::sleep_for(2500us);
+    moved += pins_moved();
     send(lcm, encoded({1700, 1700, 1700, 1700}, true, stranger));
     std::this_thread::sleep_for(2500us);
+    moved += pins_moved();
   }
-  std::this_thread::sleep_for(100ms);
-  EXPECT_EQ(duty(0), 1000000) << "an unsigned or forged motor_pwm_t moved a pin";
+  EXPECT_EQ(moved, 0) << "an unsigned or forged motor_pwm_t moved a pin";
   // Signed with the key: taken.
   send(lcm, encoded({1500, 1500, 1500, 1500}, true, mixer));
   EXPECT_GE(wait_duty(0, 1500000, kApplyBoundMs), 0.0);
+  // The replay, looked for at once: had it been taken, 1900 is written.
   send(lcm, captured);
+  std::this_thread::sleep_for(2500us);
+  EXPECT_NE(duty(0), 1900000) << "a replayed motor_pwm_t moved a pin";
   send(lcm, encoded({1501, 1501, 1501, 1501}, true, mixer));
   EXPECT_GE(wait_duty(0, 1501000, kApplyBoundMs), 0.0);
-  // The replay came before the last good one: had it been taken, 1900
-  // would have been written in between; it is counted below.
+  // Never 1900 on any channel at any point: the log's replay count below.
   output.signal(SIGTERM);
   EXPECT_EQ(output.wait_for(3s), 0);
   std::ifstream log(root_ + "/output.log");
