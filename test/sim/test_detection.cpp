@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <future>
 #include <sstream>
 
@@ -160,6 +161,44 @@ TEST(DetectedFailures, DeadTelemetryOnAWorkingMotorIsNotAFailureWithRates) {
       EXPECT_EQ(r.false_detections, 0);
     }
   }
+}
+
+// The outputs source, the slow last resort, in closed loop: an octo X
+// (a hexa falls before its second of persistence: SIM.md) losing each motor
+// with the strategies that drive the motor that lost thrust to full
+// (prioritized, shift): found every time, and the motor named is the one
+// that stopped (a detector naming a fixed motor passes one motor in eight).
+TEST(DetectedFailures, TheOutputsSourceNamesTheMotorThatStopped) {
+  int flights = 0;
+  for (const char* strategy : {"prioritized", "shift"}) {
+    const config::Config c = load("octo_x.yaml", {"failure_detection.sources=[outputs]",
+                                                  std::string("mixer.strategy=") + strategy});
+    // The scorecard's cell: motor_out, its own failure replaced by each motor's at 6 s.
+    Scenario s = load_scenario("motor_out");
+    s.timeline.erase(std::remove_if(s.timeline.begin(), s.timeline.end(),
+                                    [](const ScenarioEvent& e) { return e.fail.has_value(); }),
+                     s.timeline.end());
+    for (int motor = 0; motor < c.motors(); ++motor) {
+      for (int seed = 1; seed <= 2; ++seed) {
+        SCOPED_TRACE(std::string(strategy) + " m" + std::to_string(motor + 1) + " seed " +
+                     std::to_string(seed));
+        SimOptions o;
+        o.seed = static_cast<std::uint64_t>(seed);
+        o.undetected = true;
+        o.failures.push_back({motor, 6.0, FailureKind::kStop});
+        const SimResult r = run_lockstep(c, config::build_mixer(c), s, o);
+        ++flights;
+        ASSERT_EQ(r.failures.size(), 1U);
+        const FailureOutcome& f = r.failures.front();
+        EXPECT_FALSE(r.crashed) << r.crash_reason;
+        EXPECT_EQ(r.false_detections, 0);
+        EXPECT_GE(f.detected_at_s, 0.0) << "not found";
+        EXPECT_EQ(f.detected_motor, motor);
+        EXPECT_EQ(f.detected_by, DetectionSource::kOutputs);
+      }
+    }
+  }
+  EXPECT_EQ(flights, 32);
 }
 
 // A loose telemetry wire on a working motor (#51): on every aircraft preset,

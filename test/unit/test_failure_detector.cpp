@@ -215,18 +215,25 @@ TEST(FailureDetector, StaleRatesJudgeNothing) {
 }
 
 TEST(FailureDetector, OutputsFindTheMotorDrivenToFullForLong) {
-  FailureDetectorSettings s = hexa(bits(DetectorSources::kOutputs));
-  FailureDetector d(s);
-  MotorVector commands = hover(6);
-  commands[4] = 1.0;
-  // Shorter than the persistence: nothing.
-  std::int64_t t = 0;
-  for (; t < 1'200'000; t += kCycleUs) d.update(commands, 0, true, t);
-  for (; t < 1'700'000; t += kCycleUs) d.update(hover(6), 0, true, t);
-  EXPECT_EQ(d.detection().failed, 0U);
-  for (; t < 5'000'000 && d.detection().failed == 0; t += kCycleUs) d.update(commands, 0, true, t);
-  EXPECT_EQ(d.detection().failed, MotorMask{1} << 4);
-  EXPECT_EQ(d.detection().source, DetectionSource::kOutputs);
+  // Every motor in turn: the one named is the one driven to full (a
+  // detector naming a fixed motor passes for one motor only).
+  for (int motor = 0; motor < 6; ++motor) {
+    SCOPED_TRACE("m" + std::to_string(motor + 1));
+    FailureDetectorSettings s = hexa(bits(DetectorSources::kOutputs));
+    FailureDetector d(s);
+    MotorVector commands = hover(6);
+    commands[motor] = 1.0;
+    // Shorter than the persistence: nothing.
+    std::int64_t t = 0;
+    for (; t < 1'200'000; t += kCycleUs) d.update(commands, 0, true, t);
+    for (; t < 1'700'000; t += kCycleUs) d.update(hover(6), 0, true, t);
+    EXPECT_EQ(d.detection().failed, 0U);
+    for (; t < 5'000'000 && d.detection().failed == 0; t += kCycleUs)
+      d.update(commands, 0, true, t);
+    EXPECT_EQ(d.detection().failed, MotorMask{1} << motor);
+    EXPECT_EQ(d.detection().motor, motor);
+    EXPECT_EQ(d.detection().source, DetectionSource::kOutputs);
+  }
 }
 
 TEST(FailureDetector, ResetForgetsDeclarations) {
