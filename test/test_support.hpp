@@ -1,4 +1,7 @@
 #pragma once
+
+#include <cstdlib>
+#include <string>
 // Shared helpers for the tests: named tolerances and config loading.
 
 #include "test_paths.hpp"
@@ -30,5 +33,18 @@ inline std::string source_path(const std::string& relative) {
 inline config::Config team_quad_config() {
   return config::load_config_file(source_path("config/team_quad.yaml"));
 }
+
+// MOTORMIX_SIM_REDUCED=1 (set for the sanitizer build): the closed-loop
+// simulation tests fly a reduced grid, the first and the last motor on one
+// seed (and fewer vehicles and strategies), so their assertions, the right
+// motor named among them, run under the sanitizers within minutes.
+inline bool reduced_sim_grid() {
+  const char* v = std::getenv("MOTORMIX_SIM_REDUCED");
+  return v != nullptr && std::string(v) == "1";
+}
+inline bool in_sim_grid(int motor, int motors) {
+  return !reduced_sim_grid() || motor == 0 || motor == motors - 1;
+}
+inline int sim_grid_seeds(int full) { return reduced_sim_grid() ? 1 : full; }
 
 }  // namespace motormix::test

@@ -61,7 +61,8 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
         for (const FailureCase& fc : kCases) {
           const Scenario s = load_scenario(fc.scenario);
           for (int motor = 0; motor < c.motors(); ++motor) {
-            for (int seed = 1; seed <= kTargetSeeds; ++seed) {
+            if (!test::in_sim_grid(motor, c.motors())) continue;
+            for (int seed = 1; seed <= test::sim_grid_seeds(kTargetSeeds); ++seed) {
               std::ostringstream where;
               where << file << " " << strategy << " " << source.name << " " << fc.scenario << " m"
                     << motor + 1 << " seed " << seed;
@@ -87,7 +88,9 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
       }
     }
   }
-  EXPECT_EQ(flights, 2 * 3 * 2 * (6 + 8) * kTargetSeeds);
+  if (!test::reduced_sim_grid()) {
+    EXPECT_EQ(flights, 2 * 3 * 2 * (6 + 8) * kTargetSeeds);
+  }
 }
 
 // One vehicle's healthy flights: every scenario, strategy and seed.
@@ -104,12 +107,13 @@ FalseAlarmTally fly_healthy(const std::string& file) {
   FalseAlarmTally tally;
   for (const char* strategy :
        {"legacy_budget", "budget", "shift", "clip", "prioritized", "optimal"}) {
+    if (test::reduced_sim_grid() && std::string(strategy) != "prioritized") continue;
     // The default sources (telemetry and rates).
     const config::Config c =
         load(file, {std::string("mixer.strategy=") + strategy, "failure_detection.enabled=true"});
     for (const char* scenario : {"hover", "steps", "flips", "gusts", "battery_sag"}) {
       const Scenario s = load_scenario(scenario);
-      for (int seed = 1; seed <= kFalseAlarmSeeds; ++seed) {
+      for (int seed = 1; seed <= test::sim_grid_seeds(kFalseAlarmSeeds); ++seed) {
         SimOptions o;
         o.seed = static_cast<std::uint64_t>(seed);
         const SimResult r = run_lockstep(c, config::build_mixer(c), s, o);
@@ -132,9 +136,13 @@ FalseAlarmTally fly_healthy(const std::string& file) {
 }
 
 TEST(DetectedFailures, NoFalseAlarmInAnHourOfHealthyFlightPerVehicle) {
-  const std::vector<std::string> vehicles = {
-      "quad_x.yaml", "quad_plus.yaml", "team_quad.yaml", "hexa_x.yaml",    "hexa_plus.yaml",
-      "h_hexa.yaml", "y6.yaml",        "octo_x.yaml",    "octo_plus.yaml", "octo_coax_x8.yaml"};
+  const std::vector<std::string> vehicles =
+      test::reduced_sim_grid()
+          ? std::vector<std::string>{"quad_x.yaml", "hexa_x.yaml"}
+          : std::vector<std::string>{"quad_x.yaml",      "quad_plus.yaml", "team_quad.yaml",
+                                     "hexa_x.yaml",      "hexa_plus.yaml", "h_hexa.yaml",
+                                     "y6.yaml",          "octo_x.yaml",    "octo_plus.yaml",
+                                     "octo_coax_x8.yaml"};
   // Two vehicles at a time: the machines have two cores.
   std::vector<FalseAlarmTally> tallies(vehicles.size());
   for (std::size_t i = 0; i < vehicles.size(); i += 2) {
@@ -146,13 +154,14 @@ TEST(DetectedFailures, NoFalseAlarmInAnHourOfHealthyFlightPerVehicle) {
   }
   for (std::size_t i = 0; i < vehicles.size(); ++i) {
     SCOPED_TRACE(vehicles[i]);
+    for (const std::string& alarm : tallies[i].false_alarms) ADD_FAILURE() << alarm;
+    if (test::reduced_sim_grid()) continue;  // one seed: no hour, but every alarm above
     EXPECT_GE(tallies[i].healthy_armed_s, kFalseAlarmSecondsPerVehicle)
         << tallies[i].crashed << " of " << tallies[i].flights << " flights crashed";
     std::printf("%s: %.0f armed s in %d flights that did not crash (%d crashed)\n",
                 vehicles[i].c_str(), tallies[i].healthy_armed_s,
                 tallies[i].flights - tallies[i].crashed, tallies[i].crashed);
     EXPECT_EQ(tallies[i].flights, 6 * 5 * kFalseAlarmSeeds);
-    for (const std::string& alarm : tallies[i].false_alarms) ADD_FAILURE() << alarm;
   }
 }
 
@@ -164,6 +173,7 @@ TEST(DetectedFailures, DeadTelemetryOnAWorkingMotorIsNotAFailureWithRates) {
     const config::Config c = load(file, {"failure_detection.sources=[telemetry, rates]"});
     const Scenario s = load_scenario("steps");
     for (int motor = 0; motor < c.motors(); ++motor) {
+      if (!test::in_sim_grid(motor, c.motors())) continue;
       SCOPED_TRACE(std::string(file) + " m" + std::to_string(motor + 1));
       SimOptions o;
       o.undetected = true;
@@ -191,7 +201,8 @@ TEST(DetectedFailures, TheOutputsSourceNamesTheMotorThatStopped) {
                                     [](const ScenarioEvent& e) { return e.fail.has_value(); }),
                      s.timeline.end());
     for (int motor = 0; motor < c.motors(); ++motor) {
-      for (int seed = 1; seed <= 2; ++seed) {
+      if (!test::in_sim_grid(motor, c.motors())) continue;
+      for (int seed = 1; seed <= test::sim_grid_seeds(2); ++seed) {
         SCOPED_TRACE(std::string(strategy) + " m" + std::to_string(motor + 1) + " seed " +
                      std::to_string(seed));
         SimOptions o;
@@ -210,7 +221,9 @@ TEST(DetectedFailures, TheOutputsSourceNamesTheMotorThatStopped) {
       }
     }
   }
-  EXPECT_EQ(flights, 32);
+  if (!test::reduced_sim_grid()) {
+    EXPECT_EQ(flights, 32);
+  }
 }
 
 // A loose telemetry wire on a working motor (#51): on every aircraft preset,
@@ -232,6 +245,7 @@ TEST(DetectedFailures, ALooseTelemetryWireNeverStartsALandingOnAnyAircraft) {
         continue;  // the outputs source needs six rotors (refused at load)
       const config::Config c = load(file, {std::string("failure_detection.sources=") + sources});
       for (int motor = 0; motor < c.motors(); ++motor) {
+        if (!test::in_sim_grid(motor, c.motors())) continue;
         SCOPED_TRACE(std::string(file) + " " + sources + " m" + std::to_string(motor + 1));
         SimOptions o;
         o.undetected = true;
@@ -252,7 +266,7 @@ TEST(DetectedFailures, ALooseTelemetryWireNeverStartsALandingOnAnyAircraft) {
       }
     }
   }
-  EXPECT_GE(flights, 100);
+  EXPECT_GE(flights, test::reduced_sim_grid() ? 40 : 100);
 }
 
 TEST(DetectedFailures, WhatFlewWithoutTheDetectorFliesWithIt) {
@@ -263,6 +277,7 @@ TEST(DetectedFailures, WhatFlewWithoutTheDetectorFliesWithIt) {
     for (FailureKind kind : {FailureKind::kHalfThrust, FailureKind::kIntermittent,
                              FailureKind::kDesync, FailureKind::kTelemetry}) {
       for (int motor = 0; motor < off.motors(); ++motor) {
+        if (!test::in_sim_grid(motor, off.motors())) continue;
         SCOPED_TRACE(std::string(file) + " " + to_string(kind) + " m" + std::to_string(motor + 1));
         SimOptions o;
         o.undetected = true;
