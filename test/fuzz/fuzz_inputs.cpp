@@ -7,6 +7,11 @@
 // compensation and the failure detector judging), otherwise as a pid_t.
 // Chunks: one length byte, then that many bytes. After every chunk a control
 // cycle runs 2.5 ms later, and its outputs must be in range.
+//
+// These are robustness fuzzers: they check that no input crashes the loop
+// or drives an output out of its range, not that the detector finds the
+// right motor (detection_sim_tests and the unit tests judge that).
+// fuzz_failures starts from seeds of valid sequences (seeds/failures).
 
 #include "fuzz_checks.hpp"
 #include "loop/control_loop.hpp"
