@@ -284,6 +284,21 @@ int replay(const ReplayCommand& cmd) {
   options.cycle_on_every_input = cmd.every_input;
   options.max_gap_s = cmd.max_gap_s;
   options.verify = cmd.verify;
+  if (cmd.verify) {
+    // The key is configuration: without it, or unreadable, a usage error
+    // (exit 2) before anything is read, as every other command says it.
+    if (config->security.key_file.empty()) {
+      std::cerr << "motormix replay: --verify needs the key: set security.key_file (the log "
+                   "must also be signed: motormix sign-log)\n";
+      return kExitUsage;
+    }
+    try {
+      (void)signing::load_key(config->security.key_file);
+    } catch (const signing::KeyError& e) {
+      std::cerr << "motormix replay: security.key_file: " << e.what() << "\n";
+      return kExitUsage;
+    }
+  }
   node::ReplaySummary s;
   if (!node::replay_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
     return kExitRuntime;

@@ -10,6 +10,11 @@
   names resolves: the scenario and each --fail of `sim`, the motor of
   `motor-test`, the --failed motors of `mix`), lines continued with a
   backslash joined first;
+- and a line that needs no hardware and no bus (keygen, sign-log, matrix,
+  mix, replay, a lockstep sim, `run --check`, `output --check`) and writes
+  nowhere outside the scratch directory (no absolute path, no sudo) is then
+  run as written, through the shell (so `$PWD`, `&&` and redirections are the
+  reader's), and must exit 0; `mkdir` lines are carried out too;
 - every `scripts/...`, `tools/...` or `python3 tools/...` line names a file
   that exists.
 
@@ -76,6 +81,45 @@ def anchors(text):
     return {slug(line) for line in outside_blocks(text).split("\n") if line.startswith("#")}
 
 
+# Subcommands a reader can run with no hardware and no bus.
+RUNNABLE = {"keygen", "sign-log", "matrix", "mix", "replay"}
+
+
+def runnable(words):
+    if len(words) < 2 or any(w.startswith("/") for w in words[1:]):
+        return False  # absolute paths: the reader's machine, not the scratch directory
+    sub = words[1]
+    if sub in RUNNABLE:
+        return True
+    if sub == "sim":
+        return "--lcm" not in words
+    if sub in ("run", "output"):
+        return "--check" in words
+    return False
+
+
+def run_as_written(motormix, scratch, words, where, line=None):
+    """Runs a `motormix ...` line the way a reader would, when it needs no
+    hardware and no bus: [] when it exits 0, else the failure."""
+    if not runnable(words):
+        return []
+    text = line if line is not None else " ".join(shlex.quote(w) for w in words)
+    bindir = os.path.join(scratch, ".bin")
+    os.makedirs(bindir, exist_ok=True)
+    if not os.path.exists(os.path.join(bindir, "motormix")):
+        os.symlink(motormix, os.path.join(bindir, "motormix"))
+    env = dict(os.environ, PATH=bindir + os.pathsep + os.environ.get("PATH", ""))
+    try:
+        r = subprocess.run(["bash", "-c", text], cwd=scratch, env=env, capture_output=True,
+                           text=True, timeout=120)
+    except subprocess.TimeoutExpired:
+        return [f"{where}: '{text}' did not finish within 120 s"]
+    if r.returncode != 0:
+        return [f"{where}: '{text}' exits {r.returncode}: "
+                f"{(r.stderr or r.stdout).strip().splitlines()[-2:]}"]
+    return []
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--motormix", required=True)
@@ -139,6 +183,25 @@ def main():
                         continue
                     if words[0] == "sudo":
                         words = words[1:]
+                    if "&&" in words:
+                        # a chain: each part in turn, as the reader's shell would
+                        parts, part = [], []
+                        for w in words + ["&&"]:
+                            if w == "&&":
+                                parts.append(part)
+                                part = []
+                            else:
+                                part.append(w)
+                        words = parts[-1]
+                        for p in parts[:-1]:
+                            if p and p[0] == "mkdir":
+                                subprocess.run(p, cwd=scratch, check=False)
+                            elif p and p[0] == "motormix":
+                                commands += 1
+                                failures += run_as_written(motormix, scratch, p, where)
+                    if words[0] == "mkdir":
+                        subprocess.run(words, cwd=scratch, check=False)
+                        continue
                     if words[0] == "cp" and len(words) == 3:
                         # a file the page's later commands use (its own copy)
                         subprocess.run(["cp"] + words[1:], cwd=scratch, check=False)
@@ -150,6 +213,9 @@ def main():
                         if r.returncode != 0:
                             failures.append(f"{where}: '{line}' is refused: "
                                             f"{(r.stderr or r.stdout).strip().splitlines()[:2]}")
+                            continue
+                        if words[0] == "motormix" and not line.startswith("sudo"):
+                            failures += run_as_written(motormix, scratch, words, where, line)
                         continue
                     program = words[1] if words[0] in ("python3", "bash") and len(words) > 1 else words[0]
                     if program.startswith("build"):

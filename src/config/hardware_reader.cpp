@@ -46,8 +46,9 @@ void check_outputs(const Config& config, const std::string& path, double period_
     for (double v : {ch.min, ch.max, ch.disarmed}) {
       if (v < MM_LINK_MIN_PULSE_US || v > std::min<double>(MM_LINK_MAX_PULSE_US, longest)) {
         std::ostringstream found, allowed;
-        found << "motor " << i + 1 << ": " << v << " us at " << path << ".pulse_rate_hz "
-              << 1e6 / period_us;
+        // pulse_rate_hz sits in hardware:, beside the driver's own section.
+        found << "motor " << i + 1 << ": " << v << " us at hardware.pulse_rate_hz "
+              << 1e6 / period_us << " (" << path << ")";
         allowed << MM_LINK_MIN_PULSE_US << ".." << std::min<double>(MM_LINK_MAX_PULSE_US, longest)
                 << " us (a pulse ends " << MM_LINK_MIN_LOW_US << " us before the next period)";
         fail("output (min, max, disarmed)", found.str(), allowed.str());

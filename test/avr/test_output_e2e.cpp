@@ -58,16 +58,28 @@ constexpr double kDisarmedUs = 1000.0;
 constexpr double kMaxSimulationLagUs = 20000.0;
 constexpr double kMixerDeathBoundMs = 100.0;   // output's 50 ms staleness + frames + a period
 constexpr double kOutputDeathBoundMs = 100.0;  // the firmware's link timeout
-constexpr double kLatencyP99BoundMs = 10.0;    // generous: the bench measures the host part
+// Bus to pin: up to a period's wait for the next rise, the frame on the
+// wire (about 1 ms at 250000 baud), and the host's part (p99 under 0.2 ms
+// in the bench); the chip's measured lag comes on top. A constant 8 ms
+// delay in the chain fails it.
+constexpr double kPeriodMs = 2.5;
+constexpr double kLatencyP99BoundMs = kPeriodMs + 1.0 + 1.0;
+// Pulses held on one message while newer ones were published: at most two
+// periods (the one under way and the next, which a frame may just miss)
+// and a frame, plus the chip's measured lag.
+constexpr double kHeldBoundMs = 2 * kPeriodMs + 1.0;
 // Armed periods whose pulses are a motor_pwm_t published in the 10 ms before
-// (plus the chip's lag). The rest, measured on 2026-12-04 with the same
-// binaries as the day before (99.7-100 % then): 0-5.5 % (94.5 % in one CI
-// run), in runs of periods whose pulses stayed on one message for 11 to
-// 50 ms while the mixer kept publishing. Somewhere between `motormix
-// output` and the simulated chip the frames stalled on this loaded two-core
-// machine (output, pty or the simulator's bridge: not isolated; an open
-// problem). The share still fails a chain that stops following the mixer.
-constexpr double kMatchedShare = 0.90;
+// (plus the chip's lag). Before 0.9.0 0-5.5 % of them were not, in runs of
+// periods held on one message for 11 to 50 ms while the mixer kept
+// publishing: `motormix output` handled one message per wake-up from LCM's
+// 30-deep queue, so a burst left it behind, working through old messages
+// (it now drains every pending one, from a deep queue). The held runs are
+// bounded below (kHeldBoundMs).
+constexpr double kMatchedShare = 0.99;
+// Of the synthetic test's 1200 messages at 400 Hz, the share some period
+// carries: a message published within a period of the next can be replaced
+// before any rise carries it (two clocks at the same rate, unsynchronized).
+constexpr double kSeenShare = 0.90;
 // A message's publication time against the chip's rise: clocks read in
 // different processes and threads.
 constexpr std::int64_t kReceiveSlackUs = 1000;
@@ -118,13 +130,49 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // The first disarmed period rising after `after_us`, in ms after it; NaN
-// if none, and -1 if an armed period came after a disarmed one.
+// if none, and -1 if an armed period came after it (a failsafe that
+// disarms for a period and arms again is no failsafe).
 double ms_to_disarmed(const std::vector<Period>& periods, std::int64_t after_us) {
+  double first = NAN;
   for (const Period& p : periods) {
     if (p.rise_us <= after_us) continue;
-    if (disarmed(p)) return static_cast<double>(p.rise_us - after_us) / 1000.0;
+    if (std::isnan(first)) {
+      if (disarmed(p)) first = static_cast<double>(p.rise_us - after_us) / 1000.0;
+    } else if (!disarmed(p)) {
+      return -1.0;
+    }
   }
-  return NAN;
+  return first;
+}
+
+bool same_widths(const Period& a, const Period& b) {
+  for (const auto& [ch, w] : a.width)
+    if (std::abs(w - b.width.at(ch)) > kPulseToleranceUs / 4) return false;
+  return true;
+}
+
+// Runs of armed periods held on one set of widths while messages with other
+// values were published: the longest such run, in ms from the first
+// message that should have replaced it to the run's last rise. `published`
+// gives, for a time span, whether a message with other widths came in it.
+template <typename OtherPublished>
+double longest_stall_ms(const std::vector<Period>& periods, std::int64_t until_us,
+                        const OtherPublished& other_published) {
+  double longest = 0.0;
+  std::size_t i = 0;
+  while (i < periods.size()) {
+    std::size_t j = i;
+    while (j + 1 < periods.size() && periods[j + 1].rise_us <= until_us &&
+           !disarmed(periods[j + 1]) && same_widths(periods[i], periods[j + 1]))
+      ++j;
+    if (!disarmed(periods[i]) && periods[i].rise_us <= until_us && j > i) {
+      const std::int64_t newer =
+          other_published(periods[i], periods[i].rise_us, periods[j].rise_us);
+      if (newer >= 0) longest = std::max(longest, (periods[j].rise_us - newer) / 1000.0);
+    }
+    i = j + 1;
+  }
+  return longest;
 }
 
 TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
@@ -194,19 +242,36 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
       worst = std::max(worst, std::abs(err));
       errors.push_back(std::abs(err));
     }
-    if (!seen[k]) latency_ms.push_back(static_cast<double>(p.rise_us - published_us[k]) / 1000.0);
+    // Every period carrying it, not only its first: a chain that holds a
+    // message for long shows there.
+    latency_ms.push_back(static_cast<double>(p.rise_us - published_us[k]) / 1000.0);
     seen[k] = true;
   }
   const double mixer_gone_ms = ms_to_disarmed(run, last_publish);
+  const double held_ms =
+      longest_stall_ms(run, last_publish,
+                       [&](const Period& held, std::int64_t from, std::int64_t to) -> std::int64_t {
+                         for (const auto& [k, at] : published_us) {
+                           if (at <= from || at >= to) continue;
+                           Period other;
+                           for (int ch = 0; ch < 4; ++ch)
+                             other.width[ch] = values[k][static_cast<std::size_t>(ch)];
+                           if (!same_widths(held, other)) return at;
+                         }
+                         return -1;
+                       });
   std::printf(
       "%zu armed periods carried %zu of %d messages; pulse error p50 %.3f us, worst %.3f "
-      "us; bus to pin p50 %.2f ms, p99 %.2f ms; disarmed %.1f ms after the last "
-      "motor_pwm_t\n",
+      "us; bus to pin p50 %.2f ms, p99 %.2f ms; held at most %.2f ms; disarmed %.1f ms after "
+      "the last motor_pwm_t; chip late by %.2f ms at worst\n",
       errors.size() / 4, seen.size(), kMessages, percentile(errors, 0.5), worst,
-      percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), mixer_gone_ms);
+      percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), held_ms, mixer_gone_ms,
+      bridge.max_lag_us() / 1000.0);
   EXPECT_LE(worst, kPulseToleranceUs);
-  EXPECT_GT(seen.size(), static_cast<std::size_t>(kMessages * 8 / 10));
-  EXPECT_LE(percentile(latency_ms, 0.99), kLatencyP99BoundMs);
+  EXPECT_GE(static_cast<double>(seen.size()), kMessages * kSeenShare);
+  EXPECT_LE(percentile(latency_ms, 0.99), kLatencyP99BoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(held_ms, kHeldBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_GT(mixer_gone_ms, 0.0) << "armed again after disarming, or never disarmed";
   EXPECT_LE(mixer_gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
 
   // Armed again, then the output process killed outright.
@@ -335,15 +400,25 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
     if (best < 1e9) worst = std::max(worst, best);
   }
   const double gone_ms = ms_to_disarmed(periods, killed);
+  const double held_ms = longest_stall_ms(
+      periods, killed, [&](const Period& held, std::int64_t from, std::int64_t to) -> std::int64_t {
+        for (const auto& r : pwm) {
+          if (!r.armed || r.at_us <= from || r.at_us >= to) continue;
+          Period other;
+          for (int ch = 0; ch < 4; ++ch) other.width[ch] = r.pwm[static_cast<std::size_t>(ch)];
+          if (!same_widths(held, other)) return r.at_us;
+        }
+        return -1;
+      });
   std::printf(
       "team quad flight: %d armed periods, %d match a motor_pwm_t of the 10 ms before "
-      "within %.1f us (worst %.3f us); disarmed %.1f ms after SIGKILL of motormix run; "
-      "simulation late by %.2f ms at worst\n",
-      armed_periods, matched, kPulseToleranceUs, worst, gone_ms, bridge.max_lag_us() / 1000.0);
+      "within %.1f us (worst %.3f us); held at most %.2f ms; disarmed %.1f ms after SIGKILL of "
+      "motormix run; simulation late by %.2f ms at worst\n",
+      armed_periods, matched, kPulseToleranceUs, worst, held_ms, gone_ms,
+      bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(held_ms, kHeldBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_GT(gone_ms, 0.0) << "armed again after disarming, or never disarmed";
   EXPECT_GT(armed_periods, 1000);  // several seconds armed at 400 Hz
-  // The recorder is one more subscriber on a loaded two-core machine (the
-  // mixer, the output process, the player and the simulated chip): a
-  // message it misses leaves its period unmatched, so a few may be.
   EXPECT_GE(matched, armed_periods * kMatchedShare);
   EXPECT_LE(gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
   EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
