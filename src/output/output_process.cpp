@@ -163,11 +163,23 @@ class OutputNode {
   void on_motor_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     if (bus::receive(policy_, rbuf, channel, wall_us(), pwm_msg_, refusals_) != bus::Refusal::kNone)
       return;
-    const double now = monotonic_s();
-    if (gate_.accept(pwm_msg_.pwm.data(), pwm_msg_.num_motors, pwm_msg_.armed, now))
-      step(now, true);
+    // Taken by the gate now; written once the bus is drained (write_taken):
+    // after a stall, the messages that queued meanwhile are old, and writing
+    // each would put a backlog of frames on the serial line ahead of the
+    // newest (4 ms for six at 250000 baud).
+    if (gate_.accept(pwm_msg_.pwm.data(), pwm_msg_.num_motors, pwm_msg_.armed, monotonic_s()))
+      taken_ = true;
   }
 
+ public:
+  // Writes the newest message taken since the last call, if any.
+  void write_taken(double now) {
+    if (!taken_) return;
+    taken_ = false;
+    step(now, true);
+  }
+
+ private:
   const config::Config& config_;
   signing::Policy policy_;
   lcm::LCM& lcm_;
@@ -180,6 +192,7 @@ class OutputNode {
   double last_write_s_ = -1e9;
   motormix::motor_pwm_t pwm_msg_{};  // decoded into, its arrays reused
   bus::Refusals refusals_;
+  bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;
 };
 
@@ -276,6 +289,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
       }
     }
     const double now = monotonic_s();
+    node.write_taken(now);
     if (fds[1].revents & POLLIN) {
       std::uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);
