@@ -80,10 +80,13 @@ constexpr double kHeldBoundMs = 100.0;
 // that arms again fail the synthetic test's checks (median latency, share
 // of messages carried, no armed period after the first disarmed one).
 constexpr double kMatchedShare = 0.90;
-// Of the synthetic test's 1200 messages at 400 Hz, the share some period
-// carries: a message published within a period of the next can be replaced
-// before any rise carries it (two clocks at the same rate, unsynchronized).
-constexpr double kSeenShare = 0.90;
+// Of the synthetic test's messages at 400 Hz, those skipped alone (the one
+// before and the one after carried): a chain that drops messages does this
+// (one in six dropped: 16 %), while the machine's stalls skip runs of them
+// (after a stall the output writes only the newest message it took), which
+// are not counted. Two clocks at one rate, unsynchronized, skip alone now
+// and then: measured 0.2-3.2 % (the most on a run with stalls).
+constexpr double kLoneSkipsShare = 0.08;
 // A message's publication time against the chip's rise: clocks read in
 // different processes and threads.
 constexpr std::int64_t kReceiveSlackUs = 1000;
@@ -282,7 +285,11 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
       percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), held_ms, mixer_gone_ms,
       bridge.max_lag_us() / 1000.0);
   EXPECT_LE(worst, kPulseToleranceUs);
-  EXPECT_GE(static_cast<double>(seen.size()), kMessages * kSeenShare);
+  int lone_skips = 0;
+  for (int k = 1; k + 1 < kMessages; ++k)
+    lone_skips += !seen.count(k) && seen.count(k - 1) && seen.count(k + 1) ? 1 : 0;
+  std::printf("%d messages skipped alone\n", lone_skips);
+  EXPECT_LE(static_cast<double>(lone_skips), kMessages * kLoneSkipsShare);
   // The median without the chip's worst lag: lag comes in short episodes
   // that do not move it.
   EXPECT_LE(percentile(latency_ms, 0.5), kLatencyP50BoundMs);
