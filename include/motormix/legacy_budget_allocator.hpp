@@ -11,14 +11,9 @@
 // of the two.
 
 #include <motormix/allocation.hpp>
+#include <motormix/allocation_settings.hpp>
 
 namespace motormix {
-
-struct LegacyBudgets {
-  double throttle = 0.60;
-  double roll_pitch = 0.25;
-  double yaw = 0.15;
-};
 
 // What the budgeted strategies aim to produce: the demand scaled by the
 // budgets (their gains), against which what they miss is reported.

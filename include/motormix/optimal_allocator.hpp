@@ -11,13 +11,9 @@
 // than where it started. No heap: all matrices have fixed capacity.
 
 #include <motormix/allocation.hpp>
+#include <motormix/allocation_settings.hpp>
 
 namespace motormix {
-
-struct OptimalSettings {
-  AxisVector weights{1.0, 1.0, 0.2, 0.5};  // roll, pitch, yaw, thrust
-  int max_iterations = 100;
-};
 
 class OptimalAllocator final : public MatrixAllocator {
  public:

@@ -36,17 +36,16 @@
 // the strict lexicographic order.
 
 #include <motormix/allocation.hpp>
+#include <motormix/allocation_settings.hpp>
 
 #include <array>
 
 namespace motormix {
 
-enum class Airmode : std::uint8_t { kOff, kRollPitch, kRollPitchYaw };
-
 class PrioritizedAllocator final : public MatrixAllocator {
  public:
   // The default tie tolerance, and the least gain that counts (see above).
-  static constexpr double kDefaultTieTolerance = 1e-3;
+  static constexpr double kDefaultTieTolerance = motormix::kDefaultTieTolerance;
   static constexpr double kGainThatCounts = 1e-5;
 
   PrioritizedAllocator(const MixingBasis& basis, CommandRange range, Airmode airmode,
@@ -80,7 +79,7 @@ class PrioritizedAllocator final : public MatrixAllocator {
   Airmode airmode_;
   double yaw_headroom_;
   double tie_tolerance_;
-  double gain_that_counts_;  // min(tie_tolerance_, kGainThatCounts)
+  double gain_that_counts_;                   // min(tie_tolerance_, kGainThatCounts)
   std::array<InRangeGains, kNumAxes> gains_;  // per column, for the command range
   InRangeGains yaw_gains_with_headroom_;      // yaw, with yaw_headroom above the top
   MotorVector lift_inverse_;  // 1 / thrust where thrust > 0, else 0 (motors a shift moves)

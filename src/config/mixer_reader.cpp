@@ -3,6 +3,8 @@
 
 #include "section_readers.hpp"
 
+#include <motormix/motor_failure.hpp>
+
 #include <cmath>
 #include <sstream>
 

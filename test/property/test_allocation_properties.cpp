@@ -14,6 +14,7 @@
 #include "test_support.hpp"
 
 #include <motormix/optimal_allocator.hpp>
+#include <motormix/prioritized_allocator.hpp>
 
 #include <gtest/gtest.h>
 

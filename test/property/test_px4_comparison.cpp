@@ -16,6 +16,8 @@
 #include "reference/px4_sequential_desaturation.hpp"
 #include "test_support.hpp"
 
+#include <motormix/prioritized_allocator.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -84,7 +86,8 @@ class Px4Side {
     for (int a = 0; a < 4; ++a) theirs[a] = px4_.allocated()[static_cast<std::size_t>(a)];
     const Errors px4 = errors_of(d, theirs);
     bool same_outputs = true;
-    for (int i = 0; i < px4_.motors(); ++i) same_outputs &= std::abs(u[i] - px4_.actuator(i)) < 1e-9;
+    for (int i = 0; i < px4_.motors(); ++i)
+      same_outputs &= std::abs(u[i] - px4_.actuator(i)) < 1e-9;
     t_.identical_outputs += same_outputs;
     const int tolerant = compare(ours, px4, kTie);
     const int strict = compare(ours, px4, kStrict);
@@ -105,9 +108,9 @@ class Px4Side {
     const auto share = [](long part) {
       return 100.0 * static_cast<double>(part) / static_cast<double>(cases());
     };
-    std::printf("| %s | %s | %s | %ld | %.2f %% | %.2f %% | %.2f %% | %ld | %ld |\n", preset.c_str(),
-                airmode.c_str(), name_, cases(), share(t_.identical_outputs), share(t_.same),
-                share(t_.better), t_.worse_tolerant, t_.worse_strict);
+    std::printf("| %s | %s | %s | %ld | %.2f %% | %.2f %% | %.2f %% | %ld | %ld |\n",
+                preset.c_str(), airmode.c_str(), name_, cases(), share(t_.identical_outputs),
+                share(t_.same), share(t_.better), t_.worse_tolerant, t_.worse_strict);
   }
   const Tally& tally() const { return t_; }
 
@@ -122,10 +125,12 @@ class Px4Comparison : public ::testing::TestWithParam<std::tuple<std::string, st
 
 TEST_P(Px4Comparison, NeverWorseInPriorityOrder) {
   const auto& [preset, airmode] = GetParam();
-  const config::Config c = config::load_config_text(
-      "geometry: {preset: " + preset + ", normalization: px4}\nmixer: {strategy: prioritized, "
-      "prioritized: {airmode: " + airmode + "}}\n",
-      "px4-comparison");
+  const config::Config c =
+      config::load_config_text("geometry: {preset: " + preset +
+                                   ", normalization: px4}\nmixer: {strategy: prioritized, "
+                                   "prioritized: {airmode: " +
+                                   airmode + "}}\n",
+                               "px4-comparison");
   const Mixer mixer = config::build_mixer(c);
   const Allocator& ours = mixer.allocator();
   const EffectivenessMatrix e = effectiveness_of(c.mixing);
@@ -160,8 +165,8 @@ TEST(Px4ComparisonExamples, NoHairOfRollBoughtWithThrustAndYaw) {
   const Mixer mixer = config::build_mixer(c);
   const EffectivenessMatrix e = effectiveness_of(c.mixing);
   reference::SequentialDesaturation<double> px4(c.mixing, reference::Px4Airmode::kRollPitchYaw);
-  for (const AxisVector& d : {AxisVector(0.616, -0.619, -0.302, 0.633),
-                              AxisVector(-0.975, -0.937, -0.370, 0.013)}) {
+  for (const AxisVector& d :
+       {AxisVector(0.616, -0.619, -0.302, 0.633), AxisVector(-0.975, -0.937, -0.370, 0.013)}) {
     MotorVector u;
     mixer.allocator().allocate(d, u);
     px4.allocate({d[0], d[1], d[2], d[3]});

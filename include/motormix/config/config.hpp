@@ -3,19 +3,18 @@
 // which strategy, which output ranges, which channels and rates. Built once
 // at start-up by load_config(); nothing downstream re-validates it.
 
+#include <motormix/allocation_settings.hpp>
 #include <motormix/battery_compensation.hpp>
+#include <motormix/config/config_error.hpp>
 #include <motormix/config/failure_detection.hpp>
 #include <motormix/config/hardware.hpp>
 #include <motormix/config/motor_loss.hpp>
 #include <motormix/config/security.hpp>
 #include <motormix/config/vehicle_physics.hpp>
 #include <motormix/geometry.hpp>
-#include <motormix/legacy_budget_allocator.hpp>
-#include <motormix/mixer.hpp>
 #include <motormix/mixing_matrix.hpp>
-#include <motormix/optimal_allocator.hpp>
+#include <motormix/motor_vector.hpp>
 #include <motormix/output_stage.hpp>
-#include <motormix/prioritized_allocator.hpp>
 #include <motormix/vehicle.hpp>
 
 #include <cstdint>
@@ -26,12 +25,8 @@
 
 namespace motormix::config {
 
-// Thrown at set-up only, never inside a control cycle. The message names the
-// key path, the offending value and what is allowed.
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// ConfigError (config_error.hpp) is thrown at set-up only, never inside a
+// control cycle.
 
 enum class Strategy { kLegacyBudget, kBudget, kShift, kClip, kPrioritized, kOptimal };
 enum class YawSource { kSetpoint, kPid };
@@ -85,7 +80,7 @@ struct Realtime {
 };
 
 struct Config {
-  std::string name;             // for logs and status
+  std::string name;  // for logs and status
   Vehicle geometry;  // the `geometry:` section: preset, rotors, effectiveness, table or wheels
   std::string geometry_source;  // which form described it, for logs
   Normalization normalization = Normalization::kAxisMax;
@@ -95,12 +90,12 @@ struct Config {
       mixing;  // the matrix the mixer applies; rows: motors; columns: roll, pitch, yaw, thrust
 
   Strategy strategy = Strategy::kLegacyBudget;
-  LegacyBudgets legacy_budgets;     // legacy_budget and budget
-  Airmode airmode = Airmode::kOff;  // prioritized
-  double yaw_headroom = 0.15;       // prioritized
-  double tie_tolerance = PrioritizedAllocator::kDefaultTieTolerance;  // prioritized
-  OptimalSettings optimal;          // optimal
-  MotorMask failed_motors = 0;      // mixer.failed_motors: stopped from the start, bit i = motor i
+  LegacyBudgets legacy_budgets;                 // legacy_budget and budget
+  Airmode airmode = Airmode::kOff;              // prioritized
+  double yaw_headroom = 0.15;                   // prioritized
+  double tie_tolerance = kDefaultTieTolerance;  // prioritized
+  OptimalSettings optimal;                      // optimal
+  MotorMask failed_motors = 0;  // mixer.failed_motors: stopped from the start, bit i = motor i
 
   std::optional<BatterySettings> battery;  // set: thrust compensated for the pack voltage
 

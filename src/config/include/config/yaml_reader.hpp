@@ -3,7 +3,7 @@
 // rejects the rest, and every error names the full key path, the value found
 // and what is allowed.
 
-#include <motormix/config/config.hpp>
+#include <motormix/config/config_error.hpp>
 
 #include <yaml-cpp/yaml.h>
 
