@@ -60,7 +60,7 @@ std::string describe(const Refusals& r);
 
 namespace detail {
 
-// The big-endian int32 at `offset`, as LCM encodes an array length.
+// The big-endian int32 at `b`, as LCM encodes an array length.
 inline std::int32_t int32_at(const std::uint8_t* b) {
   const std::uint32_t raw = (std::uint32_t{b[0]} << 24) | (std::uint32_t{b[1]} << 16) |
                             (std::uint32_t{b[2]} << 8) | std::uint32_t{b[3]};
@@ -69,6 +69,7 @@ inline std::int32_t int32_at(const std::uint8_t* b) {
   return n;
 }
 
+// The big-endian int64 at `b`, as LCM encodes a type's fingerprint.
 inline std::int64_t int64_at(const std::uint8_t* b) {
   std::uint64_t raw = 0;
   for (int i = 0; i < 8; ++i) raw = (raw << 8) | b[i];
@@ -101,9 +102,6 @@ struct MeasuredSize {
   }
 };
 
-}  // namespace detail
-
-namespace detail {
 // check_wire, also giving the array length read (0 for a type without).
 template <typename Message>
 Refusal check_wire_length(const void* data, std::size_t size, std::int32_t& length) noexcept {
