@@ -48,6 +48,11 @@ void Refusals::count(Refusal r) {
   }
 }
 
+void Refusals::refuse_taken(Refusal r) {
+  if (taken > 0) --taken;
+  count(r);
+}
+
 Refusals& Refusals::operator+=(const Refusals& o) {
   taken += o.taken;
   signature += o.signature;

@@ -252,8 +252,7 @@ class Listener {
         bus::Refusal::kNone)
       return;
     if (!monitor_shows(status_msg_)) {
-      --refused_.taken;
-      refused_.count(bus::Refusal::kBadLength);
+      refused_.refuse_taken(bus::Refusal::kBadLength);
       return;
     }
     status = status_msg_;

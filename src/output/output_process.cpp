@@ -120,6 +120,14 @@ class OutputNode {
     }
   }
 
+  // Writes the newest message taken since the last call (on_motor_pwm),
+  // once the bus is drained.
+  void write_taken(double now) {
+    if (!taken_) return;
+    taken_ = false;
+    step(now, true);
+  }
+
   void write_disarmed() {
     for (int i = 0; i < gate_.outputs(); ++i)
       values_[static_cast<std::size_t>(i)] = gate_.range(i).disarmed;
@@ -171,15 +179,6 @@ class OutputNode {
       taken_ = true;
   }
 
- public:
-  // Writes the newest message taken since the last call, if any.
-  void write_taken(double now) {
-    if (!taken_) return;
-    taken_ = false;
-    step(now, true);
-  }
-
- private:
   const config::Config& config_;
   signing::Policy policy_;
   lcm::LCM& lcm_;

@@ -122,6 +122,15 @@ TEST(BusReceive, AReusedMessageTakesTheNewLengthEvenZero) {
   EXPECT_TRUE(reused.direction.empty());
 }
 
+TEST(BusReceive, ARefusalAfterTheGuardMovesTheCountFromTaken) {
+  bus::Refusals r;
+  r.count(bus::Refusal::kNone);
+  r.refuse_taken(bus::Refusal::kBadLength);
+  EXPECT_EQ(r.taken, 0u);
+  EXPECT_EQ(r.bad_length, 1u);
+  EXPECT_EQ(r.refused(), 1u);
+}
+
 TEST(BusReceive, TheSignatureIsJudgedFirst) {
   std::array<std::uint8_t, signing::kKeyBytes> bytes{};
   for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7 + 1);

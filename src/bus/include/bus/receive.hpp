@@ -47,6 +47,9 @@ struct Refusals {
   std::uint64_t bad_length = 0;
   std::uint64_t undecodable = 0;
   void count(Refusal r);
+  // A message the guard took and the caller then refuses for what it holds
+  // (a motor count no mixer has): moved from taken to reason r.
+  void refuse_taken(Refusal r);
   // Refused for what the bytes are (everything but the signature).
   std::uint64_t malformed() const {
     return truncated + trailing + wrong_type + bad_length + undecodable;

@@ -36,8 +36,6 @@ class SealedPublisher {
     return lcm_.publish(channel, buffer_.data(), static_cast<unsigned>(size)) == 0;
   }
 
-  signing::Policy& policy() { return policy_; }
-
  private:
   lcm::LCM& lcm_;
   signing::Policy& policy_;
