@@ -127,15 +127,12 @@ void BM_Px4EpsilonBaseline(benchmark::State& state, const char* preset,
                            motormix::reference::Px4Airmode mode) {
   px4_loop<motormix::reference::Px4EpsilonSequentialDesaturation>(state, preset, mode, demands());
 }
-#define MOTORMIX_PX4_CAPTURE(bench, preset)                                   \
-  BENCHMARK_CAPTURE(bench, preset##_off, #preset,                             \
-                    motormix::reference::Px4Airmode::kDisabled);              \
-  BENCHMARK_CAPTURE(bench, preset##_rp, #preset,                              \
-                    motormix::reference::Px4Airmode::kRollPitch);             \
-  BENCHMARK_CAPTURE(bench, preset##_rpy, #preset,                             \
-                    motormix::reference::Px4Airmode::kRollPitchYaw)
-#define MOTORMIX_PX4_PRESET(preset)                 \
-  MOTORMIX_PX4_CAPTURE(BM_Px4Baseline, preset);     \
+#define MOTORMIX_PX4_CAPTURE(bench, preset)                                                    \
+  BENCHMARK_CAPTURE(bench, preset##_off, #preset, motormix::reference::Px4Airmode::kDisabled); \
+  BENCHMARK_CAPTURE(bench, preset##_rp, #preset, motormix::reference::Px4Airmode::kRollPitch); \
+  BENCHMARK_CAPTURE(bench, preset##_rpy, #preset, motormix::reference::Px4Airmode::kRollPitchYaw)
+#define MOTORMIX_PX4_PRESET(preset)             \
+  MOTORMIX_PX4_CAPTURE(BM_Px4Baseline, preset); \
   MOTORMIX_PX4_CAPTURE(BM_Px4EpsilonBaseline, preset)
 // The floor: a bare fixed-size matrix-vector product of the same size
 // (motors x 4 times 4), what a mixer without limits or report would cost.

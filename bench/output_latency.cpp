@@ -16,6 +16,10 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -23,14 +27,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <fcntl.h>
 #include <fstream>
 #include <map>
-#include <poll.h>
 #include <string>
-#include <sys/wait.h>
 #include <thread>
-#include <unistd.h>
 #include <vector>
 
 #include "output/serial_port.hpp"
@@ -56,7 +56,8 @@ struct Relay {
     p.armed = m.armed ? 1 : 0;
     p.count = static_cast<std::uint8_t>(m.num_motors);
     for (int i = 0; i < m.num_motors; ++i)
-      p.pulse_hus[i] = static_cast<std::uint16_t>(std::lround(2.0 * m.pwm[static_cast<std::size_t>(i)]));
+      p.pulse_hus[i] =
+          static_cast<std::uint16_t>(std::lround(2.0 * m.pwm[static_cast<std::size_t>(i)]));
     std::uint8_t buf[MM_LINK_MAX_FRAME];
     [[maybe_unused]] const ssize_t w = ::write(fd, buf, mm_link_encode_pulses(&p, buf));
   }
@@ -145,7 +146,8 @@ void measure_one(const char* name, const std::vector<std::string>& argv_without_
     m.command.assign(4, 0.5f);
     m.direction.assign(4, 0);
     m.armed = true;
-    std::this_thread::sleep_until(start + std::chrono::microseconds(static_cast<long>(1e6 / rate * k)));
+    std::this_thread::sleep_until(start +
+                                  std::chrono::microseconds(static_cast<long>(1e6 / rate * k)));
     sent[static_cast<int>(std::lround(2.0 * w0))] = now_us();
     lcm.publish("MOTOR_PWM", &m);
   }
@@ -155,9 +157,10 @@ void measure_one(const char* name, const std::vector<std::string>& argv_without_
   kill(child, SIGTERM);
   waitpid(child, nullptr, 0);
   ::close(master);
-  std::printf("%s: %zu of %d frames; bus to serial bytes us: median %.1f, p90 %.1f, p99 %.1f, max %.1f\n",
-              name, latency.size(), count, pct(latency, 0.5), pct(latency, 0.9), pct(latency, 0.99),
-              pct(latency, 1.0));
+  std::printf(
+      "%s: %zu of %d frames; bus to serial bytes us: median %.1f, p90 %.1f, p99 %.1f, max %.1f\n",
+      name, latency.size(), count, pct(latency, 0.5), pct(latency, 0.9), pct(latency, 0.99),
+      pct(latency, 1.0));
 }
 
 }  // namespace
@@ -174,8 +177,9 @@ int main(int argc, char** argv) {
   }
   if (argc < 2 || std::strcmp(argv[1], "measure") != 0 || motormix.empty() || count < 1 ||
       count > 100000 || rate <= 0 || rate > 2000) {
-    std::fprintf(stderr, "usage: output_latency measure --motormix BIN [--count N] [--rate HZ]\n"
-                         "       output_latency relay DEVICE\n");
+    std::fprintf(stderr,
+                 "usage: output_latency measure --motormix BIN [--count N] [--rate HZ]\n"
+                 "       output_latency relay DEVICE\n");
     return 2;
   }
   const std::string config = "/tmp/motormix-output-latency.yaml";

@@ -9,6 +9,8 @@
 
 #include "bus/receive.hpp"
 
+#include "passes.hpp"
+
 #include <motormix/motor_pwm_t.hpp>
 
 #include <algorithm>
@@ -18,25 +20,12 @@
 #include <cstring>
 #include <vector>
 
-namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-}  // namespace
+using motormix::bench::median;
 
 int main(int argc, char** argv) {
   int messages = 1000000, passes = 7;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--messages") == 0) messages = std::atoi(argv[i + 1]);
-    if (std::strcmp(argv[i], "--passes") == 0) passes = std::atoi(argv[i + 1]);
-  }
-  if (messages < 1 || messages > 100000000 || passes < 1 || passes > 100) {
-    std::fprintf(stderr, "usage: receive_cost [--messages N] [--passes P]\n");
+  if (!motormix::bench::read_passes(argc, argv, "receive_cost", 100000000, messages, passes))
     return 2;
-  }
   motormix::motor_pwm_t m{};
   m.num_motors = 4;
   m.command = {0.1f, 0.2f, 0.3f, 0.4f};

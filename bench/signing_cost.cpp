@@ -6,6 +6,8 @@
 //
 //   signing_cost [--messages N] [--passes P]
 
+#include "passes.hpp"
+
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/signing.hpp>
 #include <motormix/signing_policy.hpp>
@@ -17,25 +19,12 @@
 #include <cstring>
 #include <vector>
 
-namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-}  // namespace
+using motormix::bench::median;
 
 int main(int argc, char** argv) {
   int messages = 100000, passes = 7;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--messages") == 0) messages = std::atoi(argv[i + 1]);
-    if (std::strcmp(argv[i], "--passes") == 0) passes = std::atoi(argv[i + 1]);
-  }
-  if (messages < 1 || messages > 10000000 || passes < 1 || passes > 100) {
-    std::fprintf(stderr, "usage: signing_cost [--messages N] [--passes P]\n");
+  if (!motormix::bench::read_passes(argc, argv, "signing_cost", 10000000, messages, passes))
     return 2;
-  }
   motormix::motor_pwm_t m{};
   m.num_motors = 4;
   m.command = {0.1f, 0.2f, 0.3f, 0.4f};
