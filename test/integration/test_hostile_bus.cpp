@@ -12,6 +12,7 @@
 #include "integration/hostile_messages.hpp"
 #include "integration/mixer_fixture.hpp"
 #include "integration/process.hpp"
+#include "integration/sysfs_pwm_tree.hpp"
 #include "test_paths.hpp"
 
 #include <motormix/mixer_status_t.hpp>
@@ -162,31 +163,15 @@ class HostileBus : public ::testing::Test {
 
 TEST_F(HostileBus, OutputKeepsItsPinsDisarmedCountsEveryRefusalAndTakesAGoodMessage) {
   const std::string root = dir_ + "/sys";
-  std::filesystem::create_directories(root + "/pwmchip0");
-  std::ofstream(root + "/pwmchip0/export");
-  for (int c = 0; c < 4; ++c) {
-    const std::string d = root + "/pwmchip0/pwm" + std::to_string(c);
-    std::filesystem::create_directories(d);
-    for (const char* f : {"period", "duty_cycle", "enable"}) std::ofstream(d + "/" + f);
-  }
+  make_sysfs_pwm_tree(root, 4);
   const std::string config = dir_ + "/output.yaml";
   std::ofstream(config) << "geometry: {preset: quad_x}\n"
                            "output: {min: 1000, max: 2000, disarmed: 1000}\n"
                            "hardware: {driver: sysfs, sysfs: {root: "
                         << root << "}}\n";
-  const auto duty = [&](int c) {
-    std::ifstream in(root + "/pwmchip0/pwm" + std::to_string(c) + "/duty_cycle");
-    long long v = -1;
-    in >> v;
-    return v;
-  };
+  const auto duty = [&](int c) { return read_duty(root, c); };
   const auto wait_duty = [&](long long ns, std::chrono::milliseconds bound) {
-    const auto end = Clock::now() + bound;
-    while (Clock::now() < end) {
-      if (duty(0) == ns) return true;
-      std::this_thread::sleep_for(1ms);
-    }
-    return false;
+    return test::wait_duty(root, 0, ns, static_cast<double>(bound.count())) >= 0.0;
   };
   const std::string log = dir_ + "/output.log";
   ChildProcess output({motormix_binary(), "output", "--config", config}, log);

@@ -10,6 +10,7 @@
 //   moves a pin: unsigned, forged and replayed ones are refused and counted.
 
 #include "integration/process.hpp"
+#include "integration/sysfs_pwm_tree.hpp"
 #include "output/kiss_telemetry.hpp"
 #include "test_paths.hpp"
 
@@ -49,13 +50,7 @@ class OutputProcess : public ::testing::Test {
   void SetUp() override {
     char tmpl[] = "/tmp/motormix-output-XXXXXX";
     root_ = mkdtemp(tmpl);
-    std::filesystem::create_directories(root_ + "/pwmchip0");
-    std::ofstream(root_ + "/pwmchip0/export");
-    for (int c = 0; c < 4; ++c) {
-      const std::string dir = root_ + "/pwmchip0/pwm" + std::to_string(c);
-      std::filesystem::create_directories(dir);
-      for (const char* f : {"period", "duty_cycle", "enable"}) std::ofstream(dir + "/" + f);
-    }
+    make_sysfs_pwm_tree(root_, 4);
     master_ = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
     ASSERT_GE(master_, 0);
     grantpt(master_);
@@ -74,25 +69,9 @@ class OutputProcess : public ::testing::Test {
     ::close(master_);
     std::filesystem::remove_all(root_);
   }
-  long long duty(int c) {
-    std::ifstream in(root_ + "/pwmchip0/pwm" + std::to_string(c) + "/duty_cycle");
-    long long v = -1;
-    in >> v;
-    return v;
-  }
-  // Waits until channel c's duty is `ns`; how long it took, ms (-1: not
-  // within the bound).
+  long long duty(int c) { return read_duty(root_, c); }
   double wait_duty(int c, long long ns, double bound_ms) {
-    const auto start = std::chrono::steady_clock::now();
-    while (std::chrono::steady_clock::now() - start <
-           std::chrono::duration<double, std::milli>(bound_ms)) {
-      if (duty(c) == ns) {
-        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count();
-      }
-      std::this_thread::sleep_for(500us);
-    }
-    return -1.0;
+    return test::wait_duty(root_, c, ns, bound_ms);
   }
   // The bytes of a motor_pwm_t, signed by `policy` unless it is off.
   static std::vector<std::uint8_t> encoded(std::vector<float> pwm, bool armed,
