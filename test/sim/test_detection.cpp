@@ -35,6 +35,18 @@ config::Config load(const std::string& file, const std::vector<std::string>& ove
   return config::load_config_file(source_path("config/" + file), overrides);
 }
 
+// One flight of `c` through `s` whose motor `motor` fails (`kind`) at
+// `at_s`, reported by nobody: what motormix's detector makes of it.
+SimResult fly_unreported(const config::Config& c, const Scenario& s, int motor, double at_s,
+                         FailureKind kind = FailureKind::kStop, int seed = 1,
+                         const FrameObserver& observer = {}) {
+  SimOptions o;
+  o.seed = static_cast<std::uint64_t>(seed);
+  o.undetected = true;
+  o.failures.push_back({motor, at_s, kind});
+  return run_lockstep(c, config::build_mixer(c), s, o, observer);
+}
+
 struct Source {
   const char* name;
   const char* sources;  // failure_detection.sources
@@ -67,11 +79,7 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
               where << file << " " << strategy << " " << source.name << " " << fc.scenario << " m"
                     << motor + 1 << " seed " << seed;
               SCOPED_TRACE(where.str());
-              SimOptions o;
-              o.seed = static_cast<std::uint64_t>(seed);
-              o.undetected = true;
-              o.failures.push_back({motor, fc.at_s, FailureKind::kStop});
-              const SimResult r = run_lockstep(c, config::build_mixer(c), s, o);
+              const SimResult r = fly_unreported(c, s, motor, fc.at_s, FailureKind::kStop, seed);
               ++flights;
               ASSERT_EQ(r.failures.size(), 1U);
               const FailureOutcome& f = r.failures.front();
@@ -175,10 +183,7 @@ TEST(DetectedFailures, DeadTelemetryOnAWorkingMotorIsNotAFailureWithRates) {
     for (int motor = 0; motor < c.motors(); ++motor) {
       if (!test::in_sim_grid(motor, c.motors())) continue;
       SCOPED_TRACE(std::string(file) + " m" + std::to_string(motor + 1));
-      SimOptions o;
-      o.undetected = true;
-      o.failures.push_back({motor, 10.5, FailureKind::kTelemetry});
-      const SimResult r = run_lockstep(c, config::build_mixer(c), s, o);
+      const SimResult r = fly_unreported(c, s, motor, 10.5, FailureKind::kTelemetry);
       EXPECT_FALSE(r.crashed);
       EXPECT_EQ(r.false_detections, 0);
     }
@@ -205,11 +210,7 @@ TEST(DetectedFailures, TheOutputsSourceNamesTheMotorThatStopped) {
       for (int seed = 1; seed <= test::sim_grid_seeds(2); ++seed) {
         SCOPED_TRACE(std::string(strategy) + " m" + std::to_string(motor + 1) + " seed " +
                      std::to_string(seed));
-        SimOptions o;
-        o.seed = static_cast<std::uint64_t>(seed);
-        o.undetected = true;
-        o.failures.push_back({motor, 6.0, FailureKind::kStop});
-        const SimResult r = run_lockstep(c, config::build_mixer(c), s, o);
+        const SimResult r = fly_unreported(c, s, motor, 6.0, FailureKind::kStop, seed);
         ++flights;
         ASSERT_EQ(r.failures.size(), 1U);
         const FailureOutcome& f = r.failures.front();
@@ -247,14 +248,11 @@ TEST(DetectedFailures, ALooseTelemetryWireNeverStartsALandingOnAnyAircraft) {
       for (int motor = 0; motor < c.motors(); ++motor) {
         if (!test::in_sim_grid(motor, c.motors())) continue;
         SCOPED_TRACE(std::string(file) + " " + sources + " m" + std::to_string(motor + 1));
-        SimOptions o;
-        o.undetected = true;
-        o.failures.push_back({motor, 8.0, FailureKind::kTelemetry});
         bool landing = false;
         const FrameObserver watch = [&landing](const SimFrame& f) {
           landing = landing || f.cycle->landing.state != loop::LandingState::kOff;
         };
-        const SimResult r = run_lockstep(c, config::build_mixer(c), s, o, watch);
+        const SimResult r = fly_unreported(c, s, motor, 8.0, FailureKind::kTelemetry, 1, watch);
         ++flights;
         EXPECT_FALSE(r.crashed) << r.crash_reason;
         EXPECT_FALSE(landing) << "a spin landing started";
