@@ -390,7 +390,9 @@ int matrix(const MatrixCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "matrix");
   if (!config) return kExitUsage;
   try {
-    std::cout << config::export_matrix(*config, config::matrix_format_from(cmd.format));
+    std::cout << config::export_matrix(
+        *config,
+        parse_in(config::kMatrixFormatNames, cmd.format).value_or(config::MatrixFormat::kTable));
     return kExitOk;
   } catch (const config::ConfigError& e) {  // a format the geometry cannot give
     std::cerr << "motormix matrix: " << e.what() << "\n";

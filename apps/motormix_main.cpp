@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
       app.add_subcommand("matrix", "print the mixing matrix of a configuration or a preset");
   add_vehicle(matrix_app, matrix_cmd.common);
   matrix_app->add_option("--format", matrix_cmd.format, "output format")
-      ->check(CLI::IsMember(motormix::config::matrix_format_names()));
+      ->check(CLI::IsMember(motormix::names_in(motormix::config::kMatrixFormatNames)));
 
   ReplayCommand replay_cmd;
   CLI::App* replay_app = app.add_subcommand(

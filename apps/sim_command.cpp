@@ -19,12 +19,6 @@ namespace motormix::app {
 
 namespace {
 
-const char* airmode_name(Airmode a) {
-  return a == Airmode::kRollPitch      ? "roll_pitch"
-         : a == Airmode::kRollPitchYaw ? "roll_pitch_yaw"
-                                       : "off";
-}
-
 // "3@6.5" or "FL@6.5:desync": motor number as `motormix matrix` prints it,
 // or name; the kind of failure after a colon (stop when none).
 bool parse_failure(const std::string& text_in, const config::Config& config,
@@ -78,8 +72,8 @@ int sim(const SimCommand& cmd) {
     sim::MotorFailure failure;
     if (!parse_failure(f, *config, failure)) {
       std::cerr << "motormix sim: --fail " << f << ": expected MOTOR@SECONDS[:KIND] with MOTOR 1.."
-                << config->motors() << " or a motor name and KIND one of " << sim::kFailureKindNames
-                << "\n";
+                << config->motors() << " or a motor name and KIND one of "
+                << joined_names(sim::kFailureKindNames) << "\n";
       return kExitUsage;
     }
     options.failures.push_back(failure);
@@ -160,8 +154,7 @@ int sim(const SimCommand& cmd) {
   j["scenario"] = scenario->name;
   j["vehicle"] = config->name;
   j["strategy"] = config::to_string(config->strategy);
-  if (config->strategy == config::Strategy::kPrioritized)
-    j["airmode"] = airmode_name(config->airmode);
+  if (config->strategy == config::Strategy::kPrioritized) j["airmode"] = to_string(config->airmode);
   j["seed"] = cmd.seed;
   j["failures"] = sim::failures_json(outcomes, *config, cmd.undetected);
   if (!cmd.json) {

@@ -5,6 +5,7 @@
 // these without pulling in the allocator classes.
 
 #include <motormix/axes.hpp>
+#include <motormix/enum_names.hpp>
 
 #include <cstdint>
 
@@ -20,6 +21,12 @@ struct LegacyBudgets {
 
 // prioritized: which axes may use the thrust range to stay delivered.
 enum class Airmode : std::uint8_t { kOff, kRollPitch, kRollPitchYaw };
+inline constexpr EnumName<Airmode> kAirmodeNames[] = {
+    {Airmode::kOff, "off"},
+    {Airmode::kRollPitch, "roll_pitch"},
+    {Airmode::kRollPitchYaw, "roll_pitch_yaw"},
+};
+inline const char* to_string(Airmode value) { return name_in(kAirmodeNames, value); }
 
 // prioritized: results within this much are ties (see prioritized_allocator.hpp).
 inline constexpr double kDefaultTieTolerance = 1e-3;

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <motormix/enum_names.hpp>
 
 namespace motormix {
 
@@ -29,7 +30,14 @@ enum class BatteryState : std::uint8_t {
   kImplausible = 4,  // the latest reading was outside the plausible range or not finite
 };
 
-const char* to_string(BatteryState state);
+inline constexpr EnumName<BatteryState> kBatteryStateNames[] = {
+    {BatteryState::kOff, "off"},
+    {BatteryState::kOk, "ok"},
+    {BatteryState::kMissing, "missing"},
+    {BatteryState::kStale, "stale"},
+    {BatteryState::kImplausible, "implausible"},
+};
+inline const char* to_string(BatteryState value) { return name_in(kBatteryStateNames, value); }
 
 // The gain for one voltage, unfiltered (1 for a voltage that is not finite
 // or not positive).

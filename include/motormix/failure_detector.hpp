@@ -46,6 +46,7 @@
 // judged while the caller says detection is not allowed (disarmed, spooling
 // up, motor test, low throttle), or from a stream that went stale.
 
+#include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <Eigen/Core>
@@ -64,7 +65,16 @@ enum class DetectionSource : std::uint8_t {
   kOutputs = 4,          // the controller drove the motor to full for long
 };
 
-const char* to_string(DetectionSource source);
+inline constexpr EnumName<DetectionSource> kDetectionSourceNames[] = {
+    {DetectionSource::kNone, "none"},
+    {DetectionSource::kTelemetry, "telemetry"},
+    {DetectionSource::kTelemetrySilent, "telemetry_silent"},
+    {DetectionSource::kRates, "rates"},
+    {DetectionSource::kOutputs, "outputs"},
+};
+inline const char* to_string(DetectionSource value) {
+  return name_in(kDetectionSourceNames, value);
+}
 
 // Which sources run (bit per source).
 enum class DetectorSources : std::uint8_t {

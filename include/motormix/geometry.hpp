@@ -5,6 +5,7 @@
 // the nose, positive yaw turns the nose right (clockwise seen from above).
 
 #include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
+#include <motormix/enum_names.hpp>
 
 #include <vector>
 
@@ -14,6 +15,8 @@ enum class Spin : signed char {
   kCw = -1,   // clockwise seen from above: its drag turns the body counter-clockwise (negative yaw)
   kCcw = +1,  // counter-clockwise seen from above: pushes the body toward positive yaw
 };
+inline constexpr EnumName<Spin> kSpinNames[] = {{Spin::kCw, "cw"}, {Spin::kCcw, "ccw"}};
+inline const char* to_string(Spin value) { return name_in(kSpinNames, value); }
 
 struct Rotor {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // FRD, any consistent length unit

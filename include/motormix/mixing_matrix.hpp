@@ -9,6 +9,7 @@
 #include <motormix/axes.hpp>
 #include <motormix/effectiveness.hpp>
 #include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
+#include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <cstdint>
@@ -29,7 +30,12 @@ enum class Normalization : std::uint8_t {
   kNone,  // the raw pseudo-inverse
 };
 
-const char* to_string(Normalization n);
+inline constexpr EnumName<Normalization> kNormalizationNames[] = {
+    {Normalization::kAxisMax, "axis_max"},
+    {Normalization::kPx4, "px4"},
+    {Normalization::kNone, "none"},
+};
+inline const char* to_string(Normalization value) { return name_in(kNormalizationNames, value); }
 
 struct MixingDerivation {
   MixingMatrix mixing;          // normalized; zero columns for axes not controlled

@@ -15,6 +15,7 @@
 #include <motormix/allocation.hpp>
 #include <motormix/axes.hpp>
 #include <motormix/effectiveness.hpp>
+#include <motormix/enum_names.hpp>
 #include <motormix/mixing_matrix.hpp>
 #include <motormix/motor_vector.hpp>
 
@@ -35,7 +36,15 @@ enum class FailureHandling : std::uint8_t {
                      // failed motors stopped, the rest mixed as prepared, loss reported
 };
 
-const char* to_string(FailureHandling handling);
+inline constexpr EnumName<FailureHandling> kFailureHandlingNames[] = {
+    {FailureHandling::kNone, "none"},
+    {FailureHandling::kReallocated, "reallocated"},
+    {FailureHandling::kAxesLost, "axes lost"},
+    {FailureHandling::kUnsupported, "unsupported"},
+};
+inline const char* to_string(FailureHandling value) {
+  return name_in(kFailureHandlingNames, value);
+}
 
 struct FailureMixing {
   MotorMask failed = 0;

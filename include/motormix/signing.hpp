@@ -21,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <motormix/enum_names.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -108,7 +109,15 @@ enum class Verdict {
   kStale,           // a link's first message, too far from this host's clock
   kUnknownChannel,  // more channels than the verifier keeps
 };
-const char* to_string(Verdict v);
+inline constexpr EnumName<Verdict> kVerdictNames[] = {
+    {Verdict::kSigned, "signed"},
+    {Verdict::kUnsigned, "unsigned"},
+    {Verdict::kBadSignature, "bad signature"},
+    {Verdict::kReplayed, "replayed"},
+    {Verdict::kStale, "stale timestamp"},
+    {Verdict::kUnknownChannel, "too many channels"},
+};
+inline const char* to_string(Verdict value) { return name_in(kVerdictNames, value); }
 constexpr int kVerdicts = 6;
 
 class Verifier {

@@ -17,6 +17,7 @@
 //
 // No heap per message (see Verifier); refusals are counted, never thrown.
 
+#include <motormix/enum_names.hpp>
 #include <motormix/signing.hpp>
 
 #include <cstddef>
@@ -28,7 +29,12 @@
 namespace motormix::signing {
 
 enum class Mode { kOff, kSign, kRequire };
-const char* to_string(Mode mode);
+inline constexpr EnumName<Mode> kModeNames[] = {
+    {Mode::kOff, "off"},
+    {Mode::kSign, "sign"},
+    {Mode::kRequire, "require"},
+};
+inline const char* to_string(Mode value) { return name_in(kModeNames, value); }
 
 // Counts of what check() decided, by reason.
 struct PolicyCounts {

@@ -33,6 +33,7 @@
 //   * landing: once the descent has been flown and the vertical speed stays
 //     near zero, the controller says so (the loop then disarms).
 
+#include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <Eigen/Core>
@@ -103,7 +104,12 @@ enum class DescentPhase : std::uint8_t {
   kLanded = 2,      // on the ground: the loop disarms
 };
 
-const char* to_string(DescentPhase phase);
+inline constexpr EnumName<DescentPhase> kDescentPhaseNames[] = {
+    {DescentPhase::kOff, "off"},
+    {DescentPhase::kDescending, "descending"},
+    {DescentPhase::kLanded, "landed"},
+};
+inline const char* to_string(DescentPhase value) { return name_in(kDescentPhaseNames, value); }
 
 struct DescentInput {
   Eigen::Quaterniond attitude = Eigen::Quaterniond::Identity();  // body FRD -> NED

@@ -2,26 +2,6 @@
 
 namespace motormix::bus {
 
-const char* to_string(Refusal r) {
-  switch (r) {
-    case Refusal::kNone:
-      return "taken";
-    case Refusal::kSignature:
-      return "signature";
-    case Refusal::kTruncated:
-      return "truncated";
-    case Refusal::kTrailing:
-      return "trailing bytes";
-    case Refusal::kWrongType:
-      return "wrong type";
-    case Refusal::kBadLength:
-      return "bad length";
-    case Refusal::kUndecodable:
-      return "undecodable";
-  }
-  return "unknown";
-}
-
 void Refusals::count(Refusal r) {
   switch (r) {
     case Refusal::kNone:

@@ -22,19 +22,9 @@ Vehicle rotors_vehicle(const YAML::Node& list, const std::string& path) {
   std::vector<Rotor> rotors;
   for (std::size_t i = 0; i < list.size(); ++i) {
     MapReader r(list[i], path + "[" + std::to_string(i) + "]");
-    Rotor rotor;
-    if (!r.has("position"))
-      fail(r.path_of("position"), "nothing", "[x, y] or [x, y, z] (required)");
-    rotor.position = read_vector(r.raw("position"), r.path_of("position"));
-    rotor.spin = r.choice("spin", "", {"cw", "ccw"}) == "cw" ? Spin::kCw : Spin::kCcw;
+    Rotor rotor = read_rotor_placement(r, {2, kMaxCoefficient, "[x, y] or [x, y, z]"});
     rotor.thrust_coefficient = r.number("thrust_coefficient", 1.0, 1e-6, 1e6);
     rotor.torque_ratio = r.number("torque_ratio", 0.05, 0.0, 10.0);
-    if (r.has("axis")) {
-      rotor.axis = read_vector(r.raw("axis"), r.path_of("axis"));
-      if (rotor.axis.norm() < 1e-9) fail(r.path_of("axis"), "a zero vector", "a thrust direction");
-    } else {
-      r.allow("axis");
-    }
     r.finish();
     rotors.push_back(rotor);
   }
@@ -235,11 +225,8 @@ void read_geometry(MapReader geometry, Config& config, LoadContext& context) {
   }
   for (const auto& f : forms) geometry.raw(f);
 
-  const std::string norm =
-      geometry.choice("normalization", "axis_max", {"axis_max", "px4", "none"});
-  config.normalization = norm == "px4"    ? Normalization::kPx4
-                         : norm == "none" ? Normalization::kNone
-                                          : Normalization::kAxisMax;
+  config.normalization =
+      geometry.choice("normalization", Normalization::kAxisMax, kNormalizationNames);
   if (config.geometry.effectiveness) {
     config.derivation = derive_mixing(*config.geometry.effectiveness, config.geometry.controlled,
                                       config.normalization);

@@ -9,18 +9,6 @@
 
 namespace motormix::config {
 
-const char* to_string(HardwareDriver driver) {
-  switch (driver) {
-    case HardwareDriver::kSerial:
-      return "serial";
-    case HardwareDriver::kSysfs:
-      return "sysfs";
-    case HardwareDriver::kNone:
-      break;
-  }
-  return "none";
-}
-
 namespace {
 
 std::string number_text(double v) {
@@ -88,10 +76,7 @@ int integer(MapReader& m, const std::string& key, double fallback, double lo, do
 
 void read_hardware(MapReader section, Config& config) {
   Hardware hw;
-  const std::string driver = section.choice("driver", "none", {"none", "serial", "sysfs"});
-  hw.driver = driver == "serial"  ? HardwareDriver::kSerial
-              : driver == "sysfs" ? HardwareDriver::kSysfs
-                                  : HardwareDriver::kNone;
+  hw.driver = section.choice("driver", HardwareDriver::kNone, kHardwareDriverNames);
   hw.pulse_rate_hz = section.number("pulse_rate_hz", 400.0, 1e6 / MM_LINK_MAX_PERIOD_US,
                                     1e6 / MM_LINK_MIN_PERIOD_US);
   hw.motor_pwm_timeout_s = section.number("motor_pwm_timeout_ms", 50.0, 5.0, 1000.0) / 1e3;
@@ -143,7 +128,7 @@ void read_hardware(MapReader section, Config& config) {
   section.finish();
 
   if (hw.driver != HardwareDriver::kNone) {
-    check_outputs(config, section.path_of(driver), 1e6 / hw.pulse_rate_hz);
+    check_outputs(config, section.path_of(to_string(hw.driver)), 1e6 / hw.pulse_rate_hz);
     if (hw.driver == HardwareDriver::kSerial && hw.serial.link_timeout_s < 2.0 / hw.pulse_rate_hz) {
       fail(section.path_of("serial") + ".link_timeout_ms",
            number_text(hw.serial.link_timeout_s * 1e3), "at least two pulse periods");

@@ -65,6 +65,23 @@ Eigen::Vector3d read_vector(const YAML::Node& node, const std::string& path) {
   return {v[0], v[1], v.size() == 3 ? v[2] : 0.0};
 }
 
+Rotor read_rotor_placement(MapReader& r, const PositionForm& form) {
+  Rotor rotor;
+  if (!r.has("position"))
+    fail(r.path_of("position"), "nothing", std::string(form.hint) + " (required)");
+  const std::vector<double> p = read_numbers(r.raw("position"), r.path_of("position"),
+                                             form.min_coordinates, 3, -form.extent, form.extent);
+  rotor.position = {p[0], p[1], p.size() == 3 ? p[2] : 0.0};
+  rotor.spin = *parse_in(kSpinNames, r.choice("spin", "", names_in(kSpinNames)));
+  if (r.has("axis")) {
+    rotor.axis = read_vector(r.raw("axis"), r.path_of("axis"));
+    if (rotor.axis.norm() < 1e-9) fail(r.path_of("axis"), "a zero vector", "a thrust direction");
+  } else {
+    r.allow("axis");
+  }
+  return rotor;
+}
+
 }  // namespace reading
 
 namespace {
@@ -114,9 +131,7 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
   read_channels(root.map("channels"), config);
   read_motor_test(root.map("motor_test"), config);
   read_realtime(root.map("realtime"), config);
-  config.publish = root.choice("publish", "timer", {"timer", "on_input"}) == "on_input"
-                       ? PublishMode::kOnInput
-                       : PublishMode::kTimer;
+  config.publish = root.choice("publish", PublishMode::kTimer, kPublishModeNames);
   config.loop_rate_hz = root.number("loop_rate_hz", 400.0, 50.0, 10000.0);
   config.status_rate_hz = root.number("status_rate_hz", 10.0, 0.1, 1000.0);
   if (root.has("battery")) read_battery(root.map("battery"), config);
@@ -135,26 +150,6 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
 }
 
 }  // namespace
-
-const char* to_string(Strategy strategy) {
-  switch (strategy) {
-    case Strategy::kLegacyBudget:
-      return "legacy_budget";
-    case Strategy::kBudget:
-      return "budget";
-    case Strategy::kShift:
-      return "shift";
-    case Strategy::kClip:
-      return "clip";
-    case Strategy::kPrioritized:
-      return "prioritized";
-    case Strategy::kOptimal:
-      return "optimal";
-  }
-  return "?";
-}
-
-const char* to_string(YawSource source) { return source == YawSource::kPid ? "pid" : "setpoint"; }
 
 namespace {
 

@@ -93,8 +93,8 @@ std::string table(const Config& c) {
   for (int i = 0; i < c.motors(); ++i) {
     where_width = std::max(where_width, static_cast<int>(detail(c, i).size()) + 2);
   }
-  s << "\n\n" << std::left << std::setw(7) << "motor" << std::setw(where_width) << "where"
-    << std::right;
+  s << "\n\n"
+    << std::left << std::setw(7) << "motor" << std::setw(where_width) << "where" << std::right;
   for (const char* axis : kAxisNames) s << std::setw(9) << axis;
   s << "\n";
   for (int i = 0; i < c.motors(); ++i) {
@@ -302,20 +302,6 @@ std::string ardupilot(const Config& c) {
 }
 
 }  // namespace
-
-std::vector<std::string> matrix_format_names() {
-  return {"table", "json", "yaml", "paparazzi", "header", "px4", "ardupilot"};
-}
-
-MatrixFormat matrix_format_from(const std::string& name) {
-  if (name == "json") return MatrixFormat::kJson;
-  if (name == "yaml") return MatrixFormat::kYaml;
-  if (name == "paparazzi") return MatrixFormat::kPaparazzi;
-  if (name == "header") return MatrixFormat::kHeader;
-  if (name == "px4") return MatrixFormat::kPx4;
-  if (name == "ardupilot") return MatrixFormat::kArdupilot;
-  return MatrixFormat::kTable;
-}
 
 AxisVector authority_of(const Config& config) {
   return authority_at_half_thrust(config, config.mixing);

@@ -73,18 +73,11 @@ void read_battery(MapReader battery, Config& config) {
 }
 
 void read_mixer(MapReader mixer, Config& config) {
-  const std::vector<std::string> names = {"legacy_budget", "budget",      "shift",
-                                          "clip",          "prioritized", "optimal"};
   // Default: sequential desaturation for aircraft, shifting for wheels.
-  const std::string fallback =
-      config.thrust_range() == ThrustRange::kBipolar ? "shift" : "prioritized";
-  const std::string strategy = mixer.choice("strategy", fallback, names);
-  const std::vector<Strategy> values = {Strategy::kLegacyBudget, Strategy::kBudget,
-                                        Strategy::kShift,        Strategy::kClip,
-                                        Strategy::kPrioritized,  Strategy::kOptimal};
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == strategy) config.strategy = values[i];
-  }
+  const Strategy fallback =
+      config.thrust_range() == ThrustRange::kBipolar ? Strategy::kShift : Strategy::kPrioritized;
+  config.strategy = mixer.choice("strategy", fallback, kStrategyNames);
+  const std::string strategy = to_string(config.strategy);
   const bool budgeted =
       config.strategy == Strategy::kLegacyBudget || config.strategy == Strategy::kBudget;
   if (budgeted && config.thrust_range() == ThrustRange::kBipolar) {
@@ -106,11 +99,7 @@ void read_mixer(MapReader mixer, Config& config) {
   budgets.finish();
 
   MapReader prioritized = mixer.map("prioritized");
-  const std::string airmode =
-      prioritized.choice("airmode", "off", {"off", "roll_pitch", "roll_pitch_yaw"});
-  config.airmode = airmode == "roll_pitch"       ? Airmode::kRollPitch
-                   : airmode == "roll_pitch_yaw" ? Airmode::kRollPitchYaw
-                                                 : Airmode::kOff;
+  config.airmode = prioritized.choice("airmode", Airmode::kOff, kAirmodeNames);
   config.yaw_headroom = prioritized.number("yaw_headroom", 0.15, 0.0, 1.0);
   config.tie_tolerance = prioritized.number("tie_tolerance", config.tie_tolerance, 0.0, 0.1);
   prioritized.finish();

@@ -88,15 +88,11 @@ void read_output(MapReader output, Config& config) {
 }
 
 void read_inputs(MapReader inputs, Config& config) {
-  const std::string yaw = inputs.choice("yaw_source", "setpoint", {"setpoint", "pid"});
-  config.inputs.yaw_source = yaw == "pid" ? YawSource::kPid : YawSource::kSetpoint;
+  config.inputs.yaw_source = inputs.choice("yaw_source", YawSource::kSetpoint, kYawSourceNames);
   config.inputs.setpoint_timeout_s =
       inputs.number("setpoint_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
   config.inputs.pid_timeout_s = inputs.number("pid_timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
-  const std::string failsafe = inputs.choice("failsafe", "disarm", {"disarm", "hold_last", "idle"});
-  config.inputs.failsafe = failsafe == "hold_last" ? FailsafeAction::kHoldLast
-                           : failsafe == "idle"    ? FailsafeAction::kIdle
-                                                   : FailsafeAction::kDisarm;
+  config.inputs.failsafe = inputs.choice("failsafe", FailsafeAction::kDisarm, kFailsafeActionNames);
   config.inputs.hold_last_s = inputs.number("hold_last_ms", 500.0, 1.0, 5000.0) / 1e3;
   config.inputs.max_future_s = inputs.number("max_future_ms", 1000.0, 1.0, 3.6e6) / 1e3;
   config.inputs.arm_max_throttle = inputs.number("arm_max_throttle", 0.1, 0.0, 1.0);

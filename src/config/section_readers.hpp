@@ -43,6 +43,17 @@ std::vector<double> read_numbers(const YAML::Node& node, const std::string& path
 bool read_bool(MapReader& map, const std::string& key, bool fallback);
 Eigen::Vector3d read_vector(const YAML::Node& node, const std::string& path);
 
+// What a rotor entry's position may be: geometry.rotors takes [x, y] or
+// [x, y, z] in any consistent unit, vehicle.rotors [x, y, z] in metres.
+struct PositionForm {
+  std::size_t min_coordinates;
+  double extent;     // largest magnitude of a coordinate
+  const char* hint;  // what the error says a position is
+};
+// position, spin (required) and axis (optional, nonzero) of one rotor entry:
+// the keys geometry.rotors and vehicle.rotors share, read one way.
+Rotor read_rotor_placement(MapReader& r, const PositionForm& form);
+
 // geometry: (geometry_reader.cpp): the five forms (preset, rotors, table,
 // effectiveness, paparazzi), motor order and names.
 void read_geometry(MapReader geometry, Config& config, LoadContext& context);

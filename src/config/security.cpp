@@ -10,10 +10,7 @@ namespace motormix::config {
 
 void read_security(MapReader section, const std::string& base_dir, Config& config) {
   Security& s = config.security;
-  const std::string mode = section.choice("mode", "off", {"off", "sign", "require"});
-  s.mode = mode == "require" ? signing::Mode::kRequire
-           : mode == "sign"  ? signing::Mode::kSign
-                             : signing::Mode::kOff;
+  s.mode = section.choice("mode", signing::Mode::kOff, signing::kModeNames);
   s.key_file = section.text("key_file", "");
   if (!s.key_file.empty() && s.key_file.front() != '/' && !base_dir.empty()) {
     s.key_file = base_dir + "/" + s.key_file;
@@ -26,7 +23,8 @@ void read_security(MapReader section, const std::string& base_dir, Config& confi
   s.max_skew_s = section.number("max_skew_s", 60.0, 1.0, 3600.0);
   if (s.mode != signing::Mode::kOff && s.key_file.empty()) {
     fail(section.path_of("key_file"), "nothing",
-         std::string("a key file (motormix keygen makes one) with security.mode ") + mode);
+         std::string("a key file (motormix keygen makes one) with security.mode ") +
+             to_string(s.mode));
   }
   section.finish();
 }

@@ -5,6 +5,7 @@
 #include "vehicle_physics_reader.hpp"
 
 #include "config/yaml_reader.hpp"
+#include "section_readers.hpp"
 
 #include <cmath>
 #include <optional>
@@ -13,6 +14,11 @@
 namespace motormix::config {
 
 namespace {
+
+using namespace reading;
+
+// A rotor sits within this many metres of the centre of mass.
+constexpr double kMaxPositionM = 10.0;
 
 constexpr double kGravity = 9.80665;
 // Defaults of the 250-500 mm class: 0.3 kg per rotor (frame, motor, ESC,
@@ -33,18 +39,6 @@ constexpr double kCellNominalV = 3.85;
 constexpr double kAmpsPerNewton = 1.55;
 constexpr double kMahPerRotor = 1250.0;
 constexpr double kPackOhmsTimesRotors = 0.08;
-
-std::vector<double> numbers(const YAML::Node& node, const std::string& path, std::size_t len,
-                            double lo, double hi) {
-  if (!node.IsSequence() || node.size() != len) {
-    fail(path, describe(node), "a list of " + std::to_string(len) + " numbers");
-  }
-  std::vector<double> out;
-  for (std::size_t i = 0; i < len; ++i) {
-    out.push_back(to_number(node[i], path + "[" + std::to_string(i) + "]", lo, hi));
-  }
-  return out;
-}
 
 // The team quad's table is an X quad, FL, FR, RL, RR; positive yaw raises FL
 // and RR, so those two spin counter-clockwise.
@@ -78,19 +72,7 @@ std::vector<RotorEntry> explicit_rotors(const YAML::Node& list, const std::strin
   for (std::size_t i = 0; i < list.size(); ++i) {
     MapReader r(list[i], path + "[" + std::to_string(i) + "]");
     RotorEntry entry;
-    Rotor& rotor = entry.rotor;
-    if (!r.has("position"))
-      fail(r.path_of("position"), "nothing", "[x, y, z] in metres (required)");
-    const auto p = numbers(r.raw("position"), r.path_of("position"), 3, -10.0, 10.0);
-    rotor.position = {p[0], p[1], p[2]};
-    rotor.spin = r.choice("spin", "", {"cw", "ccw"}) == "cw" ? Spin::kCw : Spin::kCcw;
-    if (r.has("axis")) {
-      const auto a = numbers(r.raw("axis"), r.path_of("axis"), 3, -1e3, 1e3);
-      rotor.axis = {a[0], a[1], a[2]};
-      if (rotor.axis.norm() < 1e-9) fail(r.path_of("axis"), "a zero vector", "a thrust direction");
-    } else {
-      r.allow("axis");
-    }
+    entry.rotor = read_rotor_placement(r, {3, kMaxPositionM, "[x, y, z] in metres"});
     if (r.has("max_thrust_n")) entry.max_thrust_n = r.number("max_thrust_n", 1.0, 1e-3, 1e5);
     r.allow("max_thrust_n");
     if (r.has("torque_ratio_m")) entry.torque_ratio_m = r.number("torque_ratio_m", 0.0, 0.0, 1.0);
@@ -230,8 +212,8 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
                      "' (position [x, y, z] in metres and spin, one per motor) to simulate it";
     }
     if (vehicle.has("inertia_kgm2")) {
-      const auto i =
-          numbers(vehicle.raw("inertia_kgm2"), vehicle.path_of("inertia_kgm2"), 3, 1e-7, 1e4);
+      const auto i = read_numbers(vehicle.raw("inertia_kgm2"), vehicle.path_of("inertia_kgm2"), 3,
+                                  3, 1e-7, 1e4);
       v.inertia_kgm2 = {i[0], i[1], i[2]};
     } else {
       vehicle.raw("inertia_kgm2");

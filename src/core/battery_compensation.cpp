@@ -9,22 +9,6 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586;
 }  // namespace
 
-const char* to_string(BatteryState state) {
-  switch (state) {
-    case BatteryState::kOff:
-      return "off";
-    case BatteryState::kOk:
-      return "ok";
-    case BatteryState::kMissing:
-      return "missing";
-    case BatteryState::kStale:
-      return "stale";
-    case BatteryState::kImplausible:
-      return "implausible";
-  }
-  return "?";
-}
-
 double battery_gain(const BatterySettings& s, double voltage) {
   if (!std::isfinite(voltage) || voltage <= 0.0) return 1.0;
   const double gain = std::pow(s.nominal_v / voltage, s.exponent);

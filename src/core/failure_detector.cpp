@@ -34,22 +34,6 @@ bool has(MotorMask mask, int i) { return ((mask >> i) & 1U) != 0; }
 
 }  // namespace
 
-const char* to_string(DetectionSource source) {
-  switch (source) {
-    case DetectionSource::kNone:
-      return "none";
-    case DetectionSource::kTelemetry:
-      return "telemetry";
-    case DetectionSource::kTelemetrySilent:
-      return "telemetry_silent";
-    case DetectionSource::kRates:
-      return "rates";
-    case DetectionSource::kOutputs:
-      return "outputs";
-  }
-  return "?";
-}
-
 FailureDetector::FailureDetector(const FailureDetectorSettings& settings) : s_(settings) {
   lagged_.setZero(s_.motors);
   output_filtered_.setZero(s_.motors);

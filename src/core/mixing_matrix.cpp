@@ -54,18 +54,6 @@ AxisVector px4_scale(const Eigen::MatrixXd& raw) {
 
 }  // namespace
 
-const char* to_string(Normalization n) {
-  switch (n) {
-    case Normalization::kAxisMax:
-      return "axis_max";
-    case Normalization::kPx4:
-      return "px4";
-    case Normalization::kNone:
-      return "none";
-  }
-  return "?";
-}
-
 MixingDerivation derive_mixing(const EffectivenessMatrix& effectiveness, AxisMask controlled,
                                Normalization normalization) {
   const Eigen::Index n = effectiveness.cols();

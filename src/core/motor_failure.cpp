@@ -36,20 +36,6 @@ int count_axes(AxisMask mask) {
 
 }  // namespace
 
-const char* to_string(FailureHandling handling) {
-  switch (handling) {
-    case FailureHandling::kNone:
-      return "none";
-    case FailureHandling::kReallocated:
-      return "reallocated";
-    case FailureHandling::kAxesLost:
-      return "axes lost";
-    case FailureHandling::kUnsupported:
-      return "unsupported";
-  }
-  return "?";
-}
-
 int count_motors(MotorMask mask) {
   int n = 0;
   for (; mask != 0; mask &= mask - 1) ++n;

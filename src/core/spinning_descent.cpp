@@ -122,18 +122,6 @@ Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin, c
 
 }  // namespace
 
-const char* to_string(DescentPhase phase) {
-  switch (phase) {
-    case DescentPhase::kOff:
-      return "off";
-    case DescentPhase::kDescending:
-      return "descending";
-    case DescentPhase::kLanded:
-      return "landed";
-  }
-  return "off";
-}
-
 SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed,
                                        double spin_rate) {
   SpinEquilibrium eq;

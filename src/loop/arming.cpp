@@ -4,34 +4,6 @@
 
 namespace motormix::loop {
 
-const char* to_string(LoopState state) {
-  switch (state) {
-    case LoopState::kDisarmed:
-      return "disarmed";
-    case LoopState::kArmed:
-      return "armed";
-    case LoopState::kFailsafe:
-      return "failsafe";
-  }
-  return "?";
-}
-
-const char* to_string(FailsafeReason reason) {
-  switch (reason) {
-    case FailsafeReason::kNone:
-      return "none";
-    case FailsafeReason::kSetpointStale:
-      return "setpoint stale";
-    case FailsafeReason::kPidStale:
-      return "pid stale";
-    case FailsafeReason::kLoopStalled:
-      return "loop stalled";
-    case FailsafeReason::kInvalidInput:
-      return "invalid input";
-  }
-  return "?";
-}
-
 void Arming::enter_failsafe(FailsafeReason reason, std::int64_t now_us) {
   state_ = LoopState::kFailsafe;
   reason_ = reason;

@@ -19,20 +19,6 @@ int single_motor(MotorMask failed) {
 
 }  // namespace
 
-const char* to_string(LandingState state) {
-  switch (state) {
-    case LandingState::kOff:
-      return "off";
-    case LandingState::kDescending:
-      return "descending";
-    case LandingState::kLanded:
-      return "landed";
-    case LandingState::kNoAttitude:
-      return "no attitude";
-  }
-  return "?";
-}
-
 LandingRunner::LandingRunner(const config::Config& config)
     : descent_(config.motor_loss->model, config.motor_loss->settings),
       attitude_timeout_us_(seconds_to_us(config.motor_loss->attitude_timeout_s)),

@@ -20,24 +20,6 @@ Rejection check_order(std::int64_t utime, std::int64_t last_utime) {
 
 }  // namespace
 
-const char* to_string(Rejection rejection) {
-  switch (rejection) {
-    case Rejection::kNone:
-      return "accepted";
-    case Rejection::kNonFinite:
-      return "non-finite field";
-    case Rejection::kOutOfRange:
-      return "field out of range";
-    case Rejection::kOutOfOrder:
-      return "utime went backwards";
-    case Rejection::kFromFuture:
-      return "utime in the future";
-    case Rejection::kWrongSize:
-      return "array size does not match the mixer";
-  }
-  return "?";
-}
-
 Rejection check_setpoint(const SetpointSample& s, ThrustRange thrust_range,
                          std::int64_t last_utime) {
   if (!std::isfinite(s.throttle) || !std::isfinite(s.yaw)) return Rejection::kNonFinite;

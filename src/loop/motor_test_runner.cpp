@@ -4,28 +4,6 @@
 
 namespace motormix::loop {
 
-const char* to_string(MotorTestResult result) {
-  switch (result) {
-    case MotorTestResult::kOk:
-      return "ok";
-    case MotorTestResult::kRefusedDisabled:
-      return "motor tests are disabled (motor_test.enabled: false)";
-    case MotorTestResult::kRefusedNotDisarmed:
-      return "the mixer is armed or in failsafe";
-    case MotorTestResult::kRefusedArmedSetpoint:
-      return "an armed setpoint arrived within the input timeout";
-    case MotorTestResult::kRefusedThrottle:
-      return "throttle outside 0..motor_test.max_throttle";
-    case MotorTestResult::kRefusedDuration:
-      return "duration outside 0..motor_test.max_seconds";
-    case MotorTestResult::kRefusedMotor:
-      return "no such motor";
-    case MotorTestResult::kRefusedInvalid:
-      return "not finite, out of order or from the future";
-  }
-  return "?";
-}
-
 bool MotorTestRunner::out_of_order(std::int64_t utime) const {
   // Not newer than the last valid request, unless far enough back to be a
   // client with a new clock.

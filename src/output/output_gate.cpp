@@ -5,20 +5,6 @@
 
 namespace motormix::output {
 
-const char* to_string(GateState s) {
-  switch (s) {
-    case GateState::kStarting:
-      return "starting";
-    case GateState::kDisarmed:
-      return "disarmed";
-    case GateState::kStale:
-      return "stale";
-    case GateState::kArmed:
-      return "armed";
-  }
-  return "?";
-}
-
 OutputGate::OutputGate(std::vector<PulseRange> ranges, double timeout_s)
     : ranges_(std::move(ranges)), timeout_s_(timeout_s) {
   if (ranges_.size() > static_cast<std::size_t>(kMaxOutputs)) ranges_.resize(kMaxOutputs);

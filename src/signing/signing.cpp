@@ -144,24 +144,6 @@ std::vector<std::uint8_t> Signer::signed_copy(const std::string& channel,
   return out;
 }
 
-const char* to_string(Verdict v) {
-  switch (v) {
-    case Verdict::kSigned:
-      return "signed";
-    case Verdict::kUnsigned:
-      return "unsigned";
-    case Verdict::kBadSignature:
-      return "bad signature";
-    case Verdict::kReplayed:
-      return "replayed";
-    case Verdict::kStale:
-      return "stale timestamp";
-    case Verdict::kUnknownChannel:
-      return "too many channels";
-  }
-  return "?";
-}
-
 bool has_trailer(const std::uint8_t* data, std::size_t size) {
   return size >= kTrailerBytes && std::memcmp(data + size - kTrailerBytes, kMagic, 4) == 0;
 }

@@ -2,18 +2,6 @@
 
 namespace motormix::signing {
 
-const char* to_string(Mode mode) {
-  switch (mode) {
-    case Mode::kOff:
-      return "off";
-    case Mode::kSign:
-      return "sign";
-    case Mode::kRequire:
-      return "require";
-  }
-  return "?";
-}
-
 Policy::Policy(Mode mode, const Key& key, std::uint8_t link_id, double max_skew_s) : mode_(mode) {
   if (mode_ == Mode::kOff) return;
   signer_ = std::make_unique<Signer>(key, link_id);

@@ -5,28 +5,8 @@
 
 namespace motormix::sim {
 
-const char* to_string(FailureKind kind) {
-  switch (kind) {
-    case FailureKind::kStop:
-      return "stop";
-    case FailureKind::kHalfThrust:
-      return "half_thrust";
-    case FailureKind::kIntermittent:
-      return "intermittent";
-    case FailureKind::kDesync:
-      return "desync";
-    case FailureKind::kTelemetry:
-      return "telemetry";
-  }
-  return "?";
-}
-
 std::optional<FailureKind> failure_kind(const std::string& name) {
-  for (FailureKind k : {FailureKind::kStop, FailureKind::kHalfThrust, FailureKind::kIntermittent,
-                        FailureKind::kDesync, FailureKind::kTelemetry}) {
-    if (name == to_string(k)) return k;
-  }
-  return std::nullopt;
+  return parse_in(kFailureKindNames, name);
 }
 
 bool reported_outside(FailureKind kind) {

@@ -47,7 +47,7 @@ ScenarioEvent read_event(MapReader e, double duration) {
     const auto kind = failure_kind(name);
     if (!kind || !ev.fail) {
       config::fail(e.path_of("kind"), "'" + name + "'",
-                   std::string("one of ") + kFailureKindNames + ", beside fail:");
+                   "one of " + joined_names(kFailureKindNames) + ", beside fail:");
     }
     ev.fail_kind = *kind;
   }

@@ -11,6 +11,7 @@
 #include <motormix/config/motor_loss.hpp>
 #include <motormix/config/security.hpp>
 #include <motormix/config/vehicle_physics.hpp>
+#include <motormix/enum_names.hpp>
 #include <motormix/geometry.hpp>
 #include <motormix/mixing_matrix.hpp>
 #include <motormix/motor_vector.hpp>
@@ -139,7 +140,30 @@ struct Config {
   std::string motor_loss_summary() const;
 };
 
-const char* to_string(Strategy strategy);
-const char* to_string(YawSource source);
+inline constexpr EnumName<Strategy> kStrategyNames[] = {
+    {Strategy::kLegacyBudget, "legacy_budget"},
+    {Strategy::kBudget, "budget"},
+    {Strategy::kShift, "shift"},
+    {Strategy::kClip, "clip"},
+    {Strategy::kPrioritized, "prioritized"},
+    {Strategy::kOptimal, "optimal"},
+};
+inline const char* to_string(Strategy value) { return name_in(kStrategyNames, value); }
+inline constexpr EnumName<YawSource> kYawSourceNames[] = {
+    {YawSource::kSetpoint, "setpoint"},
+    {YawSource::kPid, "pid"},
+};
+inline const char* to_string(YawSource value) { return name_in(kYawSourceNames, value); }
+inline constexpr EnumName<FailsafeAction> kFailsafeActionNames[] = {
+    {FailsafeAction::kDisarm, "disarm"},
+    {FailsafeAction::kHoldLast, "hold_last"},
+    {FailsafeAction::kIdle, "idle"},
+};
+inline const char* to_string(FailsafeAction value) { return name_in(kFailsafeActionNames, value); }
+inline constexpr EnumName<PublishMode> kPublishModeNames[] = {
+    {PublishMode::kTimer, "timer"},
+    {PublishMode::kOnInput, "on_input"},
+};
+inline const char* to_string(PublishMode value) { return name_in(kPublishModeNames, value); }
 
 }  // namespace motormix::config

@@ -3,6 +3,7 @@
 // motor_pwm_t (docs/wiring-it-to-motors.md). Validated with the rest of the
 // configuration; the output process refuses to start on any error.
 
+#include <motormix/enum_names.hpp>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,11 @@ struct Hardware {
   std::vector<TelemetryPort> telemetry;
 };
 
-const char* to_string(HardwareDriver driver);
+inline constexpr EnumName<HardwareDriver> kHardwareDriverNames[] = {
+    {HardwareDriver::kNone, "none"},
+    {HardwareDriver::kSerial, "serial"},
+    {HardwareDriver::kSysfs, "sysfs"},
+};
+inline const char* to_string(HardwareDriver value) { return name_in(kHardwareDriverNames, value); }
 
 }  // namespace motormix::config

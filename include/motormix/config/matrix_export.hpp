@@ -5,6 +5,7 @@
 // control-allocation parameters and an ArduPilot scripted frame.
 
 #include <motormix/config/config.hpp>
+#include <motormix/enum_names.hpp>
 
 #include <string>
 #include <vector>
@@ -12,9 +13,12 @@
 namespace motormix::config {
 
 enum class MatrixFormat { kTable, kJson, kYaml, kPaparazzi, kHeader, kPx4, kArdupilot };
-
-std::vector<std::string> matrix_format_names();
-MatrixFormat matrix_format_from(const std::string& name);  // name from matrix_format_names()
+inline constexpr EnumName<MatrixFormat> kMatrixFormatNames[] = {
+    {MatrixFormat::kTable, "table"},         {MatrixFormat::kJson, "json"},
+    {MatrixFormat::kYaml, "yaml"},           {MatrixFormat::kPaparazzi, "paparazzi"},
+    {MatrixFormat::kHeader, "header"},       {MatrixFormat::kPx4, "px4"},
+    {MatrixFormat::kArdupilot, "ardupilot"},
+};
 
 // kPx4 (PX4's CA_* parameters) needs the rotor geometry and kArdupilot (a
 // scripted MotorsMatrix frame) an aircraft: for other vehicles they throw

@@ -13,6 +13,7 @@
 // arrays, sized from a length already checked. Every refusal has a reason,
 // counted by the caller's Refusals.
 
+#include <motormix/enum_names.hpp>
 #include "bus/wire_shape.hpp"
 
 #include <motormix/signing_policy.hpp>
@@ -35,7 +36,16 @@ enum class Refusal : std::uint8_t {
   kBadLength,    // an array length below 0 or above the type's largest
   kUndecodable,  // LCM's decoder failed or threw all the same
 };
-const char* to_string(Refusal r);
+inline constexpr EnumName<Refusal> kRefusalNames[] = {
+    {Refusal::kNone, "taken"},
+    {Refusal::kSignature, "signature"},
+    {Refusal::kTruncated, "truncated"},
+    {Refusal::kTrailing, "trailing bytes"},
+    {Refusal::kWrongType, "wrong type"},
+    {Refusal::kBadLength, "bad length"},
+    {Refusal::kUndecodable, "undecodable"},
+};
+inline const char* to_string(Refusal value) { return name_in(kRefusalNames, value); }
 
 // How many messages were taken and refused, by reason.
 struct Refusals {

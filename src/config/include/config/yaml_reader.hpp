@@ -4,6 +4,7 @@
 // and what is allowed.
 
 #include <motormix/config/config_error.hpp>
+#include <motormix/enum_names.hpp>
 
 #include <yaml-cpp/yaml.h>
 
@@ -56,6 +57,11 @@ class MapReader {
   bool boolean(const std::string& key, bool fallback);
   std::string choice(const std::string& key, const std::string& fallback,
                      const std::vector<std::string>& allowed);
+  // A choice among the names of an enumeration's table (enum_names.hpp).
+  template <typename E, std::size_t N>
+  E choice(const std::string& key, E fallback, const EnumName<E> (&table)[N]) {
+    return *parse_in(table, choice(key, name_in(table, fallback), names_in(table)));
+  }
   MapReader map(const std::string& key);   // an absent key reads as an empty map
   YAML::Node raw(const std::string& key);  // marks the key as read
   // An optional key that is read only when present (by has() and one of the
@@ -70,8 +76,8 @@ class MapReader {
   YAML::Node get(const std::string& key);  // raw() without a record
   std::string text_as(const std::string& key, const std::string& fallback, const char* kind,
                       const std::string& allowed);
-  void record(const std::string& key, const char* kind, std::string fallback,
-              std::string allowed, bool required = false) const;
+  void record(const std::string& key, const char* kind, std::string fallback, std::string allowed,
+              bool required = false) const;
 
   YAML::Node node_;
   std::string path_;

@@ -11,6 +11,7 @@
 // when the attitude goes stale, when another motor fails as well, or when
 // the loop disarms; once it reports the vehicle landed, the loop disarms.
 
+#include <motormix/enum_names.hpp>
 #include "loop/esc_curve.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
@@ -32,7 +33,13 @@ enum class LandingState : std::int8_t {
   kNoAttitude = 3,  // one motor failed, but no fresh attitude: mixing as before
 };
 
-const char* to_string(LandingState state);
+inline constexpr EnumName<LandingState> kLandingStateNames[] = {
+    {LandingState::kOff, "off"},
+    {LandingState::kDescending, "descending"},
+    {LandingState::kLanded, "landed"},
+    {LandingState::kNoAttitude, "no attitude"},
+};
+inline const char* to_string(LandingState value) { return name_in(kLandingStateNames, value); }
 
 struct LandingReport {
   LandingState state = LandingState::kOff;

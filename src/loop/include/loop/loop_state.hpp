@@ -3,6 +3,7 @@
 // status message reports them (mixer_status_t STATE_* and REASON_*).
 
 #include <cstdint>
+#include <motormix/enum_names.hpp>
 
 namespace motormix::loop {
 
@@ -15,7 +16,19 @@ enum class FailsafeReason : std::int8_t {
   kLoopStalled = 4,  // the mixer itself ran no cycle for longer than an input timeout
 };
 
-const char* to_string(LoopState state);
-const char* to_string(FailsafeReason reason);
+inline constexpr EnumName<LoopState> kLoopStateNames[] = {
+    {LoopState::kDisarmed, "disarmed"},
+    {LoopState::kArmed, "armed"},
+    {LoopState::kFailsafe, "failsafe"},
+};
+inline const char* to_string(LoopState value) { return name_in(kLoopStateNames, value); }
+inline constexpr EnumName<FailsafeReason> kFailsafeReasonNames[] = {
+    {FailsafeReason::kNone, "none"},
+    {FailsafeReason::kSetpointStale, "setpoint stale"},
+    {FailsafeReason::kPidStale, "pid stale"},
+    {FailsafeReason::kLoopStalled, "loop stalled"},
+    {FailsafeReason::kInvalidInput, "invalid input"},
+};
+inline const char* to_string(FailsafeReason value) { return name_in(kFailsafeReasonNames, value); }
 
 }  // namespace motormix::loop

@@ -2,6 +2,7 @@
 // Acceptance rules for input messages. A message is either accepted whole or
 // rejected with one reason, which the control loop counts.
 
+#include <motormix/enum_names.hpp>
 #include "loop/input_samples.hpp"
 
 #include <motormix/mixer.hpp>
@@ -20,7 +21,15 @@ enum class Rejection : std::uint8_t {
   kWrongSize,   // an array whose length does not match the mixer (motor_status num_motors)
 };
 
-const char* to_string(Rejection rejection);
+inline constexpr EnumName<Rejection> kRejectionNames[] = {
+    {Rejection::kNone, "accepted"},
+    {Rejection::kNonFinite, "non-finite field"},
+    {Rejection::kOutOfRange, "field out of range"},
+    {Rejection::kOutOfOrder, "utime went backwards"},
+    {Rejection::kFromFuture, "utime in the future"},
+    {Rejection::kWrongSize, "array size does not match the mixer"},
+};
+inline const char* to_string(Rejection value) { return name_in(kRejectionNames, value); }
 
 // A utime this far behind the last accepted one is taken as a restarted
 // publisher (its clock reset), not a reordered message.

@@ -9,6 +9,7 @@
 // it, when the loop leaves the disarmed state, or on request (motor 0).
 // Every refusal has its reason (mixer_status_t MOTOR_TEST_REFUSED_*).
 
+#include <motormix/enum_names.hpp>
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
 #include "loop/message_checks.hpp"
@@ -31,7 +32,19 @@ enum class MotorTestResult : std::int8_t {
   kRefusedMotor = 6,
   kRefusedInvalid = 7,
 };
-const char* to_string(MotorTestResult result);
+inline constexpr EnumName<MotorTestResult> kMotorTestResultNames[] = {
+    {MotorTestResult::kOk, "ok"},
+    {MotorTestResult::kRefusedDisabled, "motor tests are disabled (motor_test.enabled: false)"},
+    {MotorTestResult::kRefusedNotDisarmed, "the mixer is armed or in failsafe"},
+    {MotorTestResult::kRefusedArmedSetpoint, "an armed setpoint arrived within the input timeout"},
+    {MotorTestResult::kRefusedThrottle, "throttle outside 0..motor_test.max_throttle"},
+    {MotorTestResult::kRefusedDuration, "duration outside 0..motor_test.max_seconds"},
+    {MotorTestResult::kRefusedMotor, "no such motor"},
+    {MotorTestResult::kRefusedInvalid, "not finite, out of order or from the future"},
+};
+inline const char* to_string(MotorTestResult value) {
+  return name_in(kMotorTestResultNames, value);
+}
 
 class MotorTestRunner {
  public:

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <motormix/enum_names.hpp>
 #include <vector>
 
 namespace motormix::output {
@@ -29,7 +30,13 @@ enum class GateState {
   kStale,     // the last accepted message is older than the timeout
   kArmed,
 };
-const char* to_string(GateState s);
+inline constexpr EnumName<GateState> kGateStateNames[] = {
+    {GateState::kStarting, "starting"},
+    {GateState::kDisarmed, "disarmed"},
+    {GateState::kStale, "stale"},
+    {GateState::kArmed, "armed"},
+};
+inline const char* to_string(GateState value) { return name_in(kGateStateNames, value); }
 
 struct GateCounters {
   std::uint64_t accepted = 0;

@@ -9,6 +9,7 @@
 //   desync        the motor loses sync and spins down over 200 ms
 //   telemetry     the ESC's telemetry dies; the motor keeps working
 
+#include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <optional>
@@ -18,10 +19,15 @@ namespace motormix::sim {
 
 enum class FailureKind { kStop, kHalfThrust, kIntermittent, kDesync, kTelemetry };
 
-const char* to_string(FailureKind kind);
+inline constexpr EnumName<FailureKind> kFailureKindNames[] = {
+    {FailureKind::kStop, "stop"},
+    {FailureKind::kHalfThrust, "half_thrust"},
+    {FailureKind::kIntermittent, "intermittent"},
+    {FailureKind::kDesync, "desync"},
+    {FailureKind::kTelemetry, "telemetry"},
+};
+inline const char* to_string(FailureKind value) { return name_in(kFailureKindNames, value); }
 std::optional<FailureKind> failure_kind(const std::string& name);
-inline constexpr const char* kFailureKindNames =
-    "stop, half_thrust, intermittent, desync, telemetry";
 
 // Whether something outside motormix (an ESC driver, a health monitor) would
 // report it on motor_status: a motor that stops, yes; a weak prop, a motor
