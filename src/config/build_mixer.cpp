@@ -1,11 +1,7 @@
 #include <motormix/config/build_mixer.hpp>
 
-#include <motormix/budget_allocator.hpp>
-#include <motormix/clip_allocator.hpp>
-#include <motormix/legacy_budget_allocator.hpp>
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/prioritized_allocator.hpp>
-#include <motormix/shift_allocator.hpp>
+#include "strategies.hpp"
+
 #include <motormix/yaw_yielding_allocator.hpp>
 
 #include <motormix/motor_failure.hpp>
@@ -22,27 +18,7 @@ namespace {
 
 // The configured strategy on one basis (the healthy matrix or a failure's).
 std::unique_ptr<const Allocator> make_allocator(const Config& config, const MixingBasis& basis) {
-  const CommandRange range = command_range(config);
-  switch (config.strategy) {
-    case Strategy::kLegacyBudget:
-      return std::make_unique<LegacyBudgetAllocator>(basis.mixing, config.legacy_budgets);
-    case Strategy::kBudget:
-      return std::make_unique<BudgetAllocator>(basis.mixing, config.legacy_budgets);
-    case Strategy::kShift:
-      return std::make_unique<ShiftAllocator>(basis, range);
-    case Strategy::kClip:
-      return std::make_unique<ClipAllocator>(basis, range);
-    case Strategy::kPrioritized:
-      return std::make_unique<PrioritizedAllocator>(basis, range, config.airmode,
-                                                    config.yaw_headroom, config.tie_tolerance);
-    case Strategy::kOptimal:
-      return std::make_unique<OptimalAllocator>(basis, range, config.optimal);
-  }
-  return nullptr;
-}
-
-bool reallocates(Strategy strategy) {
-  return strategy != Strategy::kLegacyBudget && strategy != Strategy::kBudget;
+  return strategy_entry(config.strategy).make(config, basis, command_range(config));
 }
 
 }  // namespace
@@ -56,7 +32,7 @@ AxisVector authority_at_half_thrust(const Config& config, const MixingMatrix& mi
 FailurePlan failure_plan(const Config& config) {
   const bool aircraft = config.thrust_range() == ThrustRange::kUnipolar;
   FailureAllocatorFactory make;
-  if (reallocates(config.strategy)) {
+  if (strategy_entry(config.strategy).reallocates) {
     make = [&config](const FailureMixing& f, const MixingBasis& basis) {
       if (config.strategy == Strategy::kPrioritized && f.yaw_free) {
         return std::unique_ptr<const Allocator>(std::make_unique<YawYieldingAllocator>(

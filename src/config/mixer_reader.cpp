@@ -2,6 +2,7 @@
 // battery:.
 
 #include "section_readers.hpp"
+#include "strategies.hpp"
 
 #include <motormix/motor_failure.hpp>
 
@@ -23,12 +24,10 @@ void read_failed_motors(MapReader& mixer, Config& config) {
                               " (as motormix matrix prints them) or motor names (" +
                               join(config.motor_names()) + ")";
   if (!list.IsSequence()) fail(path, describe(list), allowed);
-  const bool budgeted =
-      config.strategy == Strategy::kLegacyBudget || config.strategy == Strategy::kBudget;
-  if (budgeted && list.size() > 0) {
+  if (!strategy_entry(config.strategy).reallocates && list.size() > 0) {
     fail(path, describe(list) + " with strategy " + to_string(config.strategy),
-         "failed motors only with strategy shift, clip, prioritized or optimal (the budget "
-         "strategies have no reallocation)");
+         "failed motors only with strategy " + reallocating_strategies() +
+             " (the budget strategies have no reallocation)");
   }
   MotorMask mask = 0;
   for (std::size_t k = 0; k < list.size(); ++k) {
@@ -78,11 +77,10 @@ void read_mixer(MapReader mixer, Config& config) {
       config.thrust_range() == ThrustRange::kBipolar ? Strategy::kShift : Strategy::kPrioritized;
   config.strategy = mixer.choice("strategy", fallback, kStrategyNames);
   const std::string strategy = to_string(config.strategy);
-  const bool budgeted =
-      config.strategy == Strategy::kLegacyBudget || config.strategy == Strategy::kBudget;
-  if (budgeted && config.thrust_range() == ThrustRange::kBipolar) {
+  if (!strategy_entry(config.strategy).reallocates &&
+      config.thrust_range() == ThrustRange::kBipolar) {
     fail(mixer.path_of("strategy"), "'" + strategy + "' for a wheeled vehicle",
-         "shift, clip, prioritized or optimal (budgets assume motors that only push)");
+         reallocating_strategies() + " (budgets assume motors that only push)");
   }
 
   MapReader budgets = mixer.map("legacy_budget");

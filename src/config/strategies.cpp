@@ -1,0 +1,79 @@
+#include "strategies.hpp"
+
+#include <motormix/budget_allocator.hpp>
+#include <motormix/clip_allocator.hpp>
+#include <motormix/legacy_budget_allocator.hpp>
+#include <motormix/optimal_allocator.hpp>
+#include <motormix/prioritized_allocator.hpp>
+#include <motormix/shift_allocator.hpp>
+
+#include <cstddef>
+#include <iterator>
+
+namespace motormix::config {
+
+namespace {
+
+using Made = std::unique_ptr<const Allocator>;
+
+// In kStrategyNames' order (checked below), so an entry is found by index.
+constexpr StrategyEntry kStrategies[] = {
+    {Strategy::kLegacyBudget, false,
+     [](const Config& c, const MixingBasis& b, const CommandRange&) -> Made {
+       return std::make_unique<LegacyBudgetAllocator>(b.mixing, c.legacy_budgets);
+     }},
+    {Strategy::kBudget, false,
+     [](const Config& c, const MixingBasis& b, const CommandRange&) -> Made {
+       return std::make_unique<BudgetAllocator>(b.mixing, c.legacy_budgets);
+     }},
+    {Strategy::kShift, true,
+     [](const Config&, const MixingBasis& b, const CommandRange& r) -> Made {
+       return std::make_unique<ShiftAllocator>(b, r);
+     }},
+    {Strategy::kClip, true,
+     [](const Config&, const MixingBasis& b, const CommandRange& r) -> Made {
+       return std::make_unique<ClipAllocator>(b, r);
+     }},
+    {Strategy::kPrioritized, true,
+     [](const Config& c, const MixingBasis& b, const CommandRange& r) -> Made {
+       return std::make_unique<PrioritizedAllocator>(b, r, c.airmode, c.yaw_headroom,
+                                                     c.tie_tolerance);
+     }},
+    {Strategy::kOptimal, true,
+     [](const Config& c, const MixingBasis& b, const CommandRange& r) -> Made {
+       return std::make_unique<OptimalAllocator>(b, r, c.optimal);
+     }},
+};
+
+constexpr bool same_order() {
+  if (std::size(kStrategies) != std::size(kStrategyNames)) return false;
+  for (std::size_t i = 0; i < std::size(kStrategies); ++i) {
+    if (kStrategies[i].strategy != kStrategyNames[i].value) return false;
+  }
+  return true;
+}
+static_assert(same_order(), "one strategy entry per name, in kStrategyNames' order");
+
+}  // namespace
+
+const StrategyEntry& strategy_entry(Strategy strategy) {
+  for (const StrategyEntry& e : kStrategies) {
+    if (e.strategy == strategy) return e;
+  }
+  return kStrategies[0];  // unreachable: every enumerator has an entry (static_assert above)
+}
+
+std::string reallocating_strategies() {
+  std::string text;
+  std::size_t left = 0;
+  for (const StrategyEntry& e : kStrategies) left += e.reallocates ? 1 : 0;
+  for (const StrategyEntry& e : kStrategies) {
+    if (!e.reallocates) continue;
+    --left;
+    if (!text.empty()) text += left == 0 ? " or " : ", ";
+    text += to_string(e.strategy);
+  }
+  return text;
+}
+
+}  // namespace motormix::config
