@@ -98,16 +98,26 @@ struct SpinEquilibrium {
 SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& model, int failed,
                                        double spin_rate_rad_s);
 
+// The equilibrium with each of the four motors stopped, solved once at
+// start-up (the configuration keeps them; the descent and the simulator's
+// report read them).
+using SpinEquilibria = std::array<SpinEquilibrium, 4>;
+SpinEquilibria solve_spin_equilibria(const SpinningDescentModel& model, double spin_rate_rad_s);
+
+// Where a spin landing is; also what the status reports (mixer_status_t
+// LANDING_*, the same numbers).
 enum class DescentPhase : std::uint8_t {
-  kOff = 0,         // not running
-  kDescending = 1,  // spinning, coming down
-  kLanded = 2,      // on the ground: the loop disarms
+  kOff = 0,         // not running (or not configured)
+  kDescending = 1,  // spinning, coming down on three motors
+  kLanded = 2,      // on the ground: the loop disarms (and reports it until the next arming)
+  kNoAttitude = 3,  // one motor failed, but no fresh attitude: the caller mixes as before
 };
 
 inline constexpr EnumName<DescentPhase> kDescentPhaseNames[] = {
     {DescentPhase::kOff, "off"},
     {DescentPhase::kDescending, "descending"},
     {DescentPhase::kLanded, "landed"},
+    {DescentPhase::kNoAttitude, "no attitude"},
 };
 inline const char* to_string(DescentPhase value) { return name_in(kDescentPhaseNames, value); }
 
@@ -124,15 +134,18 @@ struct DescentCommand {
   // Thrust fraction (0..1) per motor; the dead one 0.
   MotorVector thrust_fraction;
   Eigen::Vector3d thrust_n = Eigen::Vector3d::Zero();  // of the working motors
-  double spin_rate_rad_s = 0.0;                        // |rates| measured
-  double axis_error_deg = 0.0;  // between the spin axis and where it should point
-  bool saturated = false;       // a torque demand did not fit
+  double measured_rate_rad_s = 0.0;  // |rates| measured (the configured one: settings)
+  double axis_error_deg = 0.0;       // between the spin axis and where it should point
+  bool saturated = false;            // a torque demand did not fit
 };
 
 class SpinningDescent {
  public:
   // The equilibria must have been found for every motor (see
-  // solve_spin_equilibrium; the config layer checks it at start-up).
+  // solve_spin_equilibria; the config layer checks it at start-up).
+  SpinningDescent(const SpinningDescentModel& model, const SpinningDescentSettings& settings,
+                  const SpinEquilibria& equilibria);
+  // Solves them here.
   SpinningDescent(const SpinningDescentModel& model, const SpinningDescentSettings& settings);
 
   const SpinEquilibrium& equilibrium(int failed) const {
@@ -158,7 +171,7 @@ class SpinningDescent {
 
   SpinningDescentModel m_;
   SpinningDescentSettings s_;
-  std::array<SpinEquilibrium, 4> equilibria_{};
+  SpinEquilibria equilibria_{};
   // Per failed motor: [thrust; tau_x; tau_y] of the working motors per newton, and its inverse.
   std::array<Eigen::Matrix3d, 4> allocation_{};
   std::array<Eigen::Matrix3d, 4> allocation_inverse_{};

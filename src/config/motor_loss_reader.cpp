@@ -84,9 +84,9 @@ void read_motor_loss(MapReader section, Config& config) {
   std::string why = unsupported(config);
   if (why.empty()) {
     ml.model = model_of(config);
-    for (int failed = 0; failed < 4 && why.empty(); ++failed) {
-      const SpinEquilibrium eq = solve_spin_equilibrium(ml.model, failed, s.spin_rate_rad_s);
-      if (!eq.found) why = eq.why;
+    ml.equilibria = solve_spin_equilibria(ml.model, s.spin_rate_rad_s);
+    for (const SpinEquilibrium& eq : ml.equilibria) {
+      if (!eq.found && why.empty()) why = eq.why;
     }
   }
   if (!why.empty()) {

@@ -243,12 +243,25 @@ Eigen::Vector3d SpinningDescent::allocate(const SpinEquilibrium& eq,
   return best;
 }
 
+SpinEquilibria solve_spin_equilibria(const SpinningDescentModel& model, double spin_rate_rad_s) {
+  SpinEquilibria equilibria;
+  for (int failed = 0; failed < 4; ++failed) {
+    equilibria[static_cast<std::size_t>(failed)] =
+        solve_spin_equilibrium(model, failed, spin_rate_rad_s);
+  }
+  return equilibria;
+}
+
 SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
                                  const SpinningDescentSettings& settings)
-    : m_(model), s_(settings) {
+    : SpinningDescent(model, settings, solve_spin_equilibria(model, settings.spin_rate_rad_s)) {}
+
+SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
+                                 const SpinningDescentSettings& settings,
+                                 const SpinEquilibria& equilibria)
+    : m_(model), s_(settings), equilibria_(equilibria) {
   for (int failed = 0; failed < 4; ++failed) {
     const auto k = static_cast<std::size_t>(failed);
-    equilibria_[k] = solve_spin_equilibrium(m_, failed, s_.spin_rate_rad_s);
     Eigen::Matrix3d a;
     for (Eigen::Index j = 0; j < 3; ++j) {
       const auto motor =
@@ -333,7 +346,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   const SpinEquilibrium& eq = equilibria_[fk];
   const Eigen::Matrix3d rot = in.attitude.normalized().toRotationMatrix();  // body -> NED
   const Eigen::Vector3d w = in.rates.cwiseMax(-kMaxRateRadS).cwiseMin(kMaxRateRadS);
-  cmd_.spin_rate_rad_s = w.norm();
+  cmd_.measured_rate_rad_s = w.norm();
 
   // Where the spin axis should point: up, tilted against the horizontal
   // velocity (at most max_tilt).

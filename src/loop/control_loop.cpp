@@ -201,7 +201,7 @@ void ControlLoop::land(std::int64_t now_us, double ramp) {
     in.attitude = &attitude_;
     in.throttle = setpoint_.sample().throttle;
     if (landing_->cycle(in, now_us, mixer_.output_stage(), result_.mix) &&
-        landing_->report().state == LandingState::kLanded) {
+        landing_->report().state == DescentPhase::kLanded) {
       arming_.disarm();
       mixer_.disarm(result_.mix);
     }

@@ -20,18 +20,19 @@ int single_motor(MotorMask failed) {
 }  // namespace
 
 LandingRunner::LandingRunner(const config::Config& config)
-    : descent_(config.motor_loss->model, config.motor_loss->settings),
+    : descent_(config.motor_loss->model, config.motor_loss->settings,
+               config.motor_loss->equilibria),
       attitude_timeout_us_(seconds_to_us(config.motor_loss->attitude_timeout_s)),
       curve_{config.vehicle_model.esc_min, config.vehicle_model.esc_max,
              config.vehicle_model.thrust_expo} {}
 
 void LandingRunner::disarmed() {
   descent_.stop();
-  if (report_.state != LandingState::kLanded) report_ = LandingReport{};
+  if (report_.state != DescentPhase::kLanded) report_ = LandingReport{};
 }
 
 void LandingRunner::armed() {
-  if (report_.state == LandingState::kLanded) report_ = LandingReport{};
+  if (report_.state == DescentPhase::kLanded) report_ = LandingReport{};
 }
 
 bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputStage& stage,
@@ -45,7 +46,7 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
     descent_.stop();
     report_ = LandingReport{};
     if (motor >= 0 && !fresh) {  // what keeps it from landing: say so
-      report_.state = LandingState::kNoAttitude;
+      report_.state = DescentPhase::kNoAttitude;
       report_.motor = motor;
     }
     return false;
@@ -58,7 +59,7 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
   } else {
     // Rates only: no direction to point the spin axis at. Not enough.
     descent_.stop();
-    report_ = LandingReport{LandingState::kNoAttitude, motor, 0.0, 0.0};
+    report_ = LandingReport{DescentPhase::kNoAttitude, motor, 0.0, 0.0};
     return false;
   }
   d.rates = {a.rates[0], a.rates[1], a.rates[2]};
@@ -66,10 +67,10 @@ bool LandingRunner::cycle(const Inputs& in, std::int64_t now_us, const OutputSta
   d.throttle = in.throttle;
   const DescentCommand& c = descent_.update(d, now_us);
   report_.motor = motor;
-  report_.spin_rate_rad_s = c.spin_rate_rad_s;
+  report_.measured_rate_rad_s = c.measured_rate_rad_s;
   report_.axis_error_deg = c.axis_error_deg;
   report_.state =
-      c.phase == DescentPhase::kLanded ? LandingState::kLanded : LandingState::kDescending;
+      c.phase == DescentPhase::kLanded ? DescentPhase::kLanded : DescentPhase::kDescending;
   for (int i = 0; i < stage.outputs(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const OutputChannel& ch = stage.channel(i);

@@ -111,7 +111,7 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.attitude_age_ms = static_cast<float>(r.attitude_age_ms);
   s.landing_state = static_cast<int8_t>(r.landing.state);
   s.landing_motor = static_cast<int8_t>(r.landing.motor + 1);
-  s.spin_rate = static_cast<float>(r.landing.spin_rate_rad_s);
+  s.spin_rate = static_cast<float>(r.landing.measured_rate_rad_s);
   s.spin_axis_error_deg = static_cast<float>(r.landing.axis_error_deg);
 }
 

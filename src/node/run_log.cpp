@@ -19,20 +19,20 @@ void log_landing(std::ostream& log, const config::Config& config, const loop::Cy
     return m >= 0 ? config.motor_names()[static_cast<std::size_t>(m)] : std::string("?");
   };
   switch (r.landing.state) {
-    case loop::LandingState::kDescending:
+    case DescentPhase::kDescending:
       log << "motormix: motor " << name(r.landing.motor)
           << " failed: yaw given up, landing spinning on the other three" << std::endl;
       break;
-    case loop::LandingState::kLanded:
+    case DescentPhase::kLanded:
       log << "motormix: spin landing touched down: disarmed (arm again only after a "
              "disarmed setpoint)"
           << std::endl;
       break;
-    case loop::LandingState::kNoAttitude:
+    case DescentPhase::kNoAttitude:
       log << "motormix: motor " << name(r.landing.motor) << " failed and no fresh attitude on "
           << config.channels.attitude << ": no spin landing, mixing as before" << std::endl;
       break;
-    case loop::LandingState::kOff:
+    case DescentPhase::kOff:
       log << "motormix: spin landing ended" << std::endl;
       break;
   }

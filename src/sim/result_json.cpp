@@ -81,8 +81,7 @@ void add_spin(nlohmann::json& j, const SimResult& r, const config::Config& confi
               const std::vector<FailureOutcome>& outcomes) {
   if (!config.motor_loss || outcomes.empty() || r.settled_thrust_n.empty()) return;
   const int failed = outcomes.front().failure.motor;
-  const SpinEquilibrium eq = solve_spin_equilibrium(config.motor_loss->model, failed,
-                                                    config.motor_loss->settings.spin_rate_rad_s);
+  const SpinEquilibrium& eq = config.motor_loss->equilibria[static_cast<std::size_t>(failed)];
   nlohmann::json thrust = nlohmann::json::array();
   for (int i = 0, w = 0; i < config.motors(); ++i) {
     thrust.push_back(i == failed ? 0.0 : eq.thrust_n[w++]);

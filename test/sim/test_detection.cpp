@@ -250,7 +250,7 @@ TEST(DetectedFailures, ALooseTelemetryWireNeverStartsALandingOnAnyAircraft) {
         SCOPED_TRACE(std::string(file) + " " + sources + " m" + std::to_string(motor + 1));
         bool landing = false;
         const FrameObserver watch = [&landing](const SimFrame& f) {
-          landing = landing || f.cycle->landing.state != loop::LandingState::kOff;
+          landing = landing || f.cycle->landing.state != DescentPhase::kOff;
         };
         const SimResult r = fly_unreported(c, s, motor, 8.0, FailureKind::kTelemetry, 1, watch);
         ++flights;

@@ -295,9 +295,9 @@ class LandingLoopTest : public ::testing::Test {
 TEST_F(LandingLoopTest, OneFailedMotorWithAttitudeHandsTheOutputsToTheLanding) {
   ASSERT_TRUE(loop_.reads_attitude());
   cycle(false, true, 0);
-  EXPECT_EQ(cycle(true, true, 0).landing.state, loop::LandingState::kOff);
+  EXPECT_EQ(cycle(true, true, 0).landing.state, DescentPhase::kOff);
   const loop::CycleResult& r = cycle(true, true, 0b0001);
-  EXPECT_EQ(r.landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(r.landing.state, DescentPhase::kDescending);
   EXPECT_EQ(r.landing.motor, 0);
   EXPECT_TRUE(r.landing_changed);
   EXPECT_EQ(r.mix.output[0], config_.outputs[0].disarmed);
@@ -311,7 +311,7 @@ TEST_F(LandingLoopTest, WithoutAFreshAttitudeItMixesAsBefore) {
   cycle(false, false, 0);
   cycle(true, false, 0);
   const loop::CycleResult& r = cycle(true, false, 0b0010);
-  EXPECT_EQ(r.landing.state, loop::LandingState::kNoAttitude);
+  EXPECT_EQ(r.landing.state, DescentPhase::kNoAttitude);
   // The same outputs as the same vehicle without motor_loss.
   config::Config off = spin_quad("quad_x", {"output.spool_up_s=0", "motor_loss.mode=off"});
   Mixer mixer = config::build_mixer(off);
@@ -323,12 +323,12 @@ TEST_F(LandingLoopTest, WithoutAFreshAttitudeItMixesAsBefore) {
 TEST_F(LandingLoopTest, AStaleAttitudeLetsGoAndTwoFailedMotorsAreNotItsCase) {
   cycle(false, true, 0);
   cycle(true, true, 0);
-  EXPECT_EQ(cycle(true, true, 0b0100).landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(cycle(true, true, 0b0100).landing.state, DescentPhase::kDescending);
   const loop::CycleResult* r = nullptr;
   for (int k = 0; k < 40; ++k) r = &cycle(true, false, 0b0100);  // 100 ms without attitude
-  EXPECT_EQ(r->landing.state, loop::LandingState::kNoAttitude);
-  EXPECT_EQ(cycle(true, true, 0b0100).landing.state, loop::LandingState::kDescending);
-  EXPECT_EQ(cycle(true, true, 0b0101).landing.state, loop::LandingState::kOff);
+  EXPECT_EQ(r->landing.state, DescentPhase::kNoAttitude);
+  EXPECT_EQ(cycle(true, true, 0b0100).landing.state, DescentPhase::kDescending);
+  EXPECT_EQ(cycle(true, true, 0b0101).landing.state, DescentPhase::kOff);
 }
 
 TEST_F(LandingLoopTest, AFailsafeKeepsALandingGoingButNeverStartsOne) {
@@ -349,15 +349,15 @@ TEST_F(LandingLoopTest, AFailsafeKeepsALandingGoingButNeverStartsOne) {
   for (int k = 0; k < 60; ++k) r = &quiet(0);
   ASSERT_EQ(r->state, loop::LoopState::kFailsafe);
   r = &quiet(0b0001);  // a motor reported failed now: no landing, motors stay stopped
-  EXPECT_NE(r->landing.state, loop::LandingState::kDescending);
+  EXPECT_NE(r->landing.state, DescentPhase::kDescending);
   EXPECT_EQ(r->mix.output[1], config_.outputs[1].disarmed);
   // Started while armed, a landing goes on through the failsafe.
   cycle(false, true, 0);
   cycle(true, true, 0);
-  EXPECT_EQ(cycle(true, true, 0b0001).landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(cycle(true, true, 0b0001).landing.state, DescentPhase::kDescending);
   for (int k = 0; k < 60; ++k) r = &quiet(0b0001);
   EXPECT_EQ(r->state, loop::LoopState::kFailsafe);
-  EXPECT_EQ(r->landing.state, loop::LandingState::kDescending);
+  EXPECT_EQ(r->landing.state, DescentPhase::kDescending);
   EXPECT_GT(r->mix.output[1], config_.outputs[1].disarmed);
 }
 
@@ -368,9 +368,9 @@ TEST_F(LandingLoopTest, LandedDisarmsAndArmingAgainNeedsADisarmedSetpoint) {
   // Velocity zero throughout: on the ground, so it lands within seconds.
   for (int k = 0; k < 2000; ++k) {
     r = &cycle(true, true, 0b1000);
-    if (r->landing.state == loop::LandingState::kLanded) break;
+    if (r->landing.state == DescentPhase::kLanded) break;
   }
-  ASSERT_EQ(r->landing.state, loop::LandingState::kLanded);
+  ASSERT_EQ(r->landing.state, DescentPhase::kLanded);
   EXPECT_EQ(r->state, loop::LoopState::kDisarmed);
   EXPECT_EQ(r->mix.output[1], config_.outputs[1].disarmed);
   // The setpoint still says armed: it stays disarmed.

@@ -18,6 +18,8 @@ struct MotorLoss {
   // The vehicle (from the `vehicle:` section) and the controller's settings.
   SpinningDescentModel model;
   SpinningDescentSettings settings;
+  // With each motor stopped, at settings.spin_rate_rad_s: solved once, here.
+  SpinEquilibria equilibria{};
   // An attitude older than this cannot fly the vehicle: the loop does what
   // it would without the mode.
   double attitude_timeout_s = 0.05;

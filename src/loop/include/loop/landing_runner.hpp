@@ -11,7 +11,6 @@
 // when the attitude goes stale, when another motor fails as well, or when
 // the loop disarms; once it reports the vehicle landed, the loop disarms.
 
-#include <motormix/enum_names.hpp>
 #include "loop/esc_curve.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/latest_input.hpp"
@@ -25,26 +24,11 @@
 
 namespace motormix::loop {
 
-// What the status reports of the spin landing (mixer_status_t LANDING_*).
-enum class LandingState : std::int8_t {
-  kOff = 0,         // nothing to do (or not configured)
-  kDescending = 1,  // spinning, coming down on three motors
-  kLanded = 2,      // touched down and disarmed (until the next arming)
-  kNoAttitude = 3,  // one motor failed, but no fresh attitude: mixing as before
-};
-
-inline constexpr EnumName<LandingState> kLandingStateNames[] = {
-    {LandingState::kOff, "off"},
-    {LandingState::kDescending, "descending"},
-    {LandingState::kLanded, "landed"},
-    {LandingState::kNoAttitude, "no attitude"},
-};
-inline const char* to_string(LandingState value) { return name_in(kLandingStateNames, value); }
-
 struct LandingReport {
-  LandingState state = LandingState::kOff;
+  DescentPhase state = DescentPhase::kOff;
   int motor = -1;  // the failed motor it lands without (0-based), -1 when off
-  double spin_rate_rad_s = 0.0;
+  double measured_rate_rad_s =
+      0.0;                      // |rates| measured (the configured one: motor_loss.spin_rate_rad_s)
   double axis_error_deg = 0.0;  // spin axis from where it should point
 };
 
@@ -61,7 +45,7 @@ class LandingRunner {
     double throttle = 0.0;  // the setpoint's
   };
   // One cycle. Returns true when it drives the outputs: `out` then holds
-  // them. report().state == kLanded asks the loop to disarm.
+  // them. report().state == DescentPhase::kLanded asks the loop to disarm.
   bool cycle(const Inputs& in, std::int64_t now_us, const OutputStage& stage, MixerOutput& out);
   // The loop disarmed: a landing in progress ends; "landed" is kept for the
   // status until the next arming.
