@@ -4,11 +4,11 @@
 #include <motormix/config/load_config.hpp>
 #include <motormix/config/matrix_export.hpp>
 #include <motormix/config/security.hpp>
+#include "bringup/monitor.hpp"
+#include "log/log_replay.hpp"
+#include "log/log_signing.hpp"
 #include "node/describe.hpp"
 #include "node/lcm_node.hpp"
-#include "node/log_replay.hpp"
-#include "node/log_signing.hpp"
-#include "node/monitor.hpp"
 #include "output/output_process.hpp"
 
 #include <motormix/signing.hpp>
@@ -279,7 +279,7 @@ int mix(const MixCommand& cmd) {
 int replay(const ReplayCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "replay");
   if (!config) return kExitUsage;
-  node::ReplayOptions options;
+  lcmlog::ReplayOptions options;
   options.progress = isatty(STDERR_FILENO) != 0;
   options.cycle_on_every_input = cmd.every_input;
   options.max_gap_s = cmd.max_gap_s;
@@ -299,8 +299,8 @@ int replay(const ReplayCommand& cmd) {
       return kExitUsage;
     }
   }
-  node::ReplaySummary s;
-  if (!node::replay_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
+  lcmlog::ReplaySummary s;
+  if (!lcmlog::replay_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
     return kExitRuntime;
   }
   std::cout << std::fixed << std::setprecision(2) << "replayed " << cmd.in_log << " -> "
@@ -328,7 +328,7 @@ int replay(const ReplayCommand& cmd) {
     // received it; how old the log is, it cannot say.
     std::cout << "signatures      checked with " << config->security.key_file
               << " (log receive time as the clock)\n";
-    for (const node::ChannelVerification& v : s.verification) {
+    for (const lcmlog::ChannelVerification& v : s.verification) {
       const auto& c = v.counts;
       std::cout << "  " << v.channel << ": " << c.signed_accepted << " verified";
       if (c.rejected() > 0) {
@@ -348,10 +348,10 @@ int replay(const ReplayCommand& cmd) {
 int sign_log(const SignLogCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "sign-log");
   if (!config) return kExitUsage;
-  node::SignLogOptions options;
+  lcmlog::SignLogOptions options;
   options.from_now = cmd.now;
-  node::SignLogSummary s;
-  if (!node::sign_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
+  lcmlog::SignLogSummary s;
+  if (!lcmlog::sign_log(*config, cmd.in_log, cmd.out_log, options, s, std::cerr)) {
     return kExitRuntime;
   }
   std::cout << "signed " << cmd.in_log << " -> " << cmd.out_log << ": " << s.signed_events
@@ -362,7 +362,7 @@ int sign_log(const SignLogCommand& cmd) {
 }
 
 int monitor(const MonitorCommand& cmd) {
-  node::MonitorOptions o;
+  bringup::MonitorOptions o;
   if (!cmd.common.config_path.empty() || !cmd.common.preset.empty()) {
     const auto config = load_vehicle(cmd.common, "monitor");
     if (!config) return kExitUsage;
@@ -383,7 +383,7 @@ int monitor(const MonitorCommand& cmd) {
   o.once = cmd.once;
   o.wait_s = cmd.wait_s;
   o.duration_s = cmd.duration_s;
-  return node::run_monitor(o, std::cout, std::cerr);
+  return bringup::run_monitor(o, std::cout, std::cerr);
 }
 
 int matrix(const MatrixCommand& cmd) {

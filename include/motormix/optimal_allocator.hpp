@@ -23,7 +23,7 @@ class OptimalAllocator final : public MatrixAllocator {
 
  private:
   // allocate() at N motors (Eigen::Dynamic: a count without its own
-  // instantiation, see src/core/fixed_size.hpp).
+  // instantiation, see src/core/allocation/fixed_size.hpp).
   template <int N>
   AllocationResult solve(const AxisVector& demand, double* out, Eigen::Index n) const;
 

@@ -21,7 +21,7 @@ class ShiftAllocator final : public MatrixAllocator {
 
  private:
   // The two paths of allocate() at N motors (N == Eigen::Dynamic: a count
-  // without its own instantiation, see src/core/fixed_size.hpp). All
+  // without its own instantiation, see src/core/allocation/fixed_size.hpp). All
   // motors alike: one pass, inlined. Along a thrust column that is not
   // uniform: out of line, so that the one-pass path keeps no stack frame
   // for it.

@@ -14,9 +14,9 @@
 // it came from (less a signature trailer, which mode off cuts off), arrays
 // the length they say, within the type's largest.
 
+#include "bringup/monitor.hpp"
 #include "bringup/motor_test_client.hpp"
 #include "bus/receive.hpp"
-#include "node/monitor.hpp"
 #include "output/output_gate.hpp"
 
 #include <cmath>
@@ -73,8 +73,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   motor_pwm_t pwm{};
   double now = 0.0;
 #elif defined(MOTORMIX_FUZZ_MONITOR)
-  node::MonitorSnapshot snap;
-  node::MonitorOptions options;
+  bringup::MonitorSnapshot snap;
+  bringup::MonitorOptions options;
   mixer_status_t status{};
   motor_pwm_t pwm{};
 #elif defined(MOTORMIX_FUZZ_SIM)
@@ -108,14 +108,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         violation("pin value outside its range, or not disarmed");
     }
 #elif defined(MOTORMIX_FUZZ_MONITOR)
-    if (channel == 0 && take(msg, len, status, counts) && node::monitor_shows(status))
+    if (channel == 0 && take(msg, len, status, counts) && bringup::monitor_shows(status))
       snap.status = status;
     if (channel == 1 && take(msg, len, pwm, counts)) {
       consistent(pwm);
       snap.pwm = pwm;
     }
     snap.refused = counts;
-    const std::string screen = node::render_monitor(snap, options);
+    const std::string screen = bringup::render_monitor(snap, options);
     if (screen.empty()) violation("empty screen");
 #elif defined(MOTORMIX_FUZZ_SIM)
     if (channel == 0 && take(msg, len, pwm, counts)) consistent(pwm);

@@ -2,8 +2,8 @@
 // whole, the damaged ranges do not overlap and stay inside the file, and the
 // replay's output is bounded by the time its segments cover.
 
-#include "node/log_reader.hpp"
-#include "node/log_replay.hpp"
+#include "log/log_reader.hpp"
+#include "log/log_replay.hpp"
 
 #include <motormix/config/load_config.hpp>
 
@@ -34,21 +34,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::abort();
   }
 
-  node::LogReader reader(in_path);
+  lcmlog::LogReader reader(in_path);
   std::uint64_t last_end = 0;
   std::size_t checked_ranges = 0;
-  while (const node::LogEventView* ev = reader.next()) {
+  while (const lcmlog::LogEventView* ev = reader.next()) {
     if (ev->offset + 28 + ev->channel.size() + ev->data.size() > size) std::abort();
     for (; checked_ranges < reader.skipped().size(); ++checked_ranges) {
-      const node::SkippedRange& r = reader.skipped()[checked_ranges];
+      const lcmlog::SkippedRange& r = reader.skipped()[checked_ranges];
       if (r.begin < last_end || r.end <= r.begin || r.end > size) std::abort();
       last_end = r.end;
     }
   }
 
-  node::ReplaySummary s;
+  lcmlog::ReplaySummary s;
   std::ostringstream log;
-  if (node::replay_log(config, in_path, out_path, node::ReplayOptions{}, s, log)) {
+  if (lcmlog::replay_log(config, in_path, out_path, lcmlog::ReplayOptions{}, s, log)) {
     const double segments = static_cast<double>(s.discontinuities + 1);
     if (static_cast<double>(s.outputs) > config.loop_rate_hz * s.duration_s + segments)
       std::abort();

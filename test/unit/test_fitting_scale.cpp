@@ -1,4 +1,4 @@
-// The repair's one-dimensional problem (src/core/fitting_scale.hpp) against
+// The repair's one-dimensional problem (src/core/allocation/fitting_scale.hpp) against
 // an independent reference: every pair of motors turned into a bound on s,
 // the way it is derived on paper. The reference is O(n^2) and divides; the
 // kernels step along the pieces of a convex excess. Random bases, parts and

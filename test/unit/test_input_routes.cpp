@@ -5,10 +5,10 @@
 // replay passed attitude on only with failure_detection on).
 
 #include "bus/receive.hpp"
+#include "log/log_reader.hpp"
+#include "log/log_replay.hpp"
+#include "log/log_writer.hpp"
 #include "loop/control_loop.hpp"
-#include "node/log_reader.hpp"
-#include "node/log_replay.hpp"
-#include "node/log_writer.hpp"
 #include "node/messages.hpp"
 #include "test_paths.hpp"
 
@@ -50,7 +50,7 @@ TEST(InputRoutes, ASpinLandingReplayedWithoutTheDetectorKeepsItsAttitude) {
     // Hover commands at 200 Hz, a level attitude at 250 Hz, and motor m1
     // reported failed from 2 s on: the spin landing takes over when it has
     // a fresh attitude, and says "no attitude" when it has none.
-    node::LogWriter w(in);
+    lcmlog::LogWriter w(in);
     ASSERT_TRUE(w.good());
     const std::int64_t t0 = 1'764'000'000'000'000;
     for (std::int64_t t = 0; t <= 4'000'000; t += 1000) {
@@ -81,12 +81,13 @@ TEST(InputRoutes, ASpinLandingReplayedWithoutTheDetectorKeepsItsAttitude) {
     }
     ASSERT_TRUE(w.close());
   }
-  node::ReplaySummary summary;
+  lcmlog::ReplaySummary summary;
   std::ostringstream log;
-  ASSERT_TRUE(node::replay_log(config, in, out, node::ReplayOptions{}, summary, log)) << log.str();
-  node::LogReader r(out);
+  ASSERT_TRUE(lcmlog::replay_log(config, in, out, lcmlog::ReplayOptions{}, summary, log))
+      << log.str();
+  lcmlog::LogReader r(out);
   int descending = 0, no_attitude = 0, attitude_taken = 0;
-  while (const node::LogEventView* ev = r.next()) {
+  while (const lcmlog::LogEventView* ev = r.next()) {
     if (ev->channel != config.channels.status) continue;
     mixer_status_t s{};
     if (bus::decode_exact(ev->data.data(), ev->data.size(), s) != bus::Refusal::kNone) continue;

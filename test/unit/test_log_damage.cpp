@@ -2,8 +2,8 @@
 // jumps in time never make the loop run across them, and the output stays
 // bounded by the input.
 
-#include "node/log_reader.hpp"
-#include "node/log_replay.hpp"
+#include "log/log_reader.hpp"
+#include "log/log_replay.hpp"
 #include "test_support.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -21,9 +21,9 @@
 namespace motormix::test {
 namespace {
 
-using node::LogReader;
-using node::ReplayOptions;
-using node::ReplaySummary;
+using lcmlog::LogReader;
+using lcmlog::ReplayOptions;
+using lcmlog::ReplaySummary;
 
 const std::string kFlight = "test/data/flights/team_quad.lcmlog";
 
@@ -46,9 +46,9 @@ void put_be64(std::vector<char>& bytes, std::uint64_t at, std::int64_t value) {
   }
 }
 
-std::vector<node::LogEventView> events_of(const std::string& path) {
+std::vector<lcmlog::LogEventView> events_of(const std::string& path) {
   LogReader r(path);
-  std::vector<node::LogEventView> out;
+  std::vector<lcmlog::LogEventView> out;
   while (const auto* ev = r.next()) out.push_back(*ev);
   return out;
 }
@@ -65,7 +65,7 @@ Replayed replay(const std::string& in) {
   Replayed r;
   std::ostringstream log;
   const std::string out = in + ".out.lcmlog";
-  r.ok = node::replay_log(config, in, out, ReplayOptions{}, r.summary, log);
+  r.ok = lcmlog::replay_log(config, in, out, ReplayOptions{}, r.summary, log);
   r.log = log.str();
   std::ifstream f(out, std::ios::binary | std::ios::ate);
   r.bytes = f ? static_cast<std::uintmax_t>(f.tellg()) : 0;

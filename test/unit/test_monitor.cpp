@@ -1,6 +1,6 @@
 // The monitor's screen, drawn from messages without a bus.
 
-#include "node/monitor.hpp"
+#include "bringup/monitor.hpp"
 
 #include <gtest/gtest.h>
 
@@ -38,10 +38,10 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   pwm.pwm = {2000.0F, 1000.0F, 1500.0F};
   pwm.direction = {0, 0, 0};
   pwm.armed = 1;
-  node::MonitorSnapshot snap{st, pwm, 0.05, 0.01, {}};
-  node::MonitorOptions o;
+  bringup::MonitorSnapshot snap{st, pwm, 0.05, 0.01, {}};
+  bringup::MonitorOptions o;
   o.motor_names = {"FL", "FR", "RR"};
-  const std::string view = node::render_monitor(snap, o, 10);
+  const std::string view = bringup::render_monitor(snap, o, 10);
   EXPECT_TRUE(has(view, "FAILSAFE (pid stale)")) << view;
   EXPECT_TRUE(has(view, "pid 150 ms STALE")) << view;
   EXPECT_TRUE(has(view, "battery never")) << view;
@@ -57,12 +57,12 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
 }
 
 TEST(MonitorView, SaysWhenNothingOrOldStatusArrived) {
-  node::MonitorOptions o;
-  EXPECT_TRUE(has(node::render_monitor(node::MonitorSnapshot{}, o), "no mixer_status"));
+  bringup::MonitorOptions o;
+  EXPECT_TRUE(has(bringup::render_monitor(bringup::MonitorSnapshot{}, o), "no mixer_status"));
   mixer_status_t st{};
   st.num_motors = 1;
-  node::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0, {}};
-  const std::string view = node::render_monitor(old, o);
+  bringup::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0, {}};
+  const std::string view = bringup::render_monitor(old, o);
   EXPECT_TRUE(has(view, "STATUS STALE")) << view;
   EXPECT_TRUE(has(view, "m1")) << view;
   EXPECT_TRUE(has(view, "no outputs seen")) << view;

@@ -1,4 +1,4 @@
-// The per-cycle report and clamp kernels (src/core/report_kernel.hpp) at the
+// The per-cycle report and clamp kernels (src/core/allocation/report_kernel.hpp) at the
 // motor counts with their own instantiation (4 to 16, even: packet code) and
 // at dynamic size (scalar code), against the plain definitions: a clamp that
 // sends NaN to the lower end, saturation flags within kSaturationTolerance of

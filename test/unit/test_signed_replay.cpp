@@ -4,8 +4,8 @@
 // mixer does with the messages it takes. --verify finds every event of a
 // signed flight good, and exactly the one event changed in a copy bad.
 
-#include "node/log_replay.hpp"
-#include "node/log_signing.hpp"
+#include "log/log_replay.hpp"
+#include "log/log_signing.hpp"
 #include "test_support.hpp"
 
 #include <motormix/signing.hpp>
@@ -51,7 +51,8 @@ std::vector<Combo> regression_combos() {
 }
 
 // The events on `channel`, each as its bytes.
-std::vector<std::vector<std::uint8_t>> events_on(const std::string& log, const std::string& channel) {
+std::vector<std::vector<std::uint8_t>> events_on(const std::string& log,
+                                                 const std::string& channel) {
   std::vector<std::vector<std::uint8_t>> out;
   lcm::LogFile file(log, "r");
   while (const lcm::LogEvent* ev = file.readNextEvent()) {
@@ -93,17 +94,18 @@ TEST_F(SignedReplay, RegressionFlightsSignedGiveTheSameOutputs) {
     const std::string flight = source_path("test/data/flights/" + c.flight + ".lcmlog");
     const config::Config off = load(c, "off");
     const config::Config require = load(c, "require");
-    node::SignLogSummary signed_summary;
-    ASSERT_TRUE(node::sign_log(require, flight, path("signed.lcmlog"), node::SignLogOptions{},
-                               signed_summary, log))
+    lcmlog::SignLogSummary signed_summary;
+    ASSERT_TRUE(lcmlog::sign_log(require, flight, path("signed.lcmlog"), lcmlog::SignLogOptions{},
+                                 signed_summary, log))
         << log.str();
     ASSERT_GT(signed_summary.signed_events, 1000);
-    node::ReplayOptions options;
+    lcmlog::ReplayOptions options;
     options.cycle_on_every_input = true;  // as the golden files are made
-    node::ReplaySummary plain, with_signatures;
-    ASSERT_TRUE(node::replay_log(off, flight, path("plain.out"), options, plain, log)) << log.str();
-    ASSERT_TRUE(node::replay_log(require, path("signed.lcmlog"), path("signed.out"), options,
-                                 with_signatures, log))
+    lcmlog::ReplaySummary plain, with_signatures;
+    ASSERT_TRUE(lcmlog::replay_log(off, flight, path("plain.out"), options, plain, log))
+        << log.str();
+    ASSERT_TRUE(lcmlog::replay_log(require, path("signed.lcmlog"), path("signed.out"), options,
+                                   with_signatures, log))
         << log.str();
     const auto a = events_on(path("plain.out"), off.channels.motor_pwm);
     const auto b = events_on(path("signed.out"), off.channels.motor_pwm);
@@ -112,8 +114,8 @@ TEST_F(SignedReplay, RegressionFlightsSignedGiveTheSameOutputs) {
     EXPECT_EQ(with_signatures.rejected, plain.rejected);
     EXPECT_EQ(with_signatures.armed_s, plain.armed_s);
     // The unsigned flight under require: nothing taken, never armed.
-    node::ReplaySummary refused;
-    ASSERT_TRUE(node::replay_log(require, flight, path("refused.out"), options, refused, log));
+    lcmlog::ReplaySummary refused;
+    ASSERT_TRUE(lcmlog::replay_log(require, flight, path("refused.out"), options, refused, log));
     EXPECT_EQ(refused.armed_s, 0.0);
     EXPECT_EQ(refused.rejected, refused.input_events);
   }
@@ -124,15 +126,17 @@ TEST_F(SignedReplay, VerifyFindsExactlyTheEventThatWasChanged) {
   const config::Config config = load(c, "off");  // --verify needs only the key file
   const std::string flight = source_path("test/data/flights/" + c.flight + ".lcmlog");
   std::ostringstream log;
-  node::SignLogSummary s;
-  ASSERT_TRUE(node::sign_log(config, flight, path("signed.lcmlog"), {}, s, log)) << log.str();
-  node::ReplayOptions verify;
+  lcmlog::SignLogSummary s;
+  ASSERT_TRUE(lcmlog::sign_log(config, flight, path("signed.lcmlog"), {}, s, log)) << log.str();
+  lcmlog::ReplayOptions verify;
   verify.verify = true;
-  node::ReplaySummary good;
-  ASSERT_TRUE(node::replay_log(config, path("signed.lcmlog"), path("good.out"), verify, good, log));
+  lcmlog::ReplaySummary good;
+  ASSERT_TRUE(
+      lcmlog::replay_log(config, path("signed.lcmlog"), path("good.out"), verify, good, log));
   EXPECT_EQ(good.unverified, 0);
   std::int64_t verified = 0;
-  for (const auto& v : good.verification) verified += static_cast<std::int64_t>(v.counts.signed_accepted);
+  for (const auto& v : good.verification)
+    verified += static_cast<std::int64_t>(v.counts.signed_accepted);
   EXPECT_EQ(verified, s.signed_events);
   // One byte of one event changed, in a copy written with LCM's own writer.
   {
@@ -148,8 +152,9 @@ TEST_F(SignedReplay, VerifyFindsExactlyTheEventThatWasChanged) {
       out.writeEvent(&copy);
     }
   }
-  node::ReplaySummary bad;
-  ASSERT_TRUE(node::replay_log(config, path("tampered.lcmlog"), path("bad.out"), verify, bad, log));
+  lcmlog::ReplaySummary bad;
+  ASSERT_TRUE(
+      lcmlog::replay_log(config, path("tampered.lcmlog"), path("bad.out"), verify, bad, log));
   EXPECT_EQ(bad.unverified, 1);
   std::uint64_t bad_signatures = 0;
   for (const auto& v : bad.verification) bad_signatures += v.counts.rejected_bad_signature;

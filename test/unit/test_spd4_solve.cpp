@@ -1,4 +1,4 @@
-// The unrolled 4 x 4 solve of `optimal`'s Newton step (src/core/spd4_solve.hpp)
+// The unrolled 4 x 4 solve of `optimal`'s Newton step (src/core/allocation/spd4_solve.hpp)
 // against Eigen's pivoting LDLT, on the systems the solver builds: B_f B_f^T
 // + I / gamma for random effectiveness columns, with 0 to 8 free motors (so
 // from the identity over gamma, through rank-deficient sums, to full rank),

@@ -1,11 +1,11 @@
-#include "node/log_reader.hpp"
+#include "log/log_reader.hpp"
 
 #include <sys/stat.h>
 
 #include <algorithm>
 #include <array>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
 
 namespace {
 
@@ -132,4 +132,4 @@ const LogEventView* LogReader::next() {
   return &current_;
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog

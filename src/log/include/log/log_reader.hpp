@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
 
 struct LogEventView {
   std::int64_t eventnum = 0;
@@ -73,4 +73,4 @@ class LogReader {
   std::vector<SkippedRange> skipped_;
 };
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
 
 class LogWriter {
  public:
@@ -60,4 +60,4 @@ class LogWriter {
   std::int64_t eventnum_ = 0;
 };
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog

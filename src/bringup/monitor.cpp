@@ -1,4 +1,4 @@
-#include "node/monitor.hpp"
+#include "bringup/monitor.hpp"
 
 #include "bus/clock.hpp"
 #include "bus/shutdown_signals.hpp"
@@ -19,7 +19,7 @@
 #include <ostream>
 #include <sstream>
 
-namespace motormix::node {
+namespace motormix::bringup {
 
 namespace {
 
@@ -342,4 +342,4 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
   return rc;
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::bringup

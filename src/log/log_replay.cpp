@@ -1,9 +1,9 @@
-#include "node/log_replay.hpp"
+#include "log/log_replay.hpp"
 
 #include <motormix/config/build_mixer.hpp>
+#include "log/log_reader.hpp"
+#include "log/log_writer.hpp"
 #include "loop/control_loop.hpp"
-#include "node/log_reader.hpp"
-#include "node/log_writer.hpp"
 #include "node/messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -16,7 +16,18 @@
 #include <ostream>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
+
+// The node's routing and message conversions: a replay feeds the loop as the
+// node does.
+using node::deliver_input;
+using node::fill_pwm_message;
+using node::fill_status_message;
+using node::InputKind;
+using node::InputRoutes;
+using node::InputSecurity;
+using node::LoopTiming;
+using node::size_pwm_message;
 
 namespace {
 
@@ -275,4 +286,4 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   return true;
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog

@@ -1,7 +1,7 @@
-#include "node/log_signing.hpp"
+#include "log/log_signing.hpp"
 
 #include "bus/clock.hpp"
-#include "node/log_writer.hpp"
+#include "log/log_writer.hpp"
 
 #include <motormix/signing.hpp>
 
@@ -10,7 +10,7 @@
 #include <ostream>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
 
 bool sign_log(const config::Config& config, const std::string& in_path, const std::string& out_path,
               const SignLogOptions& options, SignLogSummary& summary, std::ostream& log) {
@@ -67,4 +67,4 @@ bool sign_log(const config::Config& config, const std::string& in_path, const st
   return true;
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog

@@ -7,14 +7,14 @@
 // stretches are skipped and reported, as by the replay.
 
 #include <motormix/config/config.hpp>
-#include "node/log_reader.hpp"
+#include "log/log_reader.hpp"
 
 #include <cstdint>
 #include <iosfwd>
 #include <string>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
 
 struct SignLogOptions {
   // Stamp the signatures from this host's clock now, keeping the events'
@@ -35,4 +35,4 @@ struct SignLogSummary {
 bool sign_log(const config::Config& config, const std::string& in_path, const std::string& out_path,
               const SignLogOptions& options, SignLogSummary& summary, std::ostream& log);
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog

@@ -19,7 +19,7 @@
 #include <memory>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::bringup {
 
 struct MonitorOptions {
   std::string lcm_url;  // empty: LCM_DEFAULT_URL, then LCM's default
@@ -61,4 +61,4 @@ std::string render_monitor(const MonitorSnapshot& snapshot, const MonitorOptions
 // mixer on the bus within wait_s, or LCM cannot be opened).
 int run_monitor(const MonitorOptions& options, std::ostream& out, std::ostream& log);
 
-}  // namespace motormix::node
+}  // namespace motormix::bringup

@@ -23,7 +23,7 @@
 
 #include <motormix/config/config.hpp>
 #include <motormix/signing_policy.hpp>
-#include "node/log_reader.hpp"
+#include "log/log_reader.hpp"
 
 #include <array>
 #include <cstdint>
@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::lcmlog {
 
 // What verifying a log found on one channel (ReplayOptions::verify). Per
 // link and channel, timestamps must increase through the log; a link's
@@ -86,4 +86,4 @@ bool replay_log(const config::Config& config, const std::string& in_path,
                 const std::string& out_path, const ReplayOptions& options, ReplaySummary& summary,
                 std::ostream& log);
 
-}  // namespace motormix::node
+}  // namespace motormix::lcmlog
