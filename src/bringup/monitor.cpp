@@ -116,6 +116,26 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   s << "inputs    setpoint " << age(st.input_age_ms[0]) << (st.setpoint_stale ? " STALE" : "")
     << "   pid " << age(st.input_age_ms[1]) << (st.pid_stale ? " STALE" : "") << "   motor_status "
     << age(st.input_age_ms[3]) << "   battery " << age(st.input_age_ms[2]) << "\n";
+  // What failure detection and the spin landing read, and how fresh: on but
+  // never fed, they can find nothing and land nothing.
+  if (st.detector_sources != 0 || st.motor_loss_on) {
+    const bool telemetry = (st.detector_sources & mixer_status_t::DETECTOR_TELEMETRY) != 0;
+    const bool rates = (st.detector_sources & mixer_status_t::DETECTOR_RATES) != 0;
+    const bool outputs = (st.detector_sources & mixer_status_t::DETECTOR_OUTPUTS) != 0;
+    const std::string sources = std::string(telemetry ? " telemetry" : "") +
+                                (rates ? " rates" : "") + (outputs ? " outputs" : "");
+    s << "feeds     detection" << (sources.empty() ? " off" : sources) << "   spin landing "
+      << (st.motor_loss_on ? "on" : "off");
+    if (telemetry) {
+      s << "   esc_telemetry " << age(st.esc_telemetry_age_ms)
+        << (st.esc_telemetry_age_ms < 0.0F ? " NOT FED" : "");
+    }
+    if (rates || st.motor_loss_on) {
+      s << "   attitude " << age(st.attitude_age_ms)
+        << (st.attitude_age_ms < 0.0F ? " NOT FED" : "");
+    }
+    s << "\n";
+  }
   s << "battery   " << battery_name(st.battery_state);
   if (st.battery_state != mixer_status_t::BATTERY_OFF) {
     s << ", " << fixed(st.battery_voltage, 2) << " V, thrust x" << fixed(st.thrust_gain, 3);

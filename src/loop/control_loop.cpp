@@ -24,6 +24,10 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
   if (config.battery) battery_.emplace(*config.battery);
   if (config.failure_detection) detection_.emplace(config);
   if (config.motor_loss) landing_.emplace(config);
+  // What the status says is being read (constant for the configuration).
+  result_.detector_sources =
+      config.failure_detection ? config.failure_detection->detector.sources : 0;
+  result_.motor_loss_on = config.motor_loss.has_value();
   esc_last_utime_.fill(kNever);
   mixer_.disarm(result_.mix);
   record_vehicle_state(0);
@@ -142,6 +146,7 @@ Rejection ControlLoop::on_esc_telemetry(const EscTelemetrySample& sample, std::i
   count(rejection);
   if (rejection != Rejection::kNone) return rejection;
   ++counters_.esc_telemetry_received;
+  esc_received_us_ = now_us;
   for (int i = 0; i < sample.count; ++i) {
     const int motor = sample.readings[static_cast<std::size_t>(i)].motor;
     esc_last_utime_[static_cast<std::size_t>(motor - 1)] = sample.utime;
@@ -276,6 +281,8 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   detect(now_us, setpoint_fresh, ramp);
   record_vehicle_state(now_us);
   result_.attitude_age_ms = attitude_.age_ms(now_us);
+  result_.esc_telemetry_age_ms =
+      esc_received_us_ < 0 ? -1.0 : static_cast<double>(now_us - esc_received_us_) / 1e3;
   const double yaw = yaw_source_ == config::YawSource::kPid ? pid.yaw : setpoint.yaw;
   const AxisVector demand(pid.roll, pid.pitch, yaw, setpoint.throttle);
   const LoopState state = arming_.state();

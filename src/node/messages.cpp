@@ -27,6 +27,11 @@ void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t
   msg.failed_motors = static_cast<int32_t>(r.mix.armed ? r.mix.failed : r.failed);
 }
 
+static_assert(mixer_status_t::DETECTOR_TELEMETRY == static_cast<int>(DetectorSources::kTelemetry) &&
+                  mixer_status_t::DETECTOR_RATES == static_cast<int>(DetectorSources::kRates) &&
+                  mixer_status_t::DETECTOR_OUTPUTS == static_cast<int>(DetectorSources::kOutputs),
+              "the status' DETECTOR_* bits are the detector's source bits");
+
 void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
                          std::int64_t utime, const InputSecurity& security) {
@@ -109,6 +114,9 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.esc_telemetry_received = c.esc_telemetry_received;
   s.attitude_received = c.attitude_received;
   s.attitude_age_ms = static_cast<float>(r.attitude_age_ms);
+  s.detector_sources = static_cast<int8_t>(r.detector_sources);
+  s.esc_telemetry_age_ms = static_cast<float>(r.esc_telemetry_age_ms);
+  s.motor_loss_on = r.motor_loss_on;
   s.landing_state = static_cast<int8_t>(r.landing.state);
   s.landing_motor = static_cast<int8_t>(r.landing.motor + 1);
   s.spin_rate = static_cast<float>(r.landing.measured_rate_rad_s);

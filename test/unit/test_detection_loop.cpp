@@ -289,6 +289,36 @@ TEST(DetectionLoop, WithoutTheSectionNothingIsRead) {
   EXPECT_EQ(loop.counters().esc_telemetry_received, 0);
 }
 
+// What the status tells `monitor` about the detector's feed: its sources,
+// whether motor_loss is on, and the age of the last accepted telemetry
+// (-1 before any; a refused message does not make it fresh).
+TEST_F(DetectionLoopTest, ReportsItsSourcesAndTheTelemetrysAge) {
+  const loop::CycleResult& first = loop_.cycle(0);
+  EXPECT_EQ(first.detector_sources, static_cast<std::uint8_t>(DetectorSources::kTelemetry));
+  EXPECT_FALSE(first.motor_loss_on) << "a hexa has no spin landing";
+  EXPECT_EQ(first.esc_telemetry_age_ms, -1.0);
+  EXPECT_EQ(loop_.on_esc_telemetry(one_reading(utime_, 9, 9000.0), 1000, kWall),
+            Rejection::kOutOfRange);
+  EXPECT_EQ(loop_.cycle(2500).esc_telemetry_age_ms, -1.0) << "a refused reading feeds nothing";
+  EXPECT_EQ(loop_.on_esc_telemetry(one_reading(utime_ + 1, 2, 9000.0), 5000, kWall),
+            Rejection::kNone);
+  EXPECT_DOUBLE_EQ(loop_.cycle(17500).esc_telemetry_age_ms, 12.5);
+
+  mixer_status_t s{};
+  node::fill_status_message(s, loop_.cycle(20000), loop_.counters(), node::LoopTiming{}, 0, 6, 0);
+  EXPECT_EQ(s.detector_sources, mixer_status_t::DETECTOR_TELEMETRY);
+  EXPECT_FLOAT_EQ(s.esc_telemetry_age_ms, 15.0F);
+  EXPECT_FALSE(s.motor_loss_on);
+
+  const config::Config quad = config::load_config_file(
+      source_path("config/quad_x.yaml"), {"failure_detection.sources=[telemetry, rates]"});
+  ControlLoop quad_loop(quad, config::build_mixer(quad));
+  const loop::CycleResult& q = quad_loop.cycle(0);
+  EXPECT_EQ(q.detector_sources, static_cast<std::uint8_t>(DetectorSources::kTelemetry) |
+                                    static_cast<std::uint8_t>(DetectorSources::kRates));
+  EXPECT_TRUE(q.motor_loss_on);
+}
+
 TEST(DetectionConfig, DefaultsPerVehicleAndRejections) {
   const config::Config hexa = hexa_config({"failure_detection.enabled=true"});
   ASSERT_TRUE(hexa.failure_detection.has_value());

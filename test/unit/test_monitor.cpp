@@ -68,5 +68,33 @@ TEST(MonitorView, SaysWhenNothingOrOldStatusArrived) {
   EXPECT_TRUE(has(view, "no outputs seen")) << view;
 }
 
+// Whether failure detection and the spin landing are fed: a detector that is
+// on with nothing arriving says so, and nothing is said when both are off.
+TEST(MonitorView, ShowsWhatTheDetectorAndTheLandingAreFed) {
+  bringup::MonitorOptions o;
+  mixer_status_t st{};
+  st.num_motors = 4;
+  st.attitude_age_ms = -1.0F;
+  st.esc_telemetry_age_ms = -1.0F;
+  const std::string off = bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}}, o);
+  EXPECT_FALSE(has(off, "feeds")) << off;
+
+  st.detector_sources = mixer_status_t::DETECTOR_TELEMETRY | mixer_status_t::DETECTOR_RATES;
+  st.motor_loss_on = 1;
+  st.attitude_age_ms = 3.0F;
+  const std::string unfed = bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}}, o);
+  EXPECT_TRUE(has(unfed, "detection telemetry rates   spin landing on")) << unfed;
+  EXPECT_TRUE(has(unfed, "esc_telemetry never NOT FED")) << unfed;
+  EXPECT_TRUE(has(unfed, "attitude 3 ms\n")) << unfed;
+
+  st.detector_sources = 0;
+  st.esc_telemetry_age_ms = 12.0F;
+  st.attitude_age_ms = -1.0F;
+  const std::string landing_only = bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}}, o);
+  EXPECT_TRUE(has(landing_only, "detection off   spin landing on   attitude never NOT FED"))
+      << landing_only;
+  EXPECT_FALSE(has(landing_only, "esc_telemetry 12")) << "telemetry is not read without detection";
+}
+
 }  // namespace
 }  // namespace motormix::test

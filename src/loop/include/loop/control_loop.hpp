@@ -44,8 +44,8 @@
 #include "loop/counters.hpp"
 #include "loop/detection_runner.hpp"
 #include "loop/failure_set.hpp"
-#include "loop/landing_runner.hpp"
 #include "loop/input_samples.hpp"
+#include "loop/landing_runner.hpp"
 #include "loop/latest_input.hpp"
 #include "loop/loop_state.hpp"
 #include "loop/message_checks.hpp"
@@ -89,9 +89,14 @@ struct CycleResult {
   Detection detection;
   bool detection_changed = false;
   double attitude_age_ms = -1.0;
+  double esc_telemetry_age_ms = -1.0;  // since the last accepted esc_telemetry, -1 if none
+  // From the configuration: the detector's sources (DetectorSources bits, 0
+  // without failure_detection) and whether motor_loss is configured.
+  std::uint8_t detector_sources = 0;
+  bool motor_loss_on = false;
   LandingReport landing;  // the spin landing (motor_loss)
   bool landing_changed = false;
-  int motor_test = -1;       // motor spinning alone (0-based), -1 when none
+  int motor_test = -1;  // motor spinning alone (0-based), -1 when none
   double motor_test_throttle = 0.0;
   bool motor_test_changed = false;            // a test started or ended in this cycle
   std::int64_t motor_test_request_utime = 0;  // the last request handled
@@ -171,6 +176,7 @@ class ControlLoop {
   LoopState previous_state_ = LoopState::kDisarmed;  // the state the previous cycle ended in
   LatestInput<AttitudeSample> attitude_;
   std::array<std::int64_t, kMaxEscReadings> esc_last_utime_;
+  std::int64_t esc_received_us_ = -1;  // loop clock of the last accepted esc_telemetry
 
   CycleResult result_;
   Counters counters_;
