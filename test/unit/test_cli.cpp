@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <motormix/presets.hpp>
 
@@ -75,16 +76,41 @@ TEST(Cli, HelpAndVersion) {
 }
 
 // config/ holds a commented example for every preset, and each passes
-// `run --check` as shipped.
+// `run --check` as shipped; one that signs (quad_x_field.yaml: detection,
+// spin landing, hardware and security together) passes with a key put where
+// its key_file says (a key cannot be shipped: it would be everyone's), and
+// fails without one.
 TEST(Cli, EveryBundledConfigChecksAndEveryPresetHasOne) {
+  const std::string key =
+      (std::filesystem::temp_directory_path() / ("motormix_cli_key_" + std::to_string(getpid())))
+          .string();
+  std::filesystem::remove(key);
+  ASSERT_EQ(run("keygen " + key).exit_code, 0);
   std::set<std::string> covered;
+  int signed_configs = 0;
   for (const auto& entry : std::filesystem::directory_iterator(source_path("config"))) {
     if (entry.path().extension() != ".yaml") continue;
     const std::string file = entry.path().string();
     SCOPED_TRACE(file);
-    EXPECT_EQ(run("run --check --config " + file).exit_code, 0);
-    covered.insert(config::load_config_file(file).geometry.name);
+    const config::Config c = config::load_config_file(file);
+    if (c.security.mode != signing::Mode::kOff) {
+      ++signed_configs;
+      EXPECT_EQ(run("run --check --config " + file + " --set security.key_file=/nonexistent.key")
+                    .exit_code,
+                2);
+      const Result r = run("run --check --config " + file + " --set security.key_file=" + key);
+      EXPECT_EQ(r.exit_code, 0) << r.out;
+      EXPECT_NE(r.out.find("failure detection: telemetry"), std::string::npos) << r.out;
+      EXPECT_NE(r.out.find("motor loss: spin landing"), std::string::npos) << r.out;
+      EXPECT_TRUE(c.failure_detection.has_value() && c.motor_loss.has_value());
+      EXPECT_NE(c.hardware.driver, config::HardwareDriver::kNone);
+    } else {
+      EXPECT_EQ(run("run --check --config " + file).exit_code, 0);
+    }
+    covered.insert(c.geometry.name);
   }
+  std::filesystem::remove(key);
+  EXPECT_GE(signed_configs, 1) << "no bundled configuration uses all four field features";
   for (const std::string& preset : preset_names()) {
     EXPECT_EQ(covered.count(preset), 1U) << "no config/*.yaml for preset " << preset;
   }
