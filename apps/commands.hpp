@@ -126,6 +126,9 @@ struct SimCommand {
   bool controller = true;
   double duration_s = 0.0;
   bool parse_only = false;  // resolve the scenario and every --fail, then exit 0 without flying
+  bool ideal = false;       // every piece of realism off (sim/realism.hpp)
+  std::string realism;      // PIECE=on|off,...
+  std::string truth;        // model error, FACTOR=x,...
 };
 int sim(const SimCommand& cmd);
 

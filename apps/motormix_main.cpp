@@ -189,6 +189,17 @@ int main(int argc, char** argv) {
                     "VEHICLE_STATE)");
   sim_app->add_option("--duration", sim_cmd.duration_s, "seconds to run instead of the scenario's")
       ->check(CLI::Range(0.01, 86400.0));
+  sim_app->add_flag("--ideal", sim_cmd.ideal,
+                    "switch every piece of realism off: rotors without momentum, equal spin-up "
+                    "and spin-down, an unfiltered gyro without vibration, instant ESC telemetry, "
+                    "no ground effect (the simulator before 0.10)");
+  sim_app->add_option("--realism", sim_cmd.realism,
+                      "switch pieces on or off, after --ideal: PIECE=on|off,... with PIECE "
+                      "rotor_momentum, spin_down, imu, esc_latency or ground_effect");
+  sim_app->add_option("--truth", sim_cmd.truth,
+                      "model error: the simulated vehicle's FACTOR=x,... against its "
+                      "configuration, FACTOR mass, inertia, drag, time_constant or rotor_inertia "
+                      "(0.1..10)");
 
   MotorTestCommand test_cmd;
   CLI::App* test_app = app.add_subcommand(

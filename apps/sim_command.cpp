@@ -68,6 +68,15 @@ int sim(const SimCommand& cmd) {
   options.seed = cmd.seed;
   options.undetected = cmd.undetected;
   options.duration_s = cmd.duration_s;
+  if (cmd.ideal) options.realism = sim::Realism::ideal();
+  if (auto error = sim::apply_switches(options.realism, cmd.realism)) {
+    std::cerr << "motormix sim: --realism " << cmd.realism << ": " << *error << "\n";
+    return kExitUsage;
+  }
+  if (auto error = sim::parse_model_error(options.realism.truth, cmd.truth)) {
+    std::cerr << "motormix sim: --truth " << cmd.truth << ": " << *error << "\n";
+    return kExitUsage;
+  }
   for (const std::string& f : cmd.fail) {
     sim::MotorFailure failure;
     if (!parse_failure(f, *config, failure)) {
@@ -156,6 +165,7 @@ int sim(const SimCommand& cmd) {
   j["strategy"] = config::to_string(config->strategy);
   if (config->strategy == config::Strategy::kPrioritized) j["airmode"] = to_string(config->airmode);
   j["seed"] = cmd.seed;
+  j["realism"] = sim::describe(options.realism);
   j["failures"] = sim::failures_json(outcomes, *config, cmd.undetected);
   if (!cmd.json) {
     std::cerr << "motormix sim: " << config->name << " (" << config::to_string(config->strategy)

@@ -97,9 +97,16 @@ struct FailureDetectorSettings {
   // Telemetry.
   double telemetry_timeout_s = 0.1;   // a reading older than this is stale (silent)
   double telemetry_persist_s = 0.03;  // a suspicion held this long is declared
-  double rpm_ratio = 0.6;             // rpm below this fraction of the median ratio: suspect
-  double current_ratio = 0.35;        // current below this fraction of the median ratio: suspect
-  int min_reporting = 3;              // motors with fresh telemetry needed for a median
+  // How late a reading may arrive after its ESC measured it (serial
+  // telemetry's frame, the ESC's averaging, the request round-robin): a
+  // motor's rpm is judged against the least its thrust was since this long
+  // before the reading arrived, so a reading taken while the motor was
+  // still speeding up (or an old one, the frames after it lost) is not "too
+  // slow".
+  double telemetry_latency_s = 0.02;
+  double rpm_ratio = 0.6;       // rpm below this fraction of the median ratio: suspect
+  double current_ratio = 0.35;  // current below this fraction of the median ratio: suspect
+  int min_reporting = 3;        // motors with fresh telemetry needed for a median
   // Whether an ESC that goes silent while most others report is declared
   // on that alone (without the rates source). The configuration sets it
   // for six rotors or more; a quad never stops a motor for a silent wire.
@@ -110,8 +117,14 @@ struct FailureDetectorSettings {
   Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxMotors> torque_per_thrust;
   Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Ones();  // principal moments
   double rotational_drag = 0.0;                            // N m per rad/s
-  double rates_timeout_s = 0.02;                           // no rates sample within this: stale
-  double rates_filter_hz = 15.0;                           // low-pass on both sides of the residual
+  // The rotors' own angular momentum per rad/s of each (spin x inertia x
+  // axis; zero: massless rotors) and their speed at full thrust: their
+  // gyroscopic torque and the reaction of speeding them up or down are part
+  // of what the rates show without any failure.
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxMotors> momentum_per_speed;
+  double max_rotor_speed_rad_s = 0.0;
+  double rates_timeout_s = 0.02;  // no rates sample within this: stale
+  double rates_filter_hz = 15.0;  // low-pass on both sides of the residual
   double rates_persist_s = 0.06;
   double min_loss = 0.75;     // residual along the column: at least this fraction of the thrust
   double max_off_axis = 0.3;  // residual across the column: at most this fraction of the along part
@@ -192,8 +205,18 @@ class FailureDetector {
   FailureDetectorSettings s_;
   Detection detection_;
   std::array<EscState, kMaxMotors> esc_{};
-  MotorVector lagged_;           // each motor's thrust through the motor lag
-  MotorVector output_filtered_;  // outputs source: low-passed commands
+  MotorVector lagged_;  // each motor's thrust through the motor lag
+  // lagged_ over the last cycles (a ring, newest at lag_head_), for the
+  // telemetry's latency window.
+  static constexpr int kLagHistory = 64;
+  std::array<std::array<double, kMaxMotors>, kLagHistory> lag_history_{};
+  std::array<std::int64_t, kLagHistory> lag_history_us_{};
+  int lag_head_ = 0, lag_count_ = 0;
+  // Each rotor's speed (rad/s) from lagged_ at the previous update.
+  std::array<double, kMaxMotors> rotor_speed_{};
+  Eigen::Vector3d rotor_reaction_ = Eigen::Vector3d::Zero();  // N m, this update
+  Eigen::Vector3d rotor_momentum_ = Eigen::Vector3d::Zero();  // N m s
+  MotorVector output_filtered_;                               // outputs source: low-passed commands
   std::array<double, kMaxMotors> telemetry_suspicion_{};
   // Fresh telemetry shows the motor spinning as commanded (rates then do
   // not declare it).
@@ -207,6 +230,9 @@ class FailureDetector {
   std::int64_t rates_sample_us_ = 0;
   std::int64_t rates_received_us_ = 0;
   bool rates_any_ = false, accel_any_ = false;
+  Eigen::Vector3d accel_stage_ = Eigen::Vector3d::Zero();  // first stages of the filters
+  Eigen::Vector3d rotor_torque_stage_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rest_torque_stage_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel_filtered_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d rotor_torque_filtered_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d rest_torque_filtered_ = Eigen::Vector3d::Zero();

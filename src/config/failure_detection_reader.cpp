@@ -46,6 +46,20 @@ std::uint8_t read_sources(MapReader& section) {
   return sources;
 }
 
+}  // namespace
+
+void rotor_momentum_model(const VehiclePhysics& v, FailureDetectorSettings& s) {
+  s.momentum_per_speed.setZero(3, static_cast<Eigen::Index>(v.rotors.size()));
+  for (std::size_t i = 0; i < v.rotors.size(); ++i) {
+    const RotorPhysics& r = v.rotors[i];
+    s.momentum_per_speed.col(static_cast<Eigen::Index>(i)) =
+        static_cast<double>(r.spin) * v.rotor_inertia_kgm2 * r.axis;
+  }
+  s.max_rotor_speed_rad_s = v.max_rotor_speed_rad_s;
+}
+
+namespace {
+
 // Torque of each rotor at full thrust fraction, as the simulator's vehicle
 // makes it: the thrust's moment about the centre of mass and the drag
 // torque against the spin.
@@ -61,6 +75,7 @@ void rates_scale(const VehiclePhysics& v, FailureDetectorSettings& s) {
   }
   s.inertia_kgm2 = v.inertia_kgm2;
   s.rotational_drag = v.drag_rotational_nm_per_radps;
+  rotor_momentum_model(v, s);
   const double hover = lift > 0 ? std::clamp(v.mass_kg * kGravity / lift, 0.05, 1.0) : 0.5;
   double smallest = 0.0;
   for (Eigen::Index i = 0; i < s.torque_per_thrust.cols(); ++i) {
@@ -97,6 +112,7 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   MapReader telemetry = section.map("telemetry");
   s.telemetry_timeout_s = telemetry.number("timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
   s.telemetry_persist_s = telemetry.number("persist_ms", 25.0, 0.0, 10000.0) / 1e3;
+  s.telemetry_latency_s = telemetry.number("latency_ms", 20.0, 0.0, 100.0) / 1e3;
   s.rpm_ratio = telemetry.number("rpm_ratio", 0.7, 0.05, 0.95);
   s.current_ratio = telemetry.number("current_ratio", 0.4, 0.05, 0.95);
   s.min_reporting = static_cast<int>(telemetry.number("min_reporting", 3, 2, kMaxMotors));

@@ -56,7 +56,33 @@ SpinningDescentModel model_of(const Config& config) {
   return m;
 }
 
+// The model and equilibria of `ml` from the configuration; "" when every
+// motor has one, else why not.
+std::string derive(const Config& config, MotorLoss& ml) {
+  std::string why = unsupported(config);
+  if (why.empty()) {
+    ml.model = model_of(config);
+    ml.equilibria = solve_spin_equilibria(ml.model, ml.settings.spin_rate_rad_s);
+    for (const SpinEquilibrium& eq : ml.equilibria) {
+      if (!eq.found && why.empty()) why = eq.why;
+    }
+  }
+  return why;
+}
+
 }  // namespace
+
+void rederive_motor_loss(Config& config) {
+  if (!config.motor_loss) return;
+  MotorLoss ml = *config.motor_loss;
+  const std::string why = derive(config, ml);
+  if (why.empty()) {
+    config.motor_loss = ml;
+  } else {
+    config.motor_loss.reset();
+    config.motor_loss_off = why;
+  }
+}
 
 void read_motor_loss(MapReader section, Config& config) {
   const std::string mode = section.choice("mode", "auto", {"auto", "spin_landing", "off"});
@@ -81,14 +107,7 @@ void read_motor_loss(MapReader section, Config& config) {
     config.motor_loss_off = "motor_loss.mode is off";
     return;
   }
-  std::string why = unsupported(config);
-  if (why.empty()) {
-    ml.model = model_of(config);
-    ml.equilibria = solve_spin_equilibria(ml.model, s.spin_rate_rad_s);
-    for (const SpinEquilibrium& eq : ml.equilibria) {
-      if (!eq.found && why.empty()) why = eq.why;
-    }
-  }
+  const std::string why = derive(config, ml);
   if (!why.empty()) {
     if (mode == "spin_landing")
       fail(section.path_of("mode"), "spin_landing", "auto or off: " + why);

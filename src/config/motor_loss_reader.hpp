@@ -10,5 +10,8 @@
 namespace motormix::config {
 
 void read_motor_loss(MapReader section, Config& config);
+// The model and equilibria from config.vehicle_model again, the settings
+// kept (vehicle_derived.hpp).
+void rederive_motor_loss(Config& config);
 
 }  // namespace motormix::config

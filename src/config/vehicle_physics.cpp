@@ -98,6 +98,35 @@ Eigen::Vector3d default_inertia(const std::vector<RotorPhysics>& rotors, double 
   return inertia.diagonal();
 }
 
+// 0.8 of the closest spacing of two rotors side by side (rotors stacked on
+// one axis, as a coaxial pair, do not count): the props a frame of that size
+// carries with room between their tips. 0.254 m (10 inches) when the
+// rotors are unknown.
+double default_prop_diameter(const std::vector<RotorPhysics>& rotors) {
+  constexpr double kStackedM = 0.02;  // closer than this across the axis: one stack
+  double closest = 0.0;
+  for (std::size_t i = 0; i < rotors.size(); ++i) {
+    for (std::size_t j = i + 1; j < rotors.size(); ++j) {
+      const Eigen::Vector3d d = rotors[j].position_m - rotors[i].position_m;
+      const double across = (d - d.dot(rotors[i].axis) * rotors[i].axis).norm();
+      if (across > kStackedM && (closest == 0.0 || across < closest)) closest = across;
+    }
+  }
+  return closest > 0.0 ? 0.8 * closest : 0.254;
+}
+
+void read_imu(MapReader m, ImuPhysics& imu) {
+  imu.rate_hz = m.number("rate_hz", imu.rate_hz, 100.0, 1e5);
+  imu.vibration_dps = m.number("vibration_dps", imu.vibration_dps, 0.0, 2000.0);
+  imu.lowpass_hz = m.number("lowpass_hz", imu.lowpass_hz, 1.0, 1e4);
+  imu.bias_drift_dps = m.number("bias_drift_dps", imu.bias_drift_dps, 0.0, 100.0);
+  if (imu.lowpass_hz >= imu.rate_hz / 2) {
+    fail(m.path_of("lowpass_hz"), std::to_string(imu.lowpass_hz),
+         "below half of rate_hz (" + std::to_string(imu.rate_hz / 2) + ")");
+  }
+  m.finish();
+}
+
 // The pack grows with the vehicle: 1250 mAh per rotor (a quad's 4S 5000 mAh)
 // at 0.08 ohm divided among them (parallel cells), so every default
 // multirotor hovers on about the same share of its pack.
@@ -224,11 +253,16 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
   v.time_constant_down_s =
       vehicle.number("time_constant_down_s", v.time_constant_down_s, 1e-4, 5.0);
   if (!v.wheeled) {
-    v.rotor_inertia_kgm2 = vehicle.number("rotor_inertia_kgm2", 0.0, 0.0, 10.0);
+    v.prop_diameter_m =
+        vehicle.number("prop_diameter_m", default_prop_diameter(v.rotors), 0.01, 10.0);
+    v.rotor_inertia_kgm2 =
+        vehicle.number("rotor_inertia_kgm2", rotor_inertia_for(v.prop_diameter_m), 0.0, 10.0);
     v.max_rotor_speed_rad_s =
         vehicle.number("max_rotor_speed_rad_s", v.max_rotor_speed_rad_s, 1.0, 1e5);
+    read_imu(vehicle.map("imu"), v.imu);
   } else {
-    for (const char* key : {"rotor_inertia_kgm2", "max_rotor_speed_rad_s"}) {
+    for (const char* key :
+         {"prop_diameter_m", "rotor_inertia_kgm2", "max_rotor_speed_rad_s", "imu"}) {
       if (vehicle.has(key))
         fail(vehicle.path_of(key), "a rotor setting on a ground vehicle", "wheel settings");
       vehicle.raw(key);

@@ -2,6 +2,7 @@
 
 #include "sim/period.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -13,12 +14,16 @@ namespace {
 constexpr std::uint64_t kSeedOffset = 0x7E1E3E7E1E3E7ULL;
 }  // namespace
 
-EscTelemetryModel::EscTelemetryModel(int motors, std::uint64_t seed)
-    : gauss_(seed ^ kSeedOffset), uniform_state_(seed * 0x9E3779B97F4A7C15ULL + kSeedOffset) {
+EscTelemetryModel::EscTelemetryModel(int motors, std::uint64_t seed, bool latency)
+    : gauss_(seed ^ kSeedOffset),
+      uniform_state_(seed * 0x9E3779B97F4A7C15ULL + kSeedOffset),
+      latency_(latency) {
   for (int i = 0; i < motors; ++i) {
+    Esc esc;
     const auto pick = static_cast<std::size_t>(uniform() * std::size(kEscRatesHz));
-    period_s_.push_back(1.0 / kEscRatesHz[pick]);
-    next_s_.push_back(uniform() * period_s_.back());  // its own phase
+    esc.period_s = 1.0 / kEscRatesHz[pick];
+    esc.next_s = uniform() * esc.period_s;  // its own phase
+    escs_.push_back(esc);
   }
 }
 
@@ -31,29 +36,54 @@ double EscTelemetryModel::uniform() {
   return static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 
+loop::EscReading EscTelemetryModel::measure(int i, const VehicleModel& vehicle) {
+  loop::EscReading r;
+  r.motor = i + 1;
+  const double speed = std::max(vehicle.motor_speed(i), 0.0);
+  r.rpm = std::max(0.0, kFullThrustRpm * std::sqrt(speed) * (1.0 + gauss_(kRpmNoise)));
+  r.erpm = r.rpm * (kSimMotorPoles / 2);
+  const double thrust = std::max(vehicle.thrust_fraction(i), 0.0);
+  const double full_a = vehicle.physics().battery.full_throttle_current_a;
+  r.current_a =
+      full_a * thrust * std::sqrt(thrust) * (1.0 + gauss_(kCurrentNoise)) + gauss_(kCurrentNoiseA);
+  r.voltage_v = vehicle.battery().terminal_v();
+  r.temperature_c = 40.0;
+  r.consumption_mah = std::numeric_limits<double>::quiet_NaN();
+  return r;
+}
+
 const loop::EscTelemetrySample& EscTelemetryModel::sample(double t, std::int64_t utime,
                                                           const VehicleModel& vehicle,
                                                           const MotorHealth& health) {
   sample_.utime = utime;
   sample_.count = 0;
-  const double full_a = vehicle.physics().battery.full_throttle_current_a;
-  for (std::size_t k = 0; k < period_s_.size(); ++k) {
-    if (!due(t, next_s_[k])) continue;
-    while (due(t, next_s_[k])) next_s_[k] += period_s_[k];
+  for (std::size_t k = 0; k < escs_.size(); ++k) {
+    Esc& esc = escs_[k];
     const int i = static_cast<int>(k);
-    if (((health.telemetry_dead >> i) & 1U) != 0 || uniform() < kFrameLoss) continue;
-    if (sample_.count >= loop::kMaxEscReadings) break;
-    loop::EscReading& r = sample_.readings[static_cast<std::size_t>(sample_.count++)];
-    r.motor = i + 1;
-    const double speed = std::max(vehicle.motor_speed(i), 0.0);
-    r.rpm = std::max(0.0, kFullThrustRpm * std::sqrt(speed) * (1.0 + gauss_(kRpmNoise)));
-    r.erpm = r.rpm * (kSimMotorPoles / 2);
-    const double thrust = std::max(vehicle.thrust_fraction(i), 0.0);
-    r.current_a = full_a * thrust * std::sqrt(thrust) * (1.0 + gauss_(kCurrentNoise)) +
-                  gauss_(kCurrentNoiseA);
-    r.voltage_v = vehicle.battery().terminal_v();
-    r.temperature_c = 40.0;
-    r.consumption_mah = std::numeric_limits<double>::quiet_NaN();
+    // What the ESC measures now goes on its way...
+    if (due(t, esc.next_s)) {
+      while (due(t, esc.next_s)) esc.next_s += esc.period_s;
+      if (((health.telemetry_dead >> i) & 1U) == 0 && uniform() >= kFrameLoss &&
+          esc.size < kInFlight) {
+        double arrives = t;
+        if (latency_) {
+          arrives += kEscLatencyS + kEscJitterS * uniform();
+          if (esc.size > 0) {
+            const InFlight& last = esc.queue[(esc.head + esc.size - 1) % kInFlight];
+            arrives = std::max(arrives, last.arrives_s);
+          }
+        }
+        esc.queue[(esc.head + esc.size) % kInFlight] = {arrives, measure(i, vehicle)};
+        ++esc.size;
+      }
+    }
+    // ...and what has arrived by now is read.
+    while (esc.size > 0 && due(t, esc.queue[esc.head].arrives_s) &&
+           sample_.count < loop::kMaxEscReadings) {
+      sample_.readings[static_cast<std::size_t>(sample_.count++)] = esc.queue[esc.head].reading;
+      esc.head = (esc.head + 1) % kInFlight;
+      --esc.size;
+    }
   }
   return sample_;
 }

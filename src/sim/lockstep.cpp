@@ -1,8 +1,7 @@
 #include "sim/lockstep.hpp"
 
-#include "sim/attitude_sensor.hpp"
-#include "sim/esc_telemetry_model.hpp"
 #include "sim/period.hpp"
+#include "sim/plant.hpp"
 
 #include <motormix/angles.hpp>
 
@@ -18,7 +17,8 @@ std::int64_t to_us(double s) { return static_cast<std::int64_t>(std::llround(s *
 
 }  // namespace
 
-config::Config scenario_config(const config::Config& config_in, const Scenario& scenario) {
+config::Config scenario_config(const config::Config& config_in, const Scenario& scenario,
+                               const Realism& realism) {
   const bool wheeled = config_in.thrust_range() == ThrustRange::kBipolar;
   if (scenario.vehicle == ScenarioVehicle::kAircraft && wheeled) {
     throw config::ConfigError("scenario " + scenario.name + " is for aircraft, and " +
@@ -33,6 +33,7 @@ config::Config scenario_config(const config::Config& config_in, const Scenario& 
     config.vehicle_model.battery.initial_charge = *scenario.battery_initial_charge;
   if (scenario.battery_resistance_factor)
     config.vehicle_model.battery.internal_resistance_ohm *= *scenario.battery_resistance_factor;
+  apply_realism(config, realism);
   return config;
 }
 
@@ -40,18 +41,17 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
                        const SimOptions& options, const FrameObserver& observer) {
   const auto wall_start = std::chrono::steady_clock::now();
   const bool wheeled = config_in.thrust_range() == ThrustRange::kBipolar;
-  const config::Config config = scenario_config(config_in, scenario);
-  VehicleModel vehicle(config);
+  const config::Config config = scenario_config(config_in, scenario, options.realism);
+  Plant plant(config, scenario, options.realism, options.seed);
+  const VehicleModel& vehicle = plant.vehicle();
   loop::ControlLoop loop(config, std::move(mixer));
   Controller controller = Controller::for_vehicle(config, loop.mixer(), vehicle);
   ScenarioClock clock(scenario, config, options.failures);
-  Sensors sensors(scenario.noise, options.seed);
-  EscTelemetryModel esc_telemetry(config.motors(), options.seed);
-  AttitudeSensor attitude_sensor(scenario.noise.gyro_rad_s, options.seed);
   DetectionScorer detections(clock.failures());
 
   const SimulationPeriod periods(config.loop_rate_hz,
-                                 options.duration_s > 0 ? options.duration_s : scenario.duration_s);
+                                 options.duration_s > 0 ? options.duration_s : scenario.duration_s,
+                                 options.realism.imu ? config.vehicle_model.imu.rate_hz : 0.0);
   const double period = periods.period_s;
   MessageSchedule schedule;
 
@@ -72,9 +72,8 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     clock.advance(t);
     const Reference& ref = clock.reference();
 
-    const BodyState measured = sensors.measure(vehicle.body());
     const ControllerCommand cmd =
-        controller.update(ref, measured, sensors.speed(vehicle.forward_speed()), mixer_armed,
+        controller.update(ref, plant.measured(), plant.measured_speed(), mixer_armed,
                           vehicle.landed() && !wheeled, unallocated, period);
     setpoint = {now, cmd.thrust, cmd.yaw, cmd.armed};
     pid = {now, cmd.roll, cmd.pitch, cmd.yaw};
@@ -88,11 +87,10 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     }
     const MotorHealth& health = clock.health(t);
     if (loop.reads_esc_telemetry()) {
-      const loop::EscTelemetrySample& esc = esc_telemetry.sample(t, now, vehicle, health);
+      const loop::EscTelemetrySample& esc = plant.esc_telemetry(t, now, health);
       if (esc.count > 0) loop.on_esc_telemetry(esc, now, now);
     }
-    if (loop.reads_attitude())
-      loop.on_attitude(attitude_sensor.sample(vehicle.body(), now), now, now);
+    if (loop.reads_attitude()) loop.on_attitude(plant.attitude(now), now, now);
     const MotorMask detected =
         options.undetected ? 0 : clock.detected(t, scenario.failure_detection_s);
     const bool status_sent = schedule.motor_status_due(t, detected);
@@ -122,7 +120,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     scorer.add(t, ref, cmd, vehicle, mixer_armed, cycle.mix.allocation.axis_limited);
     detections.add(t, cycle);
 
-    periods.integrate(vehicle, cycle.mix.output, cycle.mix.direction, health, clock, t);
+    plant.integrate(periods, cycle.mix.output, cycle.mix.direction, health, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) break;
   }
   scorer.finish(r);

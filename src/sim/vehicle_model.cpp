@@ -25,6 +25,7 @@ VehicleModel::VehicleModel(const config::Config& config)
   if (!p_.incomplete.empty()) throw std::invalid_argument(p_.incomplete);
   for (const OutputChannel& ch : config.outputs) modes_.push_back(ch.mode);
   speed_.assign(static_cast<std::size_t>(config.motors()), 0.0);
+  rotor_speed_before_.assign(speed_.size(), 0.0);
   prop_.assign(static_cast<std::size_t>(config.motors()), 1.0);
   mass_.mass_kg = p_.mass_kg;
   mass_.inertia = p_.inertia_kgm2;
@@ -83,9 +84,27 @@ Eigen::Matrix<double, 4, Eigen::Dynamic> VehicleModel::command_effect() const {
   return e;
 }
 
-void VehicleModel::sum_rotors() {
+double VehicleModel::ground_effect(int i) const {
+  if (!p_.ground_effect) return 1.0;
+  // Cheeseman and Bennett (1955): T / T_free = 1 / (1 - (R / 4z)^2) at a
+  // height z of the rotor above the ground, R its radius; taken within one
+  // diameter and no lower than R/2 (a third more thrust at most).
+  const double radius = p_.prop_diameter_m / 2;
+  const double z =
+      -(body_.position + body_.attitude * p_.rotors[static_cast<std::size_t>(i)].position_m).z();
+  if (z >= 2.0 * radius) return 1.0;
+  const double q = radius / (4.0 * std::max(z, 0.5 * radius));
+  return 1.0 / (1.0 - q * q);
+}
+
+double VehicleModel::rotor_speed_rad_s(int i) const {
+  // Its speed grows as the square root of its thrust fraction.
+  return p_.max_rotor_speed_rad_s * std::sqrt(std::max(speed_[static_cast<std::size_t>(i)], 0.0));
+}
+
+void VehicleModel::sum_rotors(double dt) {
   MotorVector thrust(motors());
-  for (int i = 0; i < motors(); ++i) thrust[i] = thrust_n(i);
+  for (int i = 0; i < motors(); ++i) thrust[i] = thrust_n(i) * ground_effect(i);
   Eigen::Matrix<double, 6, 1> w;
   w.noalias() = per_newton_ * thrust;
   rotor_force_ = w.head<3>();
@@ -94,10 +113,14 @@ void VehicleModel::sum_rotors() {
   if (p_.rotor_inertia_kgm2 > 0.0) {
     for (std::size_t i = 0; i < p_.rotors.size(); ++i) {
       // A counter-clockwise rotor (seen from above) spins about its thrust
-      // axis; its speed grows as the square root of its thrust fraction.
+      // axis. Its momentum turns the body gyroscopically (-w x h, in
+      // wrench()); speeding it up over this step pushed the body the other
+      // way about its axis (held over the step, as the thrust is).
       const config::RotorPhysics& r = p_.rotors[i];
-      const double speed = p_.max_rotor_speed_rad_s * std::sqrt(std::max(speed_[i], 0.0));
-      rotor_momentum_ += static_cast<double>(r.spin) * p_.rotor_inertia_kgm2 * speed * r.axis;
+      const double speed = rotor_speed_rad_s(static_cast<int>(i));
+      const Eigen::Vector3d h_axis = static_cast<double>(r.spin) * p_.rotor_inertia_kgm2 * r.axis;
+      rotor_momentum_ += speed * h_axis;
+      rotor_torque_ -= (speed - rotor_speed_before_[i]) / dt * h_axis;
     }
   }
 }
@@ -144,6 +167,7 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
       }
       target *= health.drive[i];
     }
+    rotor_speed_before_[k] = rotor_speed_rad_s(i);
     speed_[k] = lag(speed_[k], target, alpha_up_, alpha_down_);
     // Electrical power grows with thrust^1.5 (momentum theory); a wheel
     // motor's current with its speed.
@@ -161,7 +185,7 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
 }
 
 void VehicleModel::step_aircraft(const Environment& env, double dt) {
-  sum_rotors();
+  sum_rotors(dt);
   if (landed_) {
     // Resting on the ground: lift off once the net force points up.
     if (wrench(body_, env).force_world.z() >= 0.0) return;

@@ -26,6 +26,8 @@
 namespace motormix::test {
 namespace {
 
+constexpr std::size_t kMostDefaultsListed = 6;  // more: "derived (by vehicle)"
+
 // Configurations that reach what the bundled ones leave out: every
 // geometry form, every optional section.
 const char* const kExtraConfigs[] = {
@@ -81,11 +83,11 @@ vehicle: {wheel_radius_m: 0.05, track_m: 0.3, max_wheel_speed_rad_s: 20}
 
 std::string unit_of(const std::string& path) {
   static const std::pair<const char*, const char*> kSuffixes[] = {
-      {"_hz", "Hz"},         {"_ms", "ms"},       {"_s", "s"},         {"_per_s", "per s"},
-      {"_kg", "kg"},         {"_kgm2", "kg m^2"}, {"_n", "N"},         {"_m", "m"},
-      {"_v", "V"},           {"_mah", "mAh"},     {"_ohm", "ohm"},     {"_a", "A"},
-      {"_rad_s", "rad/s"},   {"_mps", "m/s"},     {"_deg", "degrees"}, {"nominal_v", "V"},
-      {"min_v", "V"},        {"max_v", "V"}};
+      {"_hz", "Hz"},       {"_ms", "ms"},       {"_s", "s"},         {"_per_s", "per s"},
+      {"_kg", "kg"},       {"_kgm2", "kg m^2"}, {"_n", "N"},         {"_m", "m"},
+      {"_v", "V"},         {"_mah", "mAh"},     {"_ohm", "ohm"},     {"_a", "A"},
+      {"_rad_s", "rad/s"}, {"_mps", "m/s"},     {"_deg", "degrees"}, {"nominal_v", "V"},
+      {"min_v", "V"},      {"max_v", "V"}};
   std::string best;
   std::size_t best_len = 0;
   for (const auto& [suffix, unit] : kSuffixes) {
@@ -140,13 +142,16 @@ std::string reference_table() {
     std::string defaults;
     for (const std::string& d : row.defaults) defaults += (defaults.empty() ? "" : " or ") + d;
     if (row.required) defaults = "(required)";
+    // Derived from the geometry, one per vehicle: too many to list (the
+    // key's page says how they are derived).
+    if (row.defaults.size() > kMostDefaultsListed) defaults = "derived";
     if (row.defaults.size() > 1) defaults += " (by vehicle)";
     const std::string kind = row.kind == "value" ? "list or structure" : row.kind;
     std::string allowed;
     for (const std::string& a : row.allowed) allowed += (allowed.empty() ? "" : "; or ") + a;
     if (row.allowed.size() > 1) allowed += " (by vehicle)";
-    out << "| `" << path << "` | " << kind << " | " << escape(defaults) << " | "
-        << escape(allowed) << " | " << unit_of(path) << " |\n";
+    out << "| `" << path << "` | " << kind << " | " << escape(defaults) << " | " << escape(allowed)
+        << " | " << unit_of(path) << " |\n";
   }
   return out.str();
 }
@@ -183,7 +188,6 @@ TEST(ConfigReference, PageListsEveryKeyTheLoaderReads) {
   EXPECT_NE(table.find("`mixer.prioritized.tie_tolerance`"), std::string::npos);
   EXPECT_NE(table.find("`realtime.lock_memory`"), std::string::npos);
 }
-
 
 // Key paths as a YAML text has them: mapping keys joined by '.', the items of
 // a list of mappings as [] (geometry.rotors[].spin).

@@ -46,9 +46,18 @@ TEST(SpinEquilibrium, HoldsItsEquationsForEveryMotorOfBothQuads) {
         torque += m.torque_per_newton[k] * eq.thrust_n[j];
         force += m.axis[k] * eq.thrust_n[j];
       }
+      // The rotors' own momentum (the presets' rotors have inertia): each
+      // working rotor about its axis at its thrust's speed.
+      Eigen::Vector3d h = Eigen::Vector3d::Zero();
+      for (int j = 0; j < 3; ++j) {
+        const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+        h += m.spin[k] * m.rotor_inertia_kgm2 * m.max_rotor_speed_rad_s *
+             std::sqrt(eq.thrust_n[j] / m.max_thrust_n[k]) * m.axis[k];
+      }
+      EXPECT_GT(h.norm(), 0.0);
       const Eigen::Vector3d w = eq.rates;
       const Eigen::Vector3d holding =
-          w.cross(m.inertia_kgm2.cwiseProduct(w)) + m.rotational_drag * w;
+          w.cross(m.inertia_kgm2.cwiseProduct(w) + h) + m.rotational_drag * w;
       EXPECT_NEAR((torque - holding).norm(), 0.0, kEquationTolerance);
       EXPECT_NEAR(eq.up.dot(force), m.mass_kg * kStandardGravity, kEquationTolerance);
       EXPECT_NEAR(w.norm(), 20.0, kEquationTolerance);
@@ -62,7 +71,8 @@ TEST(SpinEquilibrium, HoldsItsEquationsForEveryMotorOfBothQuads) {
 }
 
 TEST(SpinEquilibrium, AgreesWithTheReducedSolutionOfThePlusQuad) {
-  const config::Config c = spin_quad("quad_plus");
+  // The reduced model leaves the rotors' momentum out: so does the vehicle.
+  const config::Config c = spin_quad("quad_plus", {"vehicle.rotor_inertia_kgm2=0"});
   const SpinningDescentModel& m = c.motor_loss->model;
   const int failed = 0;
   const SpinEquilibrium eq = solve_spin_equilibrium(m, failed, 20.0);

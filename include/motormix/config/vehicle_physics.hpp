@@ -48,6 +48,24 @@ struct WheelPhysics {
   int per_side = 1;
 };
 
+// The flight controller's gyro as `motormix sim` plays it (docs/simulation.md
+// says where each number comes from).
+struct ImuPhysics {
+  double rate_hz = 1000.0;       // the gyro is sampled at least this often
+  double vibration_dps = 10.0;   // per rotor at full speed (first harmonic; the second half)
+  double lowpass_hz = 40.0;      // the controller's second-order gyro low-pass
+  double bias_drift_dps = 0.02;  // bias random walk, deg/s per square root of a second
+};
+
+// A propeller's spinning inertia (with its motor's bell) from its diameter:
+// a 10-inch (0.254 m) prop measures 5e-5..6e-5 kg m^2, and the inertia of
+// props of one family grows about as the fourth power of the diameter.
+inline double rotor_inertia_for(double prop_diameter_m) {
+  constexpr double kTenInchM = 0.254, kTenInchKgm2 = 5.5e-5;
+  const double r = prop_diameter_m / kTenInchM;
+  return kTenInchKgm2 * r * r * r * r;
+}
+
 struct VehiclePhysics {
   bool wheeled = false;
   double mass_kg = 0.0;
@@ -68,12 +86,21 @@ struct VehiclePhysics {
   double thrust_expo = 0.3;
   double drag_linear_n_per_mps = 0.0;         // force against the air-relative velocity
   double drag_rotational_nm_per_radps = 0.0;  // torque against the body rates
+  // The propellers' diameter (m): what the rotor inertia and the ground
+  // effect's reach are derived from. Default: 0.8 of the closest spacing of
+  // two rotors (a 450 mm quad's 10-inch props).
+  double prop_diameter_m = 0.0;
   // Each rotor's spinning inertia (prop and motor bell, kg m^2) and its
   // speed at full thrust (rad/s; the speed grows as the square root of the
-  // thrust): their angular momentum gives the gyroscopic torque -w x h. 0
-  // (the default) leaves it out, as motormix before it did.
+  // thrust): their angular momentum gives the gyroscopic torque -w x h, and
+  // their speeding up and slowing down a reaction torque about each rotor's
+  // axis. Default: derived from prop_diameter_m (rotor_inertia_for).
   double rotor_inertia_kgm2 = 0.0;
   double max_rotor_speed_rad_s = 750.0;
+  // Ground effect: each rotor gives more thrust within one diameter of the
+  // ground (motormix sim only).
+  bool ground_effect = true;
+  ImuPhysics imu;
   BatteryPhysics battery;
   // Empty when the physics is complete; otherwise why the vehicle cannot be
   // simulated (e.g. a mixing table with no `vehicle.rotors`).

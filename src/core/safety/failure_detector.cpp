@@ -44,6 +44,8 @@ FailureDetector::FailureDetector(const FailureDetectorSettings& settings) : s_(s
 void FailureDetector::reset() {
   detection_ = Detection{};
   lagged_.setZero(s_.motors);
+  lag_count_ = 0;
+  rotor_speed_.fill(0.0);
   output_filtered_.setZero(s_.motors);
   telemetry_suspicion_.fill(0.0);
   silent_suspicion_.fill(0.0);
@@ -149,6 +151,24 @@ const Detection& FailureDetector::update(const MotorVector& thrust, MotorMask ex
     const double target = has(excluded, i) ? 0.0 : std::clamp(thrust[i], 0.0, 1.0);
     lagged_[i] += (target - lagged_[i]) * (target > lagged_[i] ? up : down);
   }
+  // The rotors' momentum, and the reaction torque of its change since the
+  // last update (the rotor speeds follow the lagged thrusts as their square
+  // roots).
+  rotor_reaction_.setZero();
+  rotor_momentum_.setZero();
+  const bool spinning_mass = s_.max_rotor_speed_rad_s > 0.0 && s_.momentum_per_speed.cols() >= n;
+  for (int i = 0; spinning_mass && i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double speed = s_.max_rotor_speed_rad_s * std::sqrt(std::max(lagged_[i], 0.0));
+    rotor_momentum_ += speed * s_.momentum_per_speed.col(i);
+    if (dt > 0.0) rotor_reaction_ -= (speed - rotor_speed_[k]) / dt * s_.momentum_per_speed.col(i);
+    rotor_speed_[k] = speed;
+  }
+  lag_head_ = (lag_head_ + 1) % kLagHistory;
+  lag_count_ = std::min(lag_count_ + 1, kLagHistory);
+  for (int i = 0; i < n; ++i)
+    lag_history_[static_cast<std::size_t>(lag_head_)][static_cast<std::size_t>(i)] = lagged_[i];
+  lag_history_us_[static_cast<std::size_t>(lag_head_)] = now_us;
 
   if (uses(DetectorSources::kTelemetry)) judge_telemetry(excluded, allowed, dt, now_us);
   if (uses(DetectorSources::kRates)) judge_rates(excluded, allowed, dt, now_us);
@@ -159,9 +179,30 @@ const Detection& FailureDetector::update(const MotorVector& thrust, MotorMask ex
 void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double dt,
                                       std::int64_t now_us) {
   const auto timeout_us = static_cast<std::int64_t>(s_.telemetry_timeout_s * 1e6);
+  const auto latency_us = static_cast<std::int64_t>(s_.telemetry_latency_s * 1e6);
+  // What a motor's thrust was while its reading can have been measured:
+  // from the latency before it arrived until now. `least` is the least of it
+  // (the kindest thrust to judge a slow rpm by), `mid` the thrust half the
+  // latency before it arrived (the likeliest; the ring holds kLagHistory
+  // cycles, at most that far back).
+  struct Window {
+    double least, mid;
+  };
+  const auto window = [&](std::size_t k, std::int64_t received_us) {
+    Window w{lagged_[static_cast<Eigen::Index>(k)], lagged_[static_cast<Eigen::Index>(k)]};
+    const std::int64_t mid_us = received_us - latency_us / 2;
+    for (int back = 1; back < lag_count_; ++back) {
+      const auto slot = static_cast<std::size_t>((lag_head_ - back + kLagHistory) % kLagHistory);
+      if (lag_history_us_[slot] < received_us - latency_us) break;
+      w.least = std::min(w.least, lag_history_[slot][k]);
+      if (lag_history_us_[slot] >= mid_us) w.mid = lag_history_[slot][k];
+    }
+    return w;
+  };
   // Each judged motor's ratio of rpm (or current) to what its thrust should
-  // give, up to a common scale; kind: 1 rpm, 2 current, 0 not judged.
-  std::array<double, kMaxMotors> ratio{};
+  // give, up to a common scale (at its likeliest thrust, and at its kindest:
+  // best); kind: 1 rpm, 2 current, 0 not judged.
+  std::array<double, kMaxMotors> ratio{}, best{};
   std::array<std::uint8_t, kMaxMotors> kind{};
   std::array<double, kMaxMotors> rpm_ratios{}, current_ratios{};
   int n_rpm = 0, n_current = 0, fresh = 0;
@@ -171,12 +212,19 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     if (!e.any || now_us - e.received_us > timeout_us) continue;
     ++fresh;
     if (has(excluded, i) || lagged_[i] < s_.min_motor_thrust) continue;
+    // Below min_motor_thrust at any time its reading can come from, it is
+    // not judged (near idle, rpm says little).
+    const Window w = window(k, e.received_us);
+    if (w.least < s_.min_motor_thrust) continue;
+    const double mid = w.mid, least = w.least;
     if (std::isfinite(e.rpm)) {
-      ratio[k] = e.rpm / std::sqrt(lagged_[i]);
+      ratio[k] = e.rpm / std::sqrt(mid);
+      best[k] = e.rpm / std::sqrt(least);
       kind[k] = 1;
       rpm_ratios[static_cast<std::size_t>(n_rpm++)] = ratio[k];
     } else if (std::isfinite(e.current)) {
-      ratio[k] = e.current / (lagged_[i] * std::sqrt(lagged_[i]));
+      ratio[k] = e.current / (mid * std::sqrt(mid));
+      best[k] = e.current / (least * std::sqrt(least));
       kind[k] = 2;
       current_ratios[static_cast<std::size_t>(n_current++)] = ratio[k];
     }
@@ -189,8 +237,8 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     telemetry_healthy_[k] =
-        (kind[k] == 1 && rpm_median > 0 && ratio[k] >= s_.rpm_ratio * rpm_median) ||
-        (kind[k] == 2 && current_median > 0 && ratio[k] >= s_.current_ratio * current_median);
+        (kind[k] == 1 && rpm_median > 0 && best[k] >= s_.rpm_ratio * rpm_median) ||
+        (kind[k] == 2 && current_median > 0 && best[k] >= s_.current_ratio * current_median);
   }
   // Silence alone stops a motor only where that costs nothing the vehicle
   // needs, and never when the rates can tell a dead motor from a dead wire.
@@ -203,8 +251,8 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     const bool silent = e.any && now_us - e.received_us > timeout_us && 2 * fresh >= s_.motors;
     if (silent) detection_.telemetry_silent |= MotorMask{1} << i;
     const bool low =
-        (kind[k] == 1 && rpm_median > 0 && ratio[k] < s_.rpm_ratio * rpm_median) ||
-        (kind[k] == 2 && current_median > 0 && ratio[k] < s_.current_ratio * current_median);
+        (kind[k] == 1 && rpm_median > 0 && best[k] < s_.rpm_ratio * rpm_median) ||
+        (kind[k] == 2 && current_median > 0 && best[k] < s_.current_ratio * current_median);
     if (!allowed) {
       telemetry_suspicion_[k] = 0.0;
       silent_suspicion_[k] = 0.0;
@@ -235,17 +283,25 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
   const Eigen::Vector3d iw = s_.inertia_kgm2.cwiseProduct(w);
   Eigen::Vector3d rotors;
   rotors.noalias() = s_.torque_per_thrust * lagged_;
-  const Eigen::Vector3d rest = -s_.rotational_drag * w - w.cross(iw);
+  const Eigen::Vector3d rest =
+      -s_.rotational_drag * w - w.cross(iw + rotor_momentum_) + rotor_reaction_;
+  // Both sides through the same second-order low-pass (two first-order
+  // stages): differentiating the rates lifts the frame's vibration by its
+  // frequency, and a second stage takes it back down where a first leaves
+  // it as large as a failure's torque.
   if (!filters_primed_) {
-    accel_filtered_ = accel_raw_;
-    rotor_torque_filtered_ = rotors;
-    rest_torque_filtered_ = rest;
+    accel_stage_ = accel_filtered_ = accel_raw_;
+    rotor_torque_stage_ = rotor_torque_filtered_ = rotors;
+    rest_torque_stage_ = rest_torque_filtered_ = rest;
     filters_primed_ = true;
   } else {
     const double a = alpha_.rates;
-    accel_filtered_ += a * (accel_raw_ - accel_filtered_);
-    rotor_torque_filtered_ += a * (rotors - rotor_torque_filtered_);
-    rest_torque_filtered_ += a * (rest - rest_torque_filtered_);
+    accel_stage_ += a * (accel_raw_ - accel_stage_);
+    rotor_torque_stage_ += a * (rotors - rotor_torque_stage_);
+    rest_torque_stage_ += a * (rest - rest_torque_stage_);
+    accel_filtered_ += a * (accel_stage_ - accel_filtered_);
+    rotor_torque_filtered_ += a * (rotor_torque_stage_ - rotor_torque_filtered_);
+    rest_torque_filtered_ += a * (rest_torque_stage_ - rest_torque_filtered_);
   }
   // What the rotors' torque did, measured: inertia times acceleration, less
   // drag and the gyroscopic term.

@@ -108,6 +108,8 @@ Eigen::Vector3d up_axis(const Eigen::Vector3d& w, const Eigen::Vector3d& force) 
   return n.dot(force) >= 0.0 ? n : Eigen::Vector3d(-n);
 }
 
+constexpr int kMomentumSteps = 8;
+
 Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin, const Vector6d& x) {
   const Eigen::Vector3d f = x.head<3>();
   const Eigen::Vector3d w = x.tail<3>();
@@ -120,23 +122,9 @@ Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin, c
   return r;
 }
 
-}  // namespace
-
-SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed,
-                                       double spin_rate) {
-  SpinEquilibrium eq;
-  eq.failed = failed;
-  const Layout l = layout(m, failed);
-  eq.working = l.working;
-  const double weight = m.mass_kg * kStandardGravity;
-  // Start level, spinning the way the two neighbours' drag turns the body.
-  Vector6d x;
-  x.head<3>().setConstant(weight / 3.0);
-  double yaw = 0.0;
-  for (int b : l.neighbours)
-    yaw +=
-        m.torque_per_newton[static_cast<std::size_t>(l.working[static_cast<std::size_t>(b)])].z();
-  x.tail<3>() = Eigen::Vector3d(0.0, 0.0, yaw >= 0.0 ? spin_rate : -spin_rate);
+// Newton's method with a halving line search from x; returns the last
+// residual's norm.
+double newton(const SpinningDescentModel& m, const Layout& l, double spin_rate, Vector6d& x) {
   Vector6d r = residual(m, l, spin_rate, x);
   for (int it = 0; it < kNewtonIterations && r.norm() > kNewtonTolerance; ++it) {
     Matrix6d jac;
@@ -159,6 +147,36 @@ SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed
     x = next;
     r = rn;
   }
+  return r.norm();
+}
+
+}  // namespace
+
+SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed,
+                                       double spin_rate) {
+  SpinEquilibrium eq;
+  eq.failed = failed;
+  const Layout l = layout(m, failed);
+  eq.working = l.working;
+  const double weight = m.mass_kg * kStandardGravity;
+  // Start level, spinning the way the two neighbours' drag turns the body.
+  Vector6d x;
+  x.head<3>().setConstant(weight / 3.0);
+  double yaw = 0.0;
+  for (int b : l.neighbours)
+    yaw +=
+        m.torque_per_newton[static_cast<std::size_t>(l.working[static_cast<std::size_t>(b)])].z();
+  x.tail<3>() = Eigen::Vector3d(0.0, 0.0, yaw >= 0.0 ? spin_rate : -spin_rate);
+  // The rotors' momentum moves the solution far from that start: solve
+  // without it first, then add it in steps, each starting from the last
+  // solution (continuation).
+  SpinningDescentModel stepped = m;
+  for (int k = 0; k <= kMomentumSteps; ++k) {
+    stepped.rotor_inertia_kgm2 = m.rotor_inertia_kgm2 * k / kMomentumSteps;
+    newton(stepped, l, spin_rate, x);
+    if (m.rotor_inertia_kgm2 <= 0.0) break;
+  }
+  const Vector6d r = residual(m, l, spin_rate, x);
   std::ostringstream why;
   if (!(r.norm() <= 1e-8)) {
     why << "no relaxed hover at " << spin_rate << " rad/s with motor " << failed + 1

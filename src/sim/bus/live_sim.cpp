@@ -6,10 +6,9 @@
 #include "bus/sealed_publisher.hpp"
 #include "bus/shutdown_signals.hpp"
 #include "node/messages.hpp"
-#include "sim/attitude_sensor.hpp"
 #include "sim/bus/sim_log.hpp"
-#include "sim/esc_telemetry_model.hpp"
 #include "sim/period.hpp"
+#include "sim/plant.hpp"
 
 #include <motormix/battery_t.hpp>
 #include <motormix/config/build_mixer.hpp>
@@ -106,7 +105,7 @@ struct MixerOutputs {
 
 bool run_live(const config::Config& config_in, const Scenario& scenario, const LiveOptions& options,
               LiveResult& result, std::ostream& err) {
-  const config::Config config = scenario_config(config_in, scenario);
+  const config::Config config = scenario_config(config_in, scenario, options.sim.realism);
   // A link of its own: it publishes motor_status_t as the mixer does.
   std::optional<signing::Policy> maybe_policy =
       bus::policy_or_error(config, "sim", err, config::kSimulatorLinkOffset);
@@ -126,14 +125,11 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     return false;
   }
   const bool wheeled = config.thrust_range() == ThrustRange::kBipolar;
-  VehicleModel vehicle(config);
+  Plant plant(config, scenario, options.sim.realism, options.sim.seed);
+  const VehicleModel& vehicle = plant.vehicle();
   const Mixer mixer = config::build_mixer(config);  // only linearized by the controller
   Controller controller = Controller::for_vehicle(config, mixer, vehicle);
   ScenarioClock clock(scenario, config, options.sim.failures);
-  Sensors sensors(scenario.noise, options.sim.seed);
-  // The vehicle's ESCs and estimator, for motormix's failure detector.
-  EscTelemetryModel esc_telemetry(config.motors(), options.sim.seed);
-  AttitudeSensor attitude_sensor(scenario.noise.gyro_rad_s, options.sim.seed);
   esc_telemetry_t esc_msg;
   attitude_t attitude_msg;
   Scorer scorer(scenario, config);
@@ -150,9 +146,10 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   lcm.subscribe(config.channels.motor_pwm, &MixerOutputs::on_pwm, &mix);
   lcm.subscribe(config.channels.status, &MixerOutputs::on_status, &mix);
 
-  const SimulationPeriod periods(config.loop_rate_hz, options.sim.duration_s > 0
-                                                          ? options.sim.duration_s
-                                                          : scenario.duration_s);
+  const SimulationPeriod periods(
+      config.loop_rate_hz,
+      options.sim.duration_s > 0 ? options.sim.duration_s : scenario.duration_s,
+      options.sim.realism.imu ? config.vehicle_model.imu.rate_hz : 0.0);
   const double period = periods.period_s;
   MessageSchedule schedule;
   const auto stale_after = std::chrono::duration<double>(
@@ -196,8 +193,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     ControllerCommand cmd;
     cmd.attitude_sp = from_euler(ref.roll, ref.pitch, ref.yaw);
     if (options.controller) {
-      cmd = controller.update(ref, sensors.measure(vehicle.body()),
-                              sensors.speed(vehicle.forward_speed()), mix.any && mix.armed,
+      cmd = controller.update(ref, plant.measured(), plant.measured_speed(), mix.any && mix.armed,
                               vehicle.landed() && !wheeled,
                               mix.armed ? mix.unallocated : AxisVector::Zero(), period);
       setpoint_t sp;
@@ -220,12 +216,12 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       publish(config.channels.battery, b);
     }
     if (!wheeled) {
-      const loop::EscTelemetrySample& esc = esc_telemetry.sample(t, now, vehicle, clock.health(t));
+      const loop::EscTelemetrySample& esc = plant.esc_telemetry(t, now, clock.health(t));
       if (esc.count > 0) {
         node::fill_esc_telemetry_message(esc_msg, esc);
         publish(config.channels.esc_telemetry, esc_msg);
       }
-      node::fill_attitude_message(attitude_msg, attitude_sensor.sample(vehicle.body(), now));
+      node::fill_attitude_message(attitude_msg, plant.attitude(now));
       publish(config.channels.attitude, attitude_msg);
     }
     const MotorMask detected =
@@ -248,8 +244,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     const double declared_t =
         mix.detected_utime > 0 ? t + static_cast<double>(mix.detected_utime - now) / 1e6 : t;
     detections.add(std::min(t, declared_t), mix.detected, mix.detected_by);
-    periods.integrate(
-        vehicle,
+    plant.integrate(
+        periods,
         mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),
         mix.direction, fresh ? clock.health(t) : all_stopped, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) {

@@ -14,6 +14,7 @@
 
 #include "loop/control_loop.hpp"
 #include "sim/controller.hpp"
+#include "sim/realism.hpp"
 #include "sim/scenario.hpp"
 #include "sim/scenario_clock.hpp"
 #include "sim/scoring.hpp"
@@ -37,6 +38,7 @@ struct SimOptions {
   bool undetected = false;             // never report the failures on motor_status
   std::uint64_t seed = 1;
   double duration_s = 0.0;  // > 0: instead of the scenario's
+  Realism realism;          // what of the real world is played (realism.hpp)
 };
 
 // Everything one loop period produced, for logs and plots.
@@ -54,10 +56,12 @@ struct SimFrame {
 };
 using FrameObserver = std::function<void(const SimFrame&)>;
 
-// The configuration as the scenario flies it (its battery settings applied).
+// The configuration as the scenario flies it: its battery settings and the
+// realism's switches applied (what the controller and motormix see).
 // Throws config::ConfigError when the scenario is for the other kind of
 // vehicle.
-config::Config scenario_config(const config::Config& config, const Scenario& scenario);
+config::Config scenario_config(const config::Config& config, const Scenario& scenario,
+                               const Realism& realism = {});
 
 // `mixer` is what the control loop flies with (build_mixer(config), or a
 // comparison allocator); the controller linearizes it.

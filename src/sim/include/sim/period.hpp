@@ -1,9 +1,9 @@
 #pragma once
 // One simulation period, written once for the lockstep and the live run:
 // how long a period is, how many physics substeps it takes (each at most
-// 1 ms), how many periods a run has, and when the simulated vehicle's own
-// messages are due (battery at 50 Hz; motor_status at 10 Hz once a failure
-// is reported, and at once when the reported set changes).
+// 1 ms, and at most one gyro sample long), how many periods a run has, and when the simulated
+// vehicle's own messages are due (battery at 50 Hz; motor_status at 10 Hz once a failure is
+// reported, and at once when the reported set changes).
 
 #include "sim/motor_health.hpp"
 #include "sim/scenario.hpp"
@@ -26,22 +26,16 @@ inline constexpr double kBatteryPeriodS = 0.02;  // battery_t at 50 Hz
 inline constexpr double kMotorStatusPeriodS =
     0.1;  // motor_status_t at 10 Hz once a failure is seen
 
-class ScenarioClock;
-
 struct SimulationPeriod {
   double period_s;      // one loop period
   int substeps;         // physics steps per period
   double step_s;        // period_s / substeps, at most kMaxPhysicsStepS
   std::int64_t cycles;  // periods in a run of duration_s
 
-  SimulationPeriod(double loop_rate_hz, double duration_s);
+  // Each step also at most 1 / sample_rate_hz long (the gyro is sampled
+  // once per step).
+  SimulationPeriod(double loop_rate_hz, double duration_s, double sample_rate_hz = 0.0);
   double start_of(std::int64_t k) const { return static_cast<double>(k) * period_s; }
-
-  // The vehicle through period k's physics, from time t, with the
-  // environment of each substep.
-  void integrate(VehicleModel& vehicle, const MotorVector& outputs,
-                 const DirectionVector& direction, const MotorHealth& health,
-                 const ScenarioClock& clock, double t) const;
 };
 
 // When the simulated vehicle's own messages are due.

@@ -1,6 +1,7 @@
 #pragma once
-// What the built-in controller sees of the simulated vehicle: its true
-// state with the scenario's sensor noise, from one seeded generator.
+// What the built-in controller sees of the simulated vehicle: the IMU's
+// rates (imu.hpp) and the rest of its true state with the scenario's sensor
+// noise, from one seeded generator.
 
 #include "sim/noise.hpp"
 #include "sim/rigid_body.hpp"
@@ -19,7 +20,7 @@ inline constexpr double kGyroRangeRadS = 2000.0 * kRadPerDeg;
 class Sensors {
  public:
   Sensors(const SensorNoise& noise, std::uint64_t seed) : noise_(noise), gauss_(seed) {}
-  BodyState measure(const BodyState& truth) {
+  BodyState measure(const BodyState& truth, const Eigen::Vector3d& gyro) {
     BodyState m = truth;
     // One draw per statement: the order of a constructor's arguments is
     // unspecified, and the sequence must not depend on the compiler.
@@ -30,10 +31,7 @@ class Sensors {
                                                         tilt_noise.z() / 2))
                        .normalized();
     }
-    m.rates += draws(noise_.gyro_rad_s);
-    // The gyro reads no further than its range (a spinning vehicle can
-    // reach it).
-    m.rates = m.rates.cwiseMax(-kGyroRangeRadS).cwiseMin(kGyroRangeRadS);
+    m.rates = gyro;
     m.position.z() += gauss_(noise_.altitude_m);
     m.velocity.z() += gauss_(noise_.altitude_m);
     return m;

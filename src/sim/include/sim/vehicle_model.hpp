@@ -6,9 +6,10 @@
 //   to a thrust fraction through the physical curve e x^2 + (1 - e) x,
 //   scaled with the pack voltage as (1 - e) v + e v^2 of v = V / V_ref; the
 //   rotor follows with a first-order lag (separate up and down time
-//   constants), pushes along its axis and drags against its spin (and, with
-//   vehicle.rotor_inertia_kgm2 set, its angular momentum turns the body
-//   gyroscopically, -w x h); a 6-DOF
+//   constants), pushes along its axis (more within a diameter of the
+//   ground) and drags against its spin; its angular momentum turns the body
+//   gyroscopically (-w x h) and its speeding up or slowing down pushes the
+//   body the other way about its axis; a 6-DOF
 //   rigid body (rigid_body.hpp) with linear and rotational drag, gravity, a
 //   flat ground at z = 0 and crash detection;
 // - ground vehicles: each wheel's driver maps centered PWM or duty plus
@@ -86,12 +87,17 @@ class VehicleModel {
   // (m/s) for wheels. What a controller's gains are derived from.
   Eigen::Matrix<double, 4, Eigen::Dynamic> command_effect() const;
 
+  // The factor on rotor i's thrust from the ground below it now (1 higher
+  // than one diameter up, or with vehicle.ground_effect off).
+  double ground_effect(int i) const;
+
   // Places the vehicle (e.g. in the air, for tests).
   void set_body(const BodyState& body, bool landed);
 
  private:
   double driver_fraction(int i, double output, int direction) const;
-  void sum_rotors();  // the rotors' force and torque, held over one step
+  void sum_rotors(double dt);  // the rotors' force and torque, held over one step
+  double rotor_speed_rad_s(int i) const;
   Wrench wrench(const BodyState& s, const Environment& env) const;
   void step_aircraft(const Environment& env, double dt);
   void step_wheels(double dt);
@@ -103,11 +109,12 @@ class VehicleModel {
   BatteryModel battery_;
   std::vector<double> speed_;  // rotors: thrust fraction; wheels: rad/s
   std::vector<double> prop_;   // rotors: thrust per unit speed fraction (1: whole prop)
+  std::vector<double> rotor_speed_before_;  // rad/s, at the start of the step
   double forward_speed_ = 0.0;
   // Rotor i: force and torque per newton (fixed capacity: no allocation per step).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxMotors> per_newton_;
-  Eigen::Vector3d rotor_force_ = Eigen::Vector3d::Zero();   // body
-  Eigen::Vector3d rotor_torque_ = Eigen::Vector3d::Zero();  // body
+  Eigen::Vector3d rotor_force_ = Eigen::Vector3d::Zero();     // body
+  Eigen::Vector3d rotor_torque_ = Eigen::Vector3d::Zero();    // body
   Eigen::Vector3d rotor_momentum_ = Eigen::Vector3d::Zero();  // body, N m s (gyroscopic)
   double lag_dt_ = 0.0, alpha_up_ = 0.0, alpha_down_ = 0.0;
   bool landed_ = true;
