@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
   sim_app->add_option("--fail", sim_cmd.fail,
                       "fail a motor: MOTOR@SECONDS[:KIND], motor numbered as motormix matrix "
                       "prints it or named; KIND stop (default), half_thrust, intermittent, "
-                      "desync or telemetry (repeatable)");
+                      "desync, telemetry, prop_lost or prop_damaged (repeatable)");
   sim_app->add_flag("--no-scenario-failures", sim_cmd.no_scenario_failures,
                     "drop the scenario's own motor failures (motor_out, spin_landing): with "
                     "--fail, another motor fails instead");

@@ -104,9 +104,10 @@ struct FailureDetectorSettings {
   // still speeding up (or an old one, the frames after it lost) is not "too
   // slow".
   double telemetry_latency_s = 0.02;
-  double rpm_ratio = 0.6;       // rpm below this fraction of the median ratio: suspect
-  double current_ratio = 0.35;  // current below this fraction of the median ratio: suspect
-  int min_reporting = 3;        // motors with fresh telemetry needed for a median
+  double rpm_ratio = 0.6;        // rpm below this fraction of the median ratio: suspect
+  double rpm_high_ratio = 1.25;  // or above this multiple of it (a prop thrown): suspect
+  double current_ratio = 0.35;   // current below this fraction of the median ratio: suspect
+  int min_reporting = 3;         // motors with fresh telemetry needed for a median
   // Whether an ESC that goes silent while most others report is declared
   // on that alone (without the rates source). The configuration sets it
   // for six rotors or more; a quad never stops a motor for a silent wire.

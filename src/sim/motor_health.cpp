@@ -34,6 +34,15 @@ void MotorHealth::apply(const MotorFailure& f, double t) {
     case FailureKind::kTelemetry:
       telemetry_dead |= MotorMask{1} << i;
       break;
+    case FailureKind::kPropLost:
+      drive[i] *= kPropLostSpeedUp;
+      prop[i] = 0.0;
+      lag[i] = kPropLostLag;
+      break;
+    case FailureKind::kPropDamaged:
+      drive[i] *= kPropDamagedSpeedUp;
+      prop[i] *= kPropDamagedThrust;
+      break;
   }
 }
 

@@ -168,7 +168,14 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
       target *= health.drive[i];
     }
     rotor_speed_before_[k] = rotor_speed_rad_s(i);
-    speed_[k] = lag(speed_[k], target, alpha_up_, alpha_down_);
+    if (health.lag.size() > i && health.lag[i] != 1.0) {
+      // A rotor that lost its prop: only the bell to turn.
+      const double f = health.lag[i];
+      speed_[k] = lag(speed_[k], target, 1.0 - std::exp(-dt / (f * p_.time_constant_up_s)),
+                      1.0 - std::exp(-dt / (f * p_.time_constant_down_s)));
+    } else {
+      speed_[k] = lag(speed_[k], target, alpha_up_, alpha_down_);
+    }
     // Electrical power grows with thrust^1.5 (momentum theory); a wheel
     // motor's current with its speed.
     const double s = std::max(speed_[k] * prop_[k], 0.0);

@@ -70,6 +70,58 @@ TEST(FailureDetector, TelemetryNamesTheMotorThatStopped) {
   EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
 }
 
+TEST(FailureDetector, TelemetryNamesTheMotorThatLostItsProp) {
+  // A thrown prop unloads its motor: at the same command it runs a third
+  // faster. Too fast is as much a sign as too slow.
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  MotorVector actual = hover(6);
+  std::int64_t t = 0;
+  const std::int64_t fail_at = 500'000;
+  for (; t < 2'000'000 && d.detection().failed == 0; t += kCycleUs) {
+    if (t >= fail_at)
+      actual[4] = hover(6)[4] * (1.0 + 0.78 * (1.0 - std::exp(-(t - fail_at) / 6e3)));
+    feed_telemetry(d, actual, 1.0, t);
+    d.update(hover(6), 0, true, t);
+  }
+  ASSERT_EQ(d.detection().failed, MotorMask{1} << 4);
+  EXPECT_EQ(d.detection().source, DetectionSource::kTelemetry);
+  const double latency = static_cast<double>(d.detection().at_us - fail_at) / 1e6;
+  EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
+}
+
+// Every motor stepping from 0.15 of full thrust to 0.9 and back, each
+// following with the motor lag; one ESC's readings arrive `late_us` after
+// they were measured (a slow telemetry line). Returns what was declared.
+MotorMask late_esc_through_steps(FailureDetectorSettings s, std::int64_t late_us) {
+  FailureDetector d(s);
+  MotorVector command = MotorVector::Constant(6, 0.15), actual = command;
+  std::vector<MotorVector> past;  // actual, one entry per cycle
+  for (std::int64_t t = 0; t < 2'000'000; t += kCycleUs) {
+    if (t == 1'000'000) command.setConstant(0.9);
+    if (t == 1'300'000) command.setConstant(0.15);
+    for (int i = 0; i < 6; ++i) {
+      const double tau = command[i] > actual[i] ? s.time_constant_up_s : s.time_constant_down_s;
+      actual[i] += (command[i] - actual[i]) * (1.0 - std::exp(-kCycleUs / 1e6 / tau));
+    }
+    past.push_back(actual);
+    MotorVector reported = actual;
+    const auto back = static_cast<std::size_t>(late_us / kCycleUs);
+    reported[3] = past[past.size() > back ? past.size() - 1 - back : 0][3];
+    feed_telemetry(d, reported, 1.0, t);
+    d.update(command, 0, true, t);
+  }
+  return d.detection().failed;
+}
+
+TEST(FailureDetector, ALateReadingOfAMotorFollowingItsCommandIsNeitherSlowNorFast) {
+  FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
+  s.telemetry_persist_s = 0.0;  // about the window, not the persistence
+  EXPECT_EQ(late_esc_through_steps(s, 17'500), 0U);
+  // Judged as if on time, the same readings declare it: the window matters.
+  s.telemetry_latency_s = 0.0;
+  EXPECT_EQ(late_esc_through_steps(s, 17'500), MotorMask{1} << 3);
+}
+
 TEST(FailureDetector, OneBadReadingIsNotAFailure) {
   FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
   for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {

@@ -186,23 +186,26 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   // latency before it arrived (the likeliest; the ring holds kLagHistory
   // cycles, at most that far back).
   struct Window {
-    double least, mid;
+    double least, mid, most;
   };
   const auto window = [&](std::size_t k, std::int64_t received_us) {
-    Window w{lagged_[static_cast<Eigen::Index>(k)], lagged_[static_cast<Eigen::Index>(k)]};
+    const double now = lagged_[static_cast<Eigen::Index>(k)];
+    Window w{now, now, now};
     const std::int64_t mid_us = received_us - latency_us / 2;
     for (int back = 1; back < lag_count_; ++back) {
       const auto slot = static_cast<std::size_t>((lag_head_ - back + kLagHistory) % kLagHistory);
       if (lag_history_us_[slot] < received_us - latency_us) break;
       w.least = std::min(w.least, lag_history_[slot][k]);
+      w.most = std::max(w.most, lag_history_[slot][k]);
       if (lag_history_us_[slot] >= mid_us) w.mid = lag_history_[slot][k];
     }
     return w;
   };
   // Each judged motor's ratio of rpm (or current) to what its thrust should
-  // give, up to a common scale (at its likeliest thrust, and at its kindest:
-  // best); kind: 1 rpm, 2 current, 0 not judged.
-  std::array<double, kMaxMotors> ratio{}, best{};
+  // give, up to a common scale: at its likeliest thrust, at the kindest to a
+  // slow motor (best: the least thrust) and to a fast one (fastest: the
+  // most); kind: 1 rpm, 2 current, 0 not judged.
+  std::array<double, kMaxMotors> ratio{}, best{}, fastest{};
   std::array<std::uint8_t, kMaxMotors> kind{};
   std::array<double, kMaxMotors> rpm_ratios{}, current_ratios{};
   int n_rpm = 0, n_current = 0, fresh = 0;
@@ -220,6 +223,7 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     if (std::isfinite(e.rpm)) {
       ratio[k] = e.rpm / std::sqrt(mid);
       best[k] = e.rpm / std::sqrt(least);
+      fastest[k] = e.rpm / std::sqrt(w.most);
       kind[k] = 1;
       rpm_ratios[static_cast<std::size_t>(n_rpm++)] = ratio[k];
     } else if (std::isfinite(e.current)) {
@@ -237,7 +241,8 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     telemetry_healthy_[k] =
-        (kind[k] == 1 && rpm_median > 0 && best[k] >= s_.rpm_ratio * rpm_median) ||
+        (kind[k] == 1 && rpm_median > 0 && best[k] >= s_.rpm_ratio * rpm_median &&
+         fastest[k] <= s_.rpm_high_ratio * rpm_median) ||
         (kind[k] == 2 && current_median > 0 && best[k] >= s_.current_ratio * current_median);
   }
   // Silence alone stops a motor only where that costs nothing the vehicle
@@ -250,8 +255,11 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     // Silent: it reported before, it no longer does, and most others do.
     const bool silent = e.any && now_us - e.received_us > timeout_us && 2 * fresh >= s_.motors;
     if (silent) detection_.telemetry_silent |= MotorMask{1} << i;
+    // Too slow for its command (stopped, desynced), or too fast: a prop
+    // thrown or broken unloads the motor, which then outruns its command.
     const bool low =
-        (kind[k] == 1 && rpm_median > 0 && best[k] < s_.rpm_ratio * rpm_median) ||
+        (kind[k] == 1 && rpm_median > 0 &&
+         (best[k] < s_.rpm_ratio * rpm_median || fastest[k] > s_.rpm_high_ratio * rpm_median)) ||
         (kind[k] == 2 && current_median > 0 && best[k] < s_.current_ratio * current_median);
     if (!allowed) {
       telemetry_suspicion_[k] = 0.0;

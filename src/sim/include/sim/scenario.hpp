@@ -17,7 +17,8 @@
 //     - {at: 7, roll_deg: 0, yaw_deg: 90}
 //     - {at: 9, fail: 3}                       # motor number as `motormix matrix` prints it
 //     - {at: 9, fail: 2, kind: desync}         # stop (default), half_thrust, intermittent,
-//                                              # desync or telemetry (motor_health.hpp)
+//                                              # desync, telemetry, prop_lost or
+//                                              # prop_damaged (motor_health.hpp)
 //     - {at: 10, gust: {force_n: [4, 0, 0], torque_nm: [0.2, 0, 0], for_s: 0.5}}
 //     - {at: 11, wind_mps: [3, 0, 0]}
 //     - {at: 2, speed_mps: 0.4, yaw_rate_dps: 90}   # ground vehicles
