@@ -79,7 +79,8 @@ TEST(FailureDetector, TelemetryNamesTheMotorThatLostItsProp) {
   const std::int64_t fail_at = 500'000;
   for (; t < 2'000'000 && d.detection().failed == 0; t += kCycleUs) {
     if (t >= fail_at)
-      actual[4] = hover(6)[4] * (1.0 + 0.78 * (1.0 - std::exp(-static_cast<double>(t - fail_at) / 6e3)));
+      actual[4] =
+          hover(6)[4] * (1.0 + 0.78 * (1.0 - std::exp(-static_cast<double>(t - fail_at) / 6e3)));
     feed_telemetry(d, actual, 1.0, t);
     d.update(hover(6), 0, true, t);
   }
