@@ -30,8 +30,10 @@
 //     torques), solved exactly; when that leaves a motor's range, the
 //     thrusts inside the ranges closest to the demands (least squares over
 //     the box, the thrust weighted below the torques);
-//   * landing: once the descent has been flown and the vertical speed stays
-//     near zero, the controller says so (the loop then disarms).
+//   * landing: the controller says so (the loop then disarms) when the spin
+//     it had reached is lost while the vehicle is still (the ground took
+//     it: nothing in the air can), or once the descent has been flown and
+//     the vertical speed stays near zero with little thrust asked for.
 
 #include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
@@ -54,6 +56,7 @@ struct SpinningDescentModel {
   Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Ones();  // principal moments
   double rotational_drag = 0.0;                            // N m per rad/s, each axis
   double time_constant_s = 0.04;                           // motor lag (mean of up and down)
+  double rate_delay_s = 0.0;  // how late the measured rates are (the gyro's low-pass)
   // Per rotor: force direction (unit), torque per newton of thrust (arm x
   // axis plus the drag torque against its spin), thrust at full command.
   std::array<Eigen::Vector3d, 4> axis{};
@@ -71,9 +74,11 @@ struct SpinningDescentModel {
 };
 
 struct SpinningDescentSettings {
-  double spin_rate_rad_s = 20.0;   // equilibrium spin rate (magnitude of the body rates)
-  double descent_rate_mps = 1.0;   // vertical speed flown down
-  double max_tilt_deg = 8.0;       // largest tilt of the spin axis asked to brake drift
+  double spin_rate_rad_s = 20.0;  // equilibrium spin rate (magnitude of the body rates)
+  double descent_rate_mps = 1.0;  // vertical speed flown down
+  double max_tilt_deg = 8.0;      // largest tilt of the spin axis asked to brake drift
+  // At most these; the controller lowers them to what the motors' lag and
+  // the rates' delay allow (rate_gains()).
   double attitude_gain = 12.0;     // 1/s: spin-axis error to rate across it
   double rate_gain = 30.0;         // 1/s: rate error to angular acceleration
   double velocity_gain = 1.5;      // 1/s: vertical speed error to acceleration
@@ -152,6 +157,9 @@ class SpinningDescent {
     return equilibria_[static_cast<std::size_t>(failed)];
   }
   const SpinningDescentSettings& settings() const { return s_; }
+  // The gains flown: the settings', lowered to the model's lag (see there).
+  double rate_gain() const { return rate_gain_; }
+  double attitude_gain() const { return attitude_gain_; }
 
   // Takes over with motor `failed` (0-based) stopped; `thrust_fraction`:
   // what each motor was asked for last (for the rotors' momentum).
@@ -176,12 +184,17 @@ class SpinningDescent {
   std::array<Eigen::Matrix3d, 4> allocation_{};
   std::array<Eigen::Matrix3d, 4> allocation_inverse_{};
   double thrust_weight_ = 1.0;
+  double rate_gain_ = 0.0;
+  double attitude_gain_ = 0.0;
   int failed_ = -1;
   std::int64_t last_us_ = 0;
   double velocity_integral_ = 0.0;
   double up_force_ = 0.0;  // the collective's vertical force asked for (N)
   Eigen::Vector3d lagged_n_ = Eigen::Vector3d::Zero();  // working motors' thrust through the lag
   double still_s_ = 0.0;
+  double descending_s_ = 0.0;  // moving down at the descent rate this long
+  bool descended_ = false;     // the descent has been flown
+  bool spin_reached_ = false;  // the spin has been near the equilibrium's
   DescentCommand cmd_;
 };
 

@@ -40,6 +40,7 @@ SpinningDescentModel model_of(const Config& config) {
   m.inertia_kgm2 = v.inertia_kgm2;
   m.rotational_drag = v.drag_rotational_nm_per_radps;
   m.time_constant_s = 0.5 * (v.time_constant_up_s + v.time_constant_down_s);
+  m.rate_delay_s = v.imu.rate_delay_s();
   for (std::size_t i = 0; i < 4; ++i) {
     const RotorPhysics& r = v.rotors[i];
     m.axis[i] = r.axis;

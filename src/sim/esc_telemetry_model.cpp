@@ -39,10 +39,13 @@ double EscTelemetryModel::uniform() {
 loop::EscReading EscTelemetryModel::measure(int i, const VehicleModel& vehicle) {
   loop::EscReading r;
   r.motor = i + 1;
-  const double speed = std::max(vehicle.motor_speed(i), 0.0);
+  // An ESC counts the commutations it drives: an unpowered motor reads 0
+  // rpm and draws nothing, however fast its rotor still freewheels.
+  const bool driven = !vehicle.freewheeling(i);
+  const double speed = driven ? std::max(vehicle.motor_speed(i), 0.0) : 0.0;
   r.rpm = std::max(0.0, kFullThrustRpm * std::sqrt(speed) * (1.0 + gauss_(kRpmNoise)));
   r.erpm = r.rpm * (kSimMotorPoles / 2);
-  const double thrust = std::max(vehicle.thrust_fraction(i), 0.0);
+  const double thrust = driven ? std::max(vehicle.thrust_fraction(i), 0.0) : 0.0;
   const double full_a = vehicle.physics().battery.full_throttle_current_a;
   r.current_a =
       full_a * thrust * std::sqrt(thrust) * (1.0 + gauss_(kCurrentNoise)) + gauss_(kCurrentNoiseA);

@@ -108,6 +108,7 @@ void apply_realism(config::Config& config, const Realism& realism) {
   if (!realism.rotor_momentum) v.rotor_inertia_kgm2 = 0.0;
   if (!realism.spin_down) v.time_constant_down_s = v.time_constant_up_s;
   v.ground_effect = realism.ground_effect;
+  if (!realism.imu) v.imu.lowpass_hz = 0.0;  // the rates arrive unfiltered, on time
   config::rederive_from_vehicle(config);
 }
 

@@ -12,6 +12,9 @@ namespace motormix::sim {
 namespace {
 
 constexpr double kTakenOffAltitudeM = 0.2;  // above this the vehicle has flown
+// A rotor without its prop still has the bell's drag: a twentieth of the
+// prop's (it then takes a few seconds to stop instead of for ever).
+constexpr double kBellDragShare = 0.05;
 
 // Exact discretization of a first-order lag over one step.
 double lag(double value, double target, double alpha_up, double alpha_down) {
@@ -26,6 +29,7 @@ VehicleModel::VehicleModel(const config::Config& config)
   for (const OutputChannel& ch : config.outputs) modes_.push_back(ch.mode);
   speed_.assign(static_cast<std::size_t>(config.motors()), 0.0);
   rotor_speed_before_.assign(speed_.size(), 0.0);
+  freewheel_.assign(speed_.size(), 0);
   prop_.assign(static_cast<std::size_t>(config.motors()), 1.0);
   mass_.mass_kg = p_.mass_kg;
   mass_.inertia = p_.inertia_kgm2;
@@ -102,6 +106,21 @@ double VehicleModel::rotor_speed_rad_s(int i) const {
   return p_.max_rotor_speed_rad_s * std::sqrt(std::max(speed_[static_cast<std::size_t>(i)], 0.0));
 }
 
+double VehicleModel::freewheel(int i, double dt) const {
+  // Nothing drives the rotor and nothing brakes it: its air drag Q = k T,
+  // with T = T_max (w / w_max)^2, slows it alone, I dw/dt = -c w^2, whose
+  // exact step is w / (1 + c w dt). A 10-inch rotor from hover keeps half
+  // its thrust for about a quarter of a second.
+  const auto k = static_cast<std::size_t>(i);
+  const config::RotorPhysics& r = p_.rotors[k];
+  const double w_max = p_.max_rotor_speed_rad_s;
+  const double c = r.torque_ratio_m * r.max_thrust_n * std::max(prop_[k], kBellDragShare) /
+                   (p_.rotor_inertia_kgm2 * w_max * w_max);
+  const double w = rotor_speed_rad_s(i);
+  const double next = w / (1.0 + c * w * dt);
+  return (next / w_max) * (next / w_max);
+}
+
 void VehicleModel::sum_rotors(double dt) {
   MotorVector thrust(motors());
   for (int i = 0; i < motors(); ++i) thrust[i] = thrust_n(i) * ground_effect(i);
@@ -120,7 +139,14 @@ void VehicleModel::sum_rotors(double dt) {
       const double speed = rotor_speed_rad_s(static_cast<int>(i));
       const Eigen::Vector3d h_axis = static_cast<double>(r.spin) * p_.rotor_inertia_kgm2 * r.axis;
       rotor_momentum_ += speed * h_axis;
-      rotor_torque_ -= (speed - rotor_speed_before_[i]) / dt * h_axis;
+      if (freewheel_[i] != 0) {
+        // No motor torque: the body feels neither the rotor's drag nor its
+        // slowing (both act between the rotor and the air).
+        rotor_torque_ -= static_cast<double>(r.spin) * r.torque_ratio_m *
+                         -thrust[static_cast<Eigen::Index>(i)] * r.axis;
+      } else {
+        rotor_torque_ -= (speed - rotor_speed_before_[i]) / dt * h_axis;
+      }
     }
   }
 }
@@ -168,7 +194,10 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
       target *= health.drive[i];
     }
     rotor_speed_before_[k] = rotor_speed_rad_s(i);
-    if (health.lag.size() > i && health.lag[i] != 1.0) {
+    freewheel_[k] = !p_.wheeled && health.drive[i] <= 0.0 && p_.rotor_inertia_kgm2 > 0.0;
+    if (freewheel_[k]) {
+      speed_[k] = freewheel(i, dt);
+    } else if (health.lag.size() > i && health.lag[i] != 1.0) {
       // A rotor that lost its prop: only the bell to turn.
       const double f = health.lag[i];
       speed_[k] = lag(speed_[k], target, 1.0 - std::exp(-dt / (f * p_.time_constant_up_s)),

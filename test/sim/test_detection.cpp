@@ -48,13 +48,26 @@ config::Config load(const std::string& file, const std::vector<std::string>& ove
 // `at_s`, reported by nobody: what motormix's detector makes of it.
 SimResult fly_unreported(const config::Config& c, const Scenario& s, int motor, double at_s,
                          FailureKind kind = FailureKind::kStop, int seed = 1,
-                         const FrameObserver& observer = {}) {
+                         const FrameObserver& observer = {}, const Realism& realism = Realism{}) {
   SimOptions o;
+  o.realism = realism;
   o.seed = static_cast<std::uint64_t>(seed);
   o.undetected = true;
   o.failures.push_back({motor, at_s, kind});
   return run_lockstep(c, config::build_mixer(c), s, o, observer);
 }
+
+// A stopped motor freewheels down under its own air drag when the rotors
+// have momentum (the default): it loses its thrust over about half a
+// second, and the rates and outputs sources, which learn slow changes as
+// the model's error, do not find it (issue 48's closing note). Those
+// sources are held to their targets on a motor that stops at once (the
+// world without rotor momentum, where the stop follows the motor lag).
+const Realism kPromptStop = [] {
+  Realism r;
+  r.rotor_momentum = false;
+  return r;
+}();
 
 struct Source {
   const char* name;
@@ -90,7 +103,10 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
               where << file << " " << strategy << " " << source.name << " " << fc.scenario << " m"
                     << motor + 1 << " seed " << seed;
               SCOPED_TRACE(where.str());
-              const SimResult r = fly_unreported(c, s, motor, fc.at_s, FailureKind::kStop, seed);
+              const bool telemetry =
+                  std::string(source.sources).find("telemetry") != std::string::npos;
+              const SimResult r = fly_unreported(c, s, motor, fc.at_s, FailureKind::kStop, seed, {},
+                                                 telemetry ? Realism{} : kPromptStop);
               ++flights;
               ASSERT_EQ(r.failures.size(), 1U);
               const FailureOutcome& f = r.failures.front();
@@ -279,7 +295,8 @@ TEST(DetectedFailures, TheOutputsSourceNamesTheMotorThatStopped) {
       for (int seed = 1; seed <= test::sim_grid_seeds(2); ++seed) {
         SCOPED_TRACE(std::string(strategy) + " m" + std::to_string(motor + 1) + " seed " +
                      std::to_string(seed));
-        const SimResult r = fly_unreported(c, s, motor, 6.0, FailureKind::kStop, seed);
+        const SimResult r =
+            fly_unreported(c, s, motor, 6.0, FailureKind::kStop, seed, {}, kPromptStop);
         ++flights;
         ASSERT_EQ(r.failures.size(), 1U);
         const FailureOutcome& f = r.failures.front();

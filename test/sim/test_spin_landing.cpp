@@ -4,8 +4,9 @@
 // still air and in wind with gusts, on five seeds: not crashed, touching
 // down no faster than the crash rule, the spin inside the gyro's range, the
 // mixer disarmed at the end; and the spin the descent settles at next to the
-// relaxed-hover equilibrium of the same vehicle. With the simulator's
-// realism, less the rotors' momentum (kLandingRealism).
+// relaxed-hover equilibrium of the same vehicle; and the same with the
+// simulated vehicle off its configuration (rotor inertia x2, mass, inertia
+// and drag +-30 %). With all of the simulator's realism (the default).
 //
 // Optimized builds only (test/CMakeLists.txt): about 200 flights of 30 s.
 
@@ -30,27 +31,18 @@ using test::source_path;
 // The issue's targets, named.
 constexpr int kSeeds = 5;
 constexpr double kReportedAfterS = 0.100;
-// Measured short of the targets (docs/motor-loss-landing.md, SIM.md): the
-// team quad's legacy_budget mixer answers the failure more slowly in the
-// time before it is reported, and a 100 ms report tips it past 90 degrees
-// on every motor; it lands from 80 ms. In wind and gusts, with the
-// simulator's realism, the quad X landed 14 of 20 flights and the team
-// quad 18 of 20 (0.10), and with rotors of 3e-5 kg m^2 the quad X found by
-// its detector 17 of 20: each floor is two flights below, so a build whose
-// rounding tips one marginal flight is not red while a real regression is.
-// They guard the descent as it is, not the goal (99 %).
-constexpr double kTeamQuadReportedAfterS = 0.080;
-constexpr int kQuadXGustsLandedAtLeast = 12;
-constexpr int kTeamQuadGustsLandedAtLeast = 16;
-constexpr int kRotorMomentumLandedAtLeast = 15;
 constexpr double kFailAtS = 8.0;  // hovering at 10 m by then
-// The simulator's realism without the rotors' angular momentum: with it the
-// descent does not yet land (SIM.md, docs/motor-loss-landing.md).
-const Realism kLandingRealism = [] {
-  Realism r;
-  r.rotor_momentum = false;
-  return r;
-}();
+// Largest thrust-axis tilt in still air (issue 48: 60 degrees). In wind and
+// gusts the flights land but a torque gust one second after the failure,
+// before the spin gives the body its stiffness, tilts the team quad to
+// 65-71 degrees: measured, not met, not asserted (SIM.md).
+constexpr double kStillAirTiltMaxDeg = 60.0;
+// Off its configuration: rotor inertia x2, or mass, inertia, drag each
+// +-30 % (issue 48: at least 95 % land). A vehicle 30 % heavier than its
+// configuration does not land in wind and gusts (its three motors cannot
+// carry it and tilt it): not asserted there (SIM.md).
+constexpr double kModelErrorFactor = 0.3;
+const Realism kRealism{};
 constexpr double kTouchdownMaxMps = kCrashSpeedMps;
 // The settled spin within this share of the equilibrium's (the descent is
 // not quite the hover the equilibrium is solved for).
@@ -91,7 +83,7 @@ std::string check_landing(const SimResult& r) {
 // Every motor on every seed; `landed_at_least` of the 20 flights must land.
 void expect_landings(const Vehicle& v, const char* scenario, double reported_after_s,
                      bool undetected, int landed_at_least, std::vector<std::string> extra = {},
-                     const Realism& realism = kLandingRealism) {
+                     const Realism& realism = kRealism, double max_tilt_deg = 90.0) {
   const config::Config c = load(v, extra);
   ASSERT_TRUE(c.motor_loss.has_value()) << c.motor_loss_off;
   std::vector<std::future<std::string>> runs;
@@ -106,6 +98,8 @@ void expect_landings(const Vehicle& v, const char* scenario, double reported_aft
         const SimResult r = run_lockstep(c, config::build_mixer(c),
                                          with_failure(scenario, motor, reported_after_s), o);
         std::string why = check_landing(r);
+        if (r.max_thrust_axis_tilt_deg > max_tilt_deg)
+          why += "tilted " + std::to_string(r.max_thrust_axis_tilt_deg) + " degrees; ";
         // Found by the detector: the motor it named is the one that stopped.
         if (undetected && (r.failures.empty() || r.failures.front().detected_motor != motor)) {
           why += "the detector named motor " +
@@ -149,42 +143,61 @@ const Vehicle kQuadX{"quad_x", {}};
 const Vehicle kTeamQuad{"team_quad", {}};
 
 TEST(SpinLanding, QuadXLandsOnEveryMotorReportedAfter100Ms) {
-  expect_landings(kQuadX, "spin_landing", kReportedAfterS, false, kAll);
+  expect_landings(kQuadX, "spin_landing", kReportedAfterS, false, kAll, {}, kRealism,
+                  kStillAirTiltMaxDeg);
 }
 
 TEST(SpinLanding, QuadXInWindAndGusts) {
-  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false, kQuadXGustsLandedAtLeast);
+  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false, kAll);
 }
 
-TEST(SpinLanding, TeamQuadLandsOnEveryMotorReportedAfter80Ms) {
-  expect_landings(kTeamQuad, "spin_landing", kTeamQuadReportedAfterS, false, kAll);
+TEST(SpinLanding, TeamQuadLandsOnEveryMotorReportedAfter100Ms) {
+  expect_landings(kTeamQuad, "spin_landing", kReportedAfterS, false, kAll, {}, kRealism,
+                  kStillAirTiltMaxDeg);
 }
 
-TEST(SpinLanding, TeamQuadLandsOnEveryMotorInWindAndGustsReportedAfter80Ms) {
-  expect_landings(kTeamQuad, "spin_landing_gusts", kTeamQuadReportedAfterS, false,
-                  kTeamQuadGustsLandedAtLeast);
+TEST(SpinLanding, TeamQuadLandsOnEveryMotorInWindAndGusts) {
+  expect_landings(kTeamQuad, "spin_landing_gusts", kReportedAfterS, false, kAll);
 }
 
 TEST(SpinLanding, QuadXLandsOnEveryMotorFoundByItsOwnDetector) {
-  // The detector's default sources (ESC telemetry and rates): it declares
-  // in about 60 ms. The rates alone take about 130 ms: too late for a quad.
   expect_landings(kQuadX, "spin_landing", kReportedAfterS, true, kAll,
-                  {"failure_detection.enabled=true"});
+                  {"failure_detection.enabled=true"}, kRealism, kStillAirTiltMaxDeg);
 }
 
 TEST(SpinLanding, TeamQuadLandsOnEveryMotorFoundByItsOwnDetector) {
   expect_landings(kTeamQuad, "spin_landing", kReportedAfterS, true, kAll,
-                  {"failure_detection.enabled=true"});
+                  {"failure_detection.enabled=true"}, kRealism, kStillAirTiltMaxDeg);
 }
 
-TEST(SpinLanding, QuadXWithRotorMomentumLandsOnEveryMotorFoundByItsOwnDetector) {
-  // The rotors' own angular momentum modelled (a light 10-inch prop and
-  // bell, half the default's), with every other piece of realism: the
-  // controller knows it from the same `vehicle:` section. With a 100 ms
-  // report it does not land (docs/motor-loss-landing.md); found by the
-  // detector in about 60 ms most flights do.
-  expect_landings(kQuadX, "spin_landing", kReportedAfterS, true, kRotorMomentumLandedAtLeast,
-                  {"failure_detection.enabled=true", "vehicle.rotor_inertia_kgm2=3e-5"}, Realism{});
+TEST(SpinLanding, BothQuadsFoundByTheDetectorInWindAndGusts) {
+  for (const Vehicle& v : {kQuadX, kTeamQuad})
+    expect_landings(v, "spin_landing_gusts", kReportedAfterS, true, kAll,
+                    {"failure_detection.enabled=true"});
+}
+
+TEST(SpinLanding, LandsWithTheVehicleOffItsConfiguration) {
+  const auto off = [](double ModelError::*factor, double x) {
+    Realism r;
+    r.truth.*factor = x;
+    return r;
+  };
+  for (const Vehicle& v : {kQuadX, kTeamQuad}) {
+    for (const char* scenario : {"spin_landing", "spin_landing_gusts"}) {
+      expect_landings(v, scenario, kReportedAfterS, false, kAll, {},
+                      off(&ModelError::rotor_inertia, 2.0));
+      for (double ModelError::*factor : {&ModelError::inertia, &ModelError::drag}) {
+        expect_landings(v, scenario, kReportedAfterS, false, kAll, {},
+                        off(factor, 1.0 + kModelErrorFactor));
+        expect_landings(v, scenario, kReportedAfterS, false, kAll, {},
+                        off(factor, 1.0 - kModelErrorFactor));
+      }
+      expect_landings(v, scenario, kReportedAfterS, false, kAll, {},
+                      off(&ModelError::mass, 1.0 - kModelErrorFactor));
+    }
+    expect_landings(v, "spin_landing", kReportedAfterS, false, kAll, {},
+                    off(&ModelError::mass, 1.0 + kModelErrorFactor));
+  }
 }
 
 TEST(SpinLanding, SettlesNearTheRelaxedHoverEquilibrium) {
@@ -195,7 +208,7 @@ TEST(SpinLanding, SettlesNearTheRelaxedHoverEquilibrium) {
   s.duration_s = 60.0;
   s.score_to_s = 60.0;
   SimOptions o;
-  o.realism = kLandingRealism;
+  o.realism = kRealism;
   // At 0.3 m/s the spinning quad floats in ground effect 0.1-0.3 m up and
   // does not touch down within a minute (at the default 1 m/s it does): a
   // defect of the descent's landing the realism found, left open (SIM.md).

@@ -53,8 +53,14 @@ struct WheelPhysics {
 struct ImuPhysics {
   double rate_hz = 1000.0;       // the gyro is sampled at least this often
   double vibration_dps = 10.0;   // per rotor at full speed (first harmonic; the second half)
-  double lowpass_hz = 40.0;      // the controller's second-order gyro low-pass
+  double lowpass_hz = 40.0;      // the controller's second-order gyro low-pass (0: none)
   double bias_drift_dps = 0.02;  // bias random walk, deg/s per square root of a second
+  // How late the filtered rates are: a second-order Butterworth low-pass
+  // delays slow signals by sqrt(2) / (2 pi f).
+  double rate_delay_s() const {
+    return lowpass_hz > 0.0 ? 1.4142135623730951 / (2.0 * 3.14159265358979323846 * lowpass_hz)
+                            : 0.0;
+  }
 };
 
 // A propeller's spinning inertia (with its motor's bell) from its diameter:

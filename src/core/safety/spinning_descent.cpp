@@ -21,17 +21,46 @@ constexpr double kEquilibriumHeadroom = 0.92;
 // this share of the weight.
 constexpr double kStillFraction = 0.25;
 constexpr double kLandedThrustShare = 0.8;
-constexpr double kMaxDtS = 0.05;
+// That rule waits for the descent to have been flown (this share of the
+// descent rate for this long), or for a vehicle that does not turn: right
+// after the takeover the vehicle may hover with the torques taking the
+// thrust the velocity loop asks to be lower (the thrust is weighted below
+// them), but in the air three rotors' yaw torque turns it within that
+// time. Still and not turning is a motor lost on the ground.
+constexpr double kDescendingFraction = 0.5;
+constexpr double kDescendedS = 1.0;
+constexpr double kGroundedRateRadS = 0.5;
+// Touchdown: the spin, once reached (this share of the equilibrium rate),
+// falls below this share while the vehicle is still. In the air nothing
+// takes the spin away: the rotors drive it and only the air brakes it.
+constexpr double kSpinReachedShare = 0.6;
+constexpr double kSpinLostShare = 0.3;
+// The rate loop crosses over where the motors' lag and the rates' delay
+// together cost this much phase (45 degrees left); the attitude loop runs
+// this many times slower than the rate loop.
+constexpr double kRateLoopLagRad = 3.14159265358979323846 / 4.0;
+constexpr double kLoopSeparation = 2.5;
+constexpr double kMaxDtS = 0.05;  // a longer gap is taken as this (a stalled process)
 constexpr double kThrustWeight = 0.3;
-constexpr double kMaxRateRadS = 100.0;  // beyond any gyro: clipped
-constexpr double kMaxSpeedMps = 200.0;  // beyond: taken as unknown
-constexpr double kMinTiltCompensationCos =
-    0.85;  // 32 degrees  // a longer gap is taken as this (a stalled process)
+constexpr double kMaxRateRadS = 100.0;            // beyond any gyro: clipped
+constexpr double kMaxSpeedMps = 200.0;            // beyond: taken as unknown
+constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 Eigen::Vector2d planar(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
+
+// The rate at which a first-order lag T and a delay d cost kRateLoopLagRad
+// of phase: atan(w T) + w d = kRateLoopLagRad, increasing in w (bisection).
+double lag_limited_gain(double lag_s, double delay_s) {
+  double lo = 0.0, hi = 1e4;
+  for (int i = 0; i < 60; ++i) {
+    const double w = 0.5 * (lo + hi);
+    (std::atan(w * lag_s) + w * delay_s > kRateLoopLagRad ? hi : lo) = w;
+  }
+  return lo;
+}
 
 struct Layout {
   std::array<int, 3> working{};
@@ -297,6 +326,12 @@ SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
   double arm = 0.0;
   for (const Eigen::Vector3d& t : m_.torque_per_newton) arm += planar(t).norm() / 4.0;
   thrust_weight_ = kThrustWeight * arm;
+  // A rate loop faster than its lag allows rings: with a 40 ms motor lag and
+  // the 5.6 ms of a 40 Hz gyro filter, 30/s leaves 30 degrees of phase and
+  // the spin goes into a limit cycle that saturates the motors.
+  rate_gain_ = std::min(s_.rate_gain, lag_limited_gain(std::max(m_.time_constant_s, 0.0),
+                                                       std::max(m_.rate_delay_s, 0.0)));
+  attitude_gain_ = std::min(s_.attitude_gain, rate_gain_ / kLoopSeparation);
 }
 
 void SpinningDescent::start(int failed, std::int64_t now_us, const MotorVector& thrust_fraction) {
@@ -313,6 +348,9 @@ void SpinningDescent::start(int failed, std::int64_t now_us, const MotorVector& 
   velocity_integral_ = 0.0;
   up_force_ = 0.0;
   still_s_ = 0.0;
+  descending_s_ = 0.0;
+  descended_ = false;
+  spin_reached_ = false;
   cmd_ = DescentCommand{};
   cmd_.thrust_fraction.setZero(4);
   cmd_.phase = DescentPhase::kDescending;
@@ -381,8 +419,8 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
 
   // Reduced attitude: rates across the axis turn it toward `desired`; the
   // rate about it is whatever it is.
-  const Eigen::Vector3d rates_wanted = s_.attitude_gain * axis.cross(desired) + w.dot(axis) * axis;
-  Eigen::Vector3d accel = s_.rate_gain * (rates_wanted - w);
+  const Eigen::Vector3d rates_wanted = attitude_gain_ * axis.cross(desired) + w.dot(axis) * axis;
+  Eigen::Vector3d accel = rate_gain_ * (rates_wanted - w);
   accel -= accel.dot(axis) * axis;
   Eigen::Vector3d feedback = m_.inertia_kgm2.cwiseProduct(accel);
   // The feedback turns with the body at the spin rate: lead it by the motor
@@ -405,11 +443,18 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   // Landing: no vertical motion for landed_after_s while the velocity loop
   // asks for well under the weight (in the air that much less thrust would
   // have the vehicle moving down within a fraction of that time).
+  if (cmd_.measured_rate_rad_s >= kSpinReachedShare * eq.rates.norm()) spin_reached_ = true;
   if (std::isfinite(in.velocity.z())) {
-    const bool still = std::abs(in.velocity.z()) < kStillFraction * s_.descent_rate_mps &&
+    const bool moving_down = in.velocity.z() > kDescendingFraction * s_.descent_rate_mps;
+    descending_s_ = moving_down ? descending_s_ + dt : 0.0;
+    if (descending_s_ >= kDescendedS) descended_ = true;
+    const bool not_moving = std::abs(in.velocity.z()) < kStillFraction * s_.descent_rate_mps;
+    const bool still = not_moving && (descended_ || cmd_.measured_rate_rad_s < kGroundedRateRadS) &&
                        up_force_ < kLandedThrustShare * m_.mass_kg * kStandardGravity;
     still_s_ = still ? still_s_ + dt : 0.0;
-    if (still_s_ >= s_.landed_after_s) {
+    const bool spin_lost =
+        not_moving && spin_reached_ && cmd_.measured_rate_rad_s < kSpinLostShare * eq.rates.norm();
+    if (still_s_ >= s_.landed_after_s || spin_lost) {
       cmd_.phase = DescentPhase::kLanded;
       f.setZero();
     }

@@ -70,6 +70,8 @@ class VehicleModel {
     const auto k = static_cast<std::size_t>(i);
     return speed_[k] * prop_[k];
   }
+  // Rotors: the motor is unpowered and its rotor freewheels (rotor momentum on).
+  bool freewheeling(int i) const { return freewheel_[static_cast<std::size_t>(i)] != 0; }
   const BatteryModel& battery() const { return battery_; }
   bool landed() const { return landed_; }
   // The vertical speed of the latest touchdown after having flown (m/s,
@@ -98,6 +100,8 @@ class VehicleModel {
   double driver_fraction(int i, double output, int direction) const;
   void sum_rotors(double dt);  // the rotors' force and torque, held over one step
   double rotor_speed_rad_s(int i) const;
+  // The thrust fraction of an unpowered rotor after dt: I dw/dt = -Q(w).
+  double freewheel(int i, double dt) const;
   Wrench wrench(const BodyState& s, const Environment& env) const;
   void step_aircraft(const Environment& env, double dt);
   void step_wheels(double dt);
@@ -110,6 +114,9 @@ class VehicleModel {
   std::vector<double> speed_;  // rotors: thrust fraction; wheels: rad/s
   std::vector<double> prop_;   // rotors: thrust per unit speed fraction (1: whole prop)
   std::vector<double> rotor_speed_before_;  // rad/s, at the start of the step
+  // Rotors: 1 while the motor is unpowered (its rotor freewheels: no torque
+  // on the body, slowed by its own air drag only).
+  std::vector<char> freewheel_;
   double forward_speed_ = 0.0;
   // Rotor i: force and torque per newton (fixed capacity: no allocation per step).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxMotors> per_newton_;
