@@ -58,10 +58,13 @@ SimResult fly_unreported(const config::Config& c, const Scenario& s, int motor, 
 }
 
 // A stopped motor freewheels down under its own air drag when the rotors
-// have momentum (the default): it loses its thrust over about half a
-// second, and the rates and outputs sources, which learn slow changes as
-// the model's error, do not find it (issue 48's closing note). Those
-// sources are held to their targets on a motor that stops at once (the
+// have momentum (the default): it loses its thrust over a few hundred
+// milliseconds, and the rates source names it later than the issue's
+// 250 ms (AFreewheelingStopIsFoundByTheRatesAlone); the outputs source
+// seconds after it (4.6-6.9 s on the octo X, against about 1.5 s for a
+// prompt stop: the mixer's integrators take that long to push the dead
+// motor's command to the top). The sources without
+// telemetry are held to their targets on a motor that stops at once (the
 // world without rotor momentum, where the stop follows the motor lag).
 const Realism kPromptStop = [] {
   Realism r;
@@ -125,6 +128,42 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
   }
   if (!test::reduced_sim_grid()) {
     EXPECT_EQ(flights, 2 * 3 * 2 * (6 + 8) * kTargetSeeds);
+  }
+}
+
+// A freewheeling stop (the default world) found by the rates alone: its
+// thrust goes over a few hundred milliseconds, so the rates see it later
+// than a prompt stop (measured 0.41 s median, 0.51 s worst over 168 flights,
+// attitude 23 degrees at most). Bound with a fifth of margin; the issue's
+// 250 ms holds for a prompt stop only (above).
+constexpr double kFreewheelRatesLatencyS = 0.6;
+
+TEST(DetectedFailures, AFreewheelingStopIsFoundByTheRatesAlone) {
+  int flights = 0;
+  for (const char* file : {"hexa_x.yaml", "octo_x.yaml"}) {
+    for (const char* strategy : {"optimal", "prioritized"}) {
+      const config::Config c = load(
+          file, {std::string("mixer.strategy=") + strategy, "failure_detection.sources=[rates]"});
+      const Scenario s = load_scenario("steps");
+      for (int motor = 0; motor < c.motors(); ++motor) {
+        if (!test::in_sim_grid(motor, c.motors())) continue;
+        SCOPED_TRACE(std::string(file) + " " + strategy + " m" + std::to_string(motor + 1));
+        const SimResult r = fly_unreported(c, s, motor, 10.5);
+        ++flights;
+        ASSERT_EQ(r.failures.size(), 1U);
+        const FailureOutcome& f = r.failures.front();
+        EXPECT_FALSE(r.crashed) << r.crash_reason;
+        EXPECT_EQ(r.false_detections, 0);
+        EXPECT_EQ(f.detected_motor, motor);
+        ASSERT_GE(f.detected_at_s, 10.5);
+        EXPECT_LE(f.detected_at_s - 10.5, kFreewheelRatesLatencyS);
+        EXPECT_LE(r.altitude_loss_m, kAltitudeLossM);
+        EXPECT_LE(r.failure_attitude_error_max_deg, kRatesOnlyAttitudeMaxDeg);
+      }
+    }
+  }
+  if (!test::reduced_sim_grid()) {
+    EXPECT_EQ(flights, 2 * (6 + 8));
   }
 }
 

@@ -331,8 +331,14 @@ void FailureDetector::judge_rates(MotorMask excluded, bool allowed, double dt,
   const Eigen::Vector3d across =
       residual_ - (excitation > 0.0 ? residual_.dot(rotor_torque_filtered_) / excitation : 0.0) *
                       rotor_torque_filtered_;
+  // And only a residual a scale inside its range can explain: a motor that
+  // loses its thrust over a few hundred milliseconds (a freewheeling rotor)
+  // leaves one along the modelled torque too, but larger than that, and
+  // learning it would shrink the loss below min_loss.
+  const bool scale_explains =
+      residual_.norm() <= (kMaxScale - 1.0) * std::sqrt(excitation) + 0.5 * s_.min_residual_nm;
   if (allowed && !suspected && excitation >= s_.min_residual_nm * s_.min_residual_nm &&
-      across.norm() < 0.5 * s_.min_residual_nm) {
+      across.norm() < 0.5 * s_.min_residual_nm && scale_explains) {
     const double forget = alpha_.scale;
     scale_xy_ += forget * (rotor_torque_filtered_.dot(measured) - scale_xy_);
     scale_xx_ += forget * (excitation - scale_xx_);
