@@ -107,7 +107,12 @@ struct FailureDetectorSettings {
   double rpm_ratio = 0.6;        // rpm below this fraction of the median ratio: suspect
   double rpm_high_ratio = 1.25;  // or above this multiple of it (a prop thrown): suspect
   double current_ratio = 0.35;   // current below this fraction of the median ratio: suspect
-  int min_reporting = 3;         // motors with fresh telemetry needed for a median
+  // With rpm and current both read: a motor's current per rpm^3 (its
+  // prop's load) below this fraction of the median is a prop thrown or
+  // broken, whatever its command (0: not judged). Judged only while the
+  // motor is not being slowed: a braking ESC draws little or regenerates.
+  double load_ratio = 0.6;
+  int min_reporting = 3;  // motors with fresh telemetry needed for a median
   // Whether an ESC that goes silent while most others report is declared
   // on that alone (without the rates source). The configuration sets it
   // for six rotors or more; a quad never stops a motor for a silent wire.

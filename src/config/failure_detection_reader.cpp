@@ -116,6 +116,7 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   s.rpm_ratio = telemetry.number("rpm_ratio", 0.7, 0.05, 0.95);
   s.rpm_high_ratio = telemetry.number("rpm_high_ratio", 1.25, 1.05, 5.0);
   s.current_ratio = telemetry.number("current_ratio", 0.4, 0.05, 0.95);
+  s.load_ratio = telemetry.number("load_ratio", 0.6, 0.0, 0.95);
   s.min_reporting = static_cast<int>(telemetry.number("min_reporting", 3, 2, kMaxMotors));
   // A silent ESC is stopped on that alone only where the rest keep every
   // axis: six rotors or more. A quad gives up yaw and altitude for a motor

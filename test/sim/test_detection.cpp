@@ -32,11 +32,13 @@ constexpr double kFailureAttitudeMaxDeg = 20.0;
 // rotors with momentum) the hexa's worst was 22.5 degrees (0.10).
 constexpr double kRatesOnlyAttitudeMaxDeg = 30.0;
 constexpr int kTargetSeeds = 3;
-// A thrown prop: the issue asks 50 ms; measured 42-75 ms with the
+// A thrown prop: the issue asks 50 ms; measured 32-65 ms with the
 // simulator's realism (an ESC reporting at 100 Hz, late, then 25 ms of
 // persistence). The bound guards that, the notes carry the gap.
 constexpr double kPropLostLatencyS = 0.100;
-constexpr double kPropDamagedAttitudeMaxDeg = 20.0;  // flown through if within this
+// A broken tip: the issue asks 500 ms (or flown through); its load names
+// it in 32-50 ms.
+constexpr double kPropDamagedLatencyS = 0.500;
 constexpr int kFalseAlarmSeeds = 10;
 constexpr double kFalseAlarmSecondsPerVehicle = 3600.0;
 
@@ -167,33 +169,60 @@ TEST(DetectedFailures, AFreewheelingStopIsFoundByTheRatesAlone) {
   }
 }
 
+// Where a prop fails: hexa and octo in the scenario at 7 s (3 m up); a quad
+// at 10 m in spin_landing (its own failure dropped) at 8 s, high enough to
+// spin up and land.
+struct PropFlight {
+  Scenario scenario;
+  double at_s;
+};
+PropFlight prop_flight(const config::Config& c, const char* scenario) {
+  if (c.motors() > 4) return {load_scenario(scenario), 7.0};
+  Scenario s =
+      load_scenario(std::string(scenario) == "gusts" ? "spin_landing_gusts" : "spin_landing");
+  s.timeline.erase(std::remove_if(s.timeline.begin(), s.timeline.end(),
+                                  [](const ScenarioEvent& e) { return e.fail.has_value(); }),
+                   s.timeline.end());
+  return {s, 8.0};
+}
+
 TEST(DetectedFailures, AThrownPropIsFoundByItsEscOnTheRightMotor) {
-  // The unloaded motor outruns its command: rpm too high for it. Hexa and
-  // octo keep flying on the rest; a quad's detection is checked, not its
-  // landing (docs/motor-loss-landing.md).
+  // The unloaded motor outruns its command and draws next to nothing: rpm
+  // too high for it, or its load too low. Hexa and octo keep flying on the
+  // rest; the quad lands spinning (docs/motor-loss-landing.md).
   int flights = 0;
   for (const char* file : {"hexa_x.yaml", "octo_x.yaml", "quad_x.yaml"}) {
     const config::Config c = load(file, {"failure_detection.enabled=true"});
-    const bool keeps_flying = c.motors() > 4;
+    const bool keeps_flying = c.motors() > 4;  // the quad lands instead
     for (const char* scenario : {"hover", "gusts"}) {
-      const Scenario s = load_scenario(scenario);
+      const PropFlight p = prop_flight(c, scenario);
       for (int motor = 0; motor < c.motors(); ++motor) {
         if (!test::in_sim_grid(motor, c.motors())) continue;
         for (int seed = 11; seed < 11 + test::sim_grid_seeds(2); ++seed) {
           SCOPED_TRACE(std::string(file) + " " + scenario + " m" + std::to_string(motor + 1) +
                        " seed " + std::to_string(seed));
-          const SimResult r = fly_unreported(c, s, motor, 7.0, FailureKind::kPropLost, seed);
+          const SimResult r =
+              fly_unreported(c, p.scenario, motor, p.at_s, FailureKind::kPropLost, seed);
           ++flights;
           ASSERT_EQ(r.failures.size(), 1U);
           const FailureOutcome& f = r.failures.front();
           EXPECT_EQ(f.detected_motor, motor);
           EXPECT_EQ(f.detected_by, DetectionSource::kTelemetry);
-          ASSERT_GE(f.detected_at_s, 7.0);
-          EXPECT_LE(f.detected_at_s - 7.0, kPropLostLatencyS);
+          ASSERT_GE(f.detected_at_s, p.at_s);
+          EXPECT_LE(f.detected_at_s - p.at_s, kPropLostLatencyS);
           EXPECT_EQ(r.false_detections, 0);
-          if (keeps_flying) {
+          // A quad in wind and gusts: 3 of 16 flights (seeds 11-15) hit the
+          // ground at 2.3-4.5 m/s after the tumble a thrown prop starts
+          // (75 degrees); not asserted, in issue 48's closing note.
+          const bool quad_in_gusts = !keeps_flying && std::string(scenario) == "gusts";
+          if (!quad_in_gusts) {
             EXPECT_FALSE(r.crashed) << r.crash_reason;
+          }
+          if (keeps_flying) {
             EXPECT_LE(r.altitude_loss_m, kAltitudeLossM);
+          } else if (!quad_in_gusts) {
+            EXPECT_GE(r.touchdown_speed_mps, 0.0) << "did not touch down";
+            EXPECT_LE(r.touchdown_speed_mps, kCrashSpeedMps);
           }
         }
       }
@@ -202,25 +231,25 @@ TEST(DetectedFailures, AThrownPropIsFoundByItsEscOnTheRightMotor) {
   EXPECT_GT(flights, 0);
 }
 
-TEST(DetectedFailures, ABrokenPropTipIsFlownThroughByHexaAndOcto) {
-  // 45 % less thrust, rpm 11 % high: under the detector's thresholds (a
-  // half-size residual, rpm within 1.25 of the others), and the vehicle
-  // holds its attitude on the rest.
-  for (const char* file : {"hexa_x.yaml", "octo_x.yaml"}) {
+TEST(DetectedFailures, ABrokenPropTipIsFoundByItsLoad) {
+  // 45 % less thrust, rpm 11 % high (under rpm_high_ratio), but 40 % of a
+  // whole prop's current at that rpm: named by its load on the right motor.
+  // Hexa and octo fly on the rest, quads land spinning.
+  for (const char* file : {"hexa_x.yaml", "octo_x.yaml", "quad_x.yaml", "team_quad.yaml"}) {
     const config::Config c = load(file, {"failure_detection.enabled=true"});
     for (int motor = 0; motor < c.motors(); ++motor) {
       if (!test::in_sim_grid(motor, c.motors())) continue;
       SCOPED_TRACE(std::string(file) + " m" + std::to_string(motor + 1));
+      const PropFlight p = prop_flight(c, "hover");
       const SimResult r =
-          fly_unreported(c, load_scenario("hover"), motor, 7.0, FailureKind::kPropDamaged, 11);
+          fly_unreported(c, p.scenario, motor, p.at_s, FailureKind::kPropDamaged, 11);
       EXPECT_FALSE(r.crashed) << r.crash_reason;
       EXPECT_EQ(r.false_detections, 0);
       const FailureOutcome& f = r.failures.front();
-      if (f.detected_at_s < 0) {
-        EXPECT_LE(r.failure_attitude_error_max_deg, kPropDamagedAttitudeMaxDeg);
-      } else {
-        EXPECT_EQ(f.detected_motor, motor);
-      }
+      EXPECT_EQ(f.detected_motor, motor);
+      EXPECT_EQ(f.detected_by, DetectionSource::kTelemetry);
+      ASSERT_GE(f.detected_at_s, p.at_s);
+      EXPECT_LE(f.detected_at_s - p.at_s, kPropDamagedLatencyS);
     }
   }
 }

@@ -17,6 +17,14 @@ constexpr double kMaxLoss = 2.0;
 // The learned torque scale stays within these: beyond, the vehicle section
 // is wrong, not the battery.
 constexpr double kMinScale = 0.7, kMaxScale = 1.3;
+// rpm in thousands for the load (current / krpm^3): keeps the cube in range.
+constexpr double kLoadRpmScale = 1000.0;
+// A motor whose thrust is at least this share of the most it had in the
+// latency window is not being slowed: its load is judged.
+constexpr double kSteadyShare = 0.9;
+// Below this thrust share a motor's current is too small against an ESC's
+// current offset and noise (a few tenths of an ampere) to weigh its prop.
+constexpr double kLoadMinThrust = 0.25;
 
 // Median of the first n values (n >= 1) of a scratch array (reordered).
 double median(std::array<double, kMaxMotors>& v, int n) {
@@ -205,10 +213,10 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   // give, up to a common scale: at its likeliest thrust, at the kindest to a
   // slow motor (best: the least thrust) and to a fast one (fastest: the
   // most); kind: 1 rpm, 2 current, 0 not judged.
-  std::array<double, kMaxMotors> ratio{}, best{}, fastest{};
+  std::array<double, kMaxMotors> ratio{}, best{}, fastest{}, load{};
   std::array<std::uint8_t, kMaxMotors> kind{};
-  std::array<double, kMaxMotors> rpm_ratios{}, current_ratios{};
-  int n_rpm = 0, n_current = 0, fresh = 0;
+  std::array<double, kMaxMotors> rpm_ratios{}, current_ratios{}, loads{};
+  int n_rpm = 0, n_current = 0, n_load = 0, fresh = 0;
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const EscState& e = esc_[k];
@@ -226,6 +234,15 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
       fastest[k] = e.rpm / std::sqrt(w.most);
       kind[k] = 1;
       rpm_ratios[static_cast<std::size_t>(n_rpm++)] = ratio[k];
+      // The prop's load: battery current grows as the cube of the rpm for a
+      // given prop. Not while the motor is being slowed (a braking ESC's
+      // current says nothing of its prop).
+      const double krpm = e.rpm / kLoadRpmScale;
+      if (s_.load_ratio > 0.0 && std::isfinite(e.current) && krpm > 0.0 &&
+          w.least >= kLoadMinThrust && lagged_[i] >= kSteadyShare * w.most) {
+        load[k] = e.current / (krpm * krpm * krpm);
+        loads[static_cast<std::size_t>(n_load++)] = load[k];
+      }
     } else if (std::isfinite(e.current)) {
       ratio[k] = e.current / (mid * std::sqrt(mid));
       best[k] = e.current / (least * std::sqrt(least));
@@ -236,13 +253,17 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   const double rpm_median = n_rpm >= s_.min_reporting ? median(rpm_ratios, n_rpm) : 0.0;
   const double current_median =
       n_current >= s_.min_reporting ? median(current_ratios, n_current) : 0.0;
+  const double load_median = n_load >= s_.min_reporting ? median(loads, n_load) : 0.0;
+  const auto unloaded = [&](std::size_t k) {
+    return load_median > 0.0 && load[k] > 0.0 && load[k] < s_.load_ratio * load_median;
+  };
 
   detection_.telemetry_silent = 0;
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     telemetry_healthy_[k] =
         (kind[k] == 1 && rpm_median > 0 && best[k] >= s_.rpm_ratio * rpm_median &&
-         fastest[k] <= s_.rpm_high_ratio * rpm_median) ||
+         fastest[k] <= s_.rpm_high_ratio * rpm_median && !unloaded(k)) ||
         (kind[k] == 2 && current_median > 0 && best[k] >= s_.current_ratio * current_median);
   }
   // Silence alone stops a motor only where that costs nothing the vehicle
@@ -259,7 +280,8 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     // thrown or broken unloads the motor, which then outruns its command.
     const bool low =
         (kind[k] == 1 && rpm_median > 0 &&
-         (best[k] < s_.rpm_ratio * rpm_median || fastest[k] > s_.rpm_high_ratio * rpm_median)) ||
+         (best[k] < s_.rpm_ratio * rpm_median || fastest[k] > s_.rpm_high_ratio * rpm_median ||
+          unloaded(k))) ||
         (kind[k] == 2 && current_median > 0 && best[k] < s_.current_ratio * current_median);
     if (!allowed) {
       telemetry_suspicion_[k] = 0.0;
