@@ -74,6 +74,21 @@ const Realism kPromptStop = [] {
   return r;
 }();
 
+// One failure at at_s on `motor`: not crashed, no false alarm, named right
+// within latency_s, the altitude and the attitude within their bounds.
+void expect_found_in_time(const SimResult& r, int motor, double at_s, double latency_s,
+                          double attitude_max_deg) {
+  ASSERT_EQ(r.failures.size(), 1U);
+  const FailureOutcome& f = r.failures.front();
+  EXPECT_FALSE(r.crashed) << r.crash_reason;
+  EXPECT_EQ(r.false_detections, 0);
+  EXPECT_EQ(f.detected_motor, motor);
+  ASSERT_GE(f.detected_at_s, at_s);
+  EXPECT_LE(f.detected_at_s - at_s, latency_s);
+  EXPECT_LE(r.altitude_loss_m, kAltitudeLossM);
+  EXPECT_LE(r.failure_attitude_error_max_deg, attitude_max_deg);
+}
+
 struct Source {
   const char* name;
   const char* sources;  // failure_detection.sources
@@ -113,15 +128,7 @@ TEST(DetectedFailures, EveryMotorOfHexaAndOctoFoundInTimeAndNamed) {
               const SimResult r = fly_unreported(c, s, motor, fc.at_s, FailureKind::kStop, seed, {},
                                                  telemetry ? Realism{} : kPromptStop);
               ++flights;
-              ASSERT_EQ(r.failures.size(), 1U);
-              const FailureOutcome& f = r.failures.front();
-              EXPECT_FALSE(r.crashed) << r.crash_reason;
-              EXPECT_EQ(r.false_detections, 0);
-              EXPECT_EQ(f.detected_motor, motor);
-              ASSERT_GE(f.detected_at_s, fc.at_s);
-              EXPECT_LE(f.detected_at_s - fc.at_s, source.latency_s);
-              EXPECT_LE(r.altitude_loss_m, kAltitudeLossM);
-              EXPECT_LE(r.failure_attitude_error_max_deg, source.attitude_max_deg);
+              expect_found_in_time(r, motor, fc.at_s, source.latency_s, source.attitude_max_deg);
             }
           }
         }
@@ -152,15 +159,7 @@ TEST(DetectedFailures, AFreewheelingStopIsFoundByTheRatesAlone) {
         SCOPED_TRACE(std::string(file) + " " + strategy + " m" + std::to_string(motor + 1));
         const SimResult r = fly_unreported(c, s, motor, 10.5);
         ++flights;
-        ASSERT_EQ(r.failures.size(), 1U);
-        const FailureOutcome& f = r.failures.front();
-        EXPECT_FALSE(r.crashed) << r.crash_reason;
-        EXPECT_EQ(r.false_detections, 0);
-        EXPECT_EQ(f.detected_motor, motor);
-        ASSERT_GE(f.detected_at_s, 10.5);
-        EXPECT_LE(f.detected_at_s - 10.5, kFreewheelRatesLatencyS);
-        EXPECT_LE(r.altitude_loss_m, kAltitudeLossM);
-        EXPECT_LE(r.failure_attitude_error_max_deg, kRatesOnlyAttitudeMaxDeg);
+        expect_found_in_time(r, motor, 10.5, kFreewheelRatesLatencyS, kRatesOnlyAttitudeMaxDeg);
       }
     }
   }
