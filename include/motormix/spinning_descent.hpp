@@ -78,7 +78,7 @@ struct SpinningDescentSettings {
   double descent_rate_mps = 1.0;  // vertical speed flown down
   double max_tilt_deg = 8.0;      // largest tilt of the spin axis asked to brake drift
   // At most these; the controller lowers them to what the motors' lag and
-  // the rates' delay allow (rate_gains()).
+  // the rates' delay allow (rate_gain(), attitude_gain()).
   double attitude_gain = 12.0;     // 1/s: spin-axis error to rate across it
   double rate_gain = 30.0;         // 1/s: rate error to angular acceleration
   double velocity_gain = 1.5;      // 1/s: vertical speed error to acceleration

@@ -114,6 +114,50 @@ MotorMask late_esc_through_steps(FailureDetectorSettings s, std::int64_t late_us
   return d.detection().failed;
 }
 
+// Each motor's rpm for its thrust and its battery current (cube of the rpm
+// for a whole prop); motor `weak` turns at the rpm of its command but draws
+// `load` of that current (a broken tip).
+void feed_rpm_and_current(FailureDetector& d, const MotorVector& actual, int weak, double load,
+                          std::int64_t t) {
+  for (int i = 0; i < actual.size(); ++i) {
+    const double x = std::max(actual[i], 0.0);
+    const double current = 20.0 * x * std::sqrt(x) * (i == weak ? load : 1.0);
+    d.on_telemetry(i, kFullRpm * std::sqrt(x), current, t);
+  }
+}
+
+TEST(FailureDetector, APropDrawingTooLittleForItsRpmIsNamed) {
+  // A broken tip: rpm as its command asks (within rpm_high_ratio), current
+  // at 40 % of a whole prop's at that rpm: named by its load.
+  FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+  std::int64_t t = 0;
+  const std::int64_t fail_at = 500'000;
+  for (; t < 1'500'000 && d.detection().failed == 0; t += kCycleUs) {
+    feed_rpm_and_current(d, hover(6), 4, t >= fail_at ? 0.4 : 1.0, t);
+    d.update(hover(6), 0, true, t);
+  }
+  ASSERT_EQ(d.detection().failed, MotorMask{1} << 4);
+  EXPECT_EQ(d.detection().source, DetectionSource::kTelemetry);
+  const double latency = static_cast<double>(d.detection().at_us - fail_at) / 1e6;
+  EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
+}
+
+TEST(FailureDetector, ALoadIsNotWeighedNearIdleNorWithTheCheckOff) {
+  // At 15 % thrust an ESC's current offset swamps the load; with
+  // load_ratio 0 it is never judged.
+  for (const bool off : {false, true}) {
+    FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
+    if (off) s.load_ratio = 0.0;
+    FailureDetector d(s);
+    const MotorVector thrust = MotorVector::Constant(6, off ? kHover : 0.15);
+    for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+      feed_rpm_and_current(d, thrust, 1, 0.4, t);
+      d.update(thrust, 0, true, t);
+    }
+    EXPECT_EQ(d.detection().failed, 0U) << (off ? "load_ratio 0" : "near idle");
+  }
+}
+
 TEST(FailureDetector, ALateReadingOfAMotorFollowingItsCommandIsNeitherSlowNorFast) {
   FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
   s.telemetry_persist_s = 0.0;  // about the window, not the persistence

@@ -234,6 +234,51 @@ TEST_F(SpinningDescentTest, LandsOnlyOnceStillWithLittleThrustAskedFor) {
   EXPECT_EQ(descent_.command().thrust_fraction.sum(), 0.0);
 }
 
+TEST_F(SpinningDescentTest, TouchdownIsTheSpinLostWhileStill) {
+  descent_.start(0, 0, equilibrium_fractions(0));
+  DescentInput in = at_equilibrium(0);
+  std::int64_t t = 0;
+  for (int k = 0; k < 400; ++k) descent_.update(in, t += 2500);  // spinning down at the rate
+  ASSERT_EQ(descent_.command().phase, DescentPhase::kDescending);
+  // The ground stops the vehicle and takes its spin: landed at once.
+  in.velocity.setZero();
+  in.rates.setZero();
+  EXPECT_EQ(descent_.update(in, t += 2500).phase, DescentPhase::kLanded);
+}
+
+TEST_F(SpinningDescentTest, HoveringRightAfterTheTakeOverIsNotLanded) {
+  // Still, the spin building up (a quarter of the equilibrium's), the
+  // velocity loop asking ever less thrust: in the air, not landed, however
+  // long (the rule that lands it needs the descent flown or no turning).
+  descent_.start(0, 0, equilibrium_fractions(0));
+  DescentInput in = at_equilibrium(0);
+  in.velocity.setZero();
+  in.rates *= 0.25;
+  std::int64_t t = 0;
+  for (int k = 0; k < 1200; ++k) descent_.update(in, t += 2500);
+  EXPECT_EQ(descent_.command().phase, DescentPhase::kDescending);
+}
+
+TEST(SpinningDescentGains, TheRateLoopLeavesFortyFiveDegreesToTheLagAndTheDelay) {
+  config::Config c = spin_quad("quad_x");
+  SpinningDescentModel m = c.motor_loss->model;
+  const SpinningDescentSettings& s = c.motor_loss->settings;
+  // A 40 ms motor lag and a 40 Hz gyro filter's 5.6 ms.
+  m.time_constant_s = 0.04;
+  m.rate_delay_s = 0.0056;
+  const SpinningDescent slow(m, s);
+  const double g = slow.rate_gain();
+  EXPECT_NEAR(std::atan(g * m.time_constant_s) + g * m.rate_delay_s, std::atan(1.0), 1e-6);
+  EXPECT_LT(g, s.rate_gain);
+  EXPECT_NEAR(slow.attitude_gain(), g / 2.5, 1e-9);
+  // Fast motors, no delay: the settings' own gains.
+  m.time_constant_s = 0.01;
+  m.rate_delay_s = 0.0;
+  const SpinningDescent fast(m, s);
+  EXPECT_EQ(fast.rate_gain(), s.rate_gain);
+  EXPECT_EQ(fast.attitude_gain(), s.attitude_gain);
+}
+
 TEST_F(SpinningDescentTest, WithoutVelocityTheThrottleIsTheCollective) {
   descent_.start(3, 0, equilibrium_fractions(3));
   DescentInput in = at_equilibrium(3);
