@@ -13,11 +13,11 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <fstream>
-#include <iterator>
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 namespace motormix::test {
@@ -27,7 +27,7 @@ using namespace std::chrono_literals;
 
 constexpr float kDisarmedUs = 900.0f;  // config/quad_x.yaml
 constexpr float kMinUs = 1000.0f;
-constexpr double kSpoolUpS = 0.5;         // config/quad_x.yaml's output.spool_up_s
+constexpr double kSpoolUpS = 0.5;        // config/quad_x.yaml's output.spool_up_s
 constexpr double kSpoolUpSlackS = 0.03;  // a dozen cycles at 400 Hz, either way
 
 std::int64_t now_us() {
@@ -177,8 +177,15 @@ TEST_F(MixerOnTheBus, AnArmedSetpointEndsTheTestAndArmedMixersRefuseOne) {
   EXPECT_EQ(run_client({"motor-test", "--config", quad(), "--motor", "1", "--throttle", "0.1",
                         "--seconds", "1"}),
             5);  // refused
-  const auto status = bus_.status();
-  EXPECT_EQ(status.back().motor_test_result, mixer_status_t::MOTOR_TEST_REFUSED_NOT_DISARMED);
+  // The client heard the refusal; the status saying so may reach this
+  // test's own subscriber a moment later (a loaded machine): wait for it.
+  EXPECT_TRUE(bus_.wait_until(
+      [](const auto&, const auto& status) {
+        return !status.empty() &&
+               status.back().motor_test_result == mixer_status_t::MOTOR_TEST_REFUSED_NOT_DISARMED;
+      },
+      2s))
+      << "the status never said MOTOR_TEST_REFUSED_NOT_DISARMED";
 }
 
 TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
@@ -212,8 +219,7 @@ TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
   // inputs (not to the ESC's zero, where a mixer that never spun up would
   // also be "steady"), and the ramp lasts output.spool_up_s (0.5 s) in the
   // mixer's own clock, give or take a few cycles.
-  const config::Config no_spool =
-      config::load_config_file(quad(), {"output.spool_up_s=0"});
+  const config::Config no_spool = config::load_config_file(quad(), {"output.spool_up_s=0"});
   const Mixer mixer = config::build_mixer(no_spool);
   MixerOutput out;
   AxisVector demand;
@@ -223,7 +229,8 @@ TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
   for (std::size_t k = 0; k < ramp.size() && reached == ramp.size(); ++k) {
     bool all = true;
     for (std::size_t i = 0; i < 4; ++i) {
-      all = all && std::abs(ramp[k].pwm[i] - out.output[static_cast<Eigen::Index>(i)]) <= kFloatPwmUs;
+      all =
+          all && std::abs(ramp[k].pwm[i] - out.output[static_cast<Eigen::Index>(i)]) <= kFloatPwmUs;
     }
     if (all) reached = k;
   }
@@ -250,7 +257,7 @@ TEST_F(MixerOnTheBus, SpoolUpRampsMonotonicallyToTheMixedValue) {
 TEST_F(MixerOnTheBus, EscCalibrationRefusesWhileAMixerRuns) {
   const std::string err_path = ::testing::TempDir() + "/esc_refusal_stderr.txt";
   std::vector<std::string> argv = {motormix_binary(), "esc-calibrate", "--config", quad(),
-                                   "--props-off", "--timeout", "1"};
+                                   "--props-off",     "--timeout",     "1"};
   ChildProcess client(argv, err_path);
   EXPECT_EQ(client.wait_for(15s), 5);
   std::ifstream err_file(err_path);
