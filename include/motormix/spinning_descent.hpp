@@ -71,6 +71,9 @@ struct SpinningDescentModel {
   std::array<double, 4> spin{};
   double rotor_inertia_kgm2 = 0.0;
   double max_rotor_speed_rad_s = 0.0;
+  // The gyro's full scale (0: unknown). A two-rotor descent spins faster
+  // than a gyro can measure: beyond 90 % of it the spin rate is the model's.
+  double gyro_range_rad_s = 0.0;
 };
 
 struct SpinningDescentSettings {

@@ -2,6 +2,8 @@
 
 #include "motor_loss_reader.hpp"
 
+#include <motormix/two_rotor_descent.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -63,12 +65,36 @@ std::string derive(const Config& config, MotorLoss& ml) {
   std::string why = unsupported(config);
   if (why.empty()) {
     ml.model = model_of(config);
+    ml.model.gyro_range_rad_s = ml.gyro_range_rad_s;
     ml.equilibria = solve_spin_equilibria(ml.model, ml.settings.spin_rate_rad_s);
     for (const SpinEquilibrium& eq : ml.equilibria) {
       if (!eq.found && why.empty()) why = eq.why;
     }
   }
   return why;
+}
+
+// What `run --check` says of two motors lost: the pairs the two-rotor
+// landing covers, or why none.
+std::string two_rotor_summary(const SpinningDescentModel& model) {
+  std::ostringstream s;
+  std::string why;
+  int found = 0;
+  s.precision(3);
+  for (int a = 0; a < 4; ++a) {
+    for (int b = a + 1; b < 4; ++b) {
+      const TwoRotorPlan p = plan_two_rotor_descent(model, a, b);
+      if (p.found) {
+        s << (found++ == 0 ? "; two motors lost: lands on " : ", on ") << p.working[0] + 1 << "+"
+          << p.working[1] + 1 << " (" << p.weight_share * 100 << " % of the weight carried)";
+      } else if (why.empty() && p.why.find("not opposite") == std::string::npos) {
+        why = p.why;
+      }
+    }
+  }
+  if (found == 0)
+    return "; two motors lost: no landing (" + (why.empty() ? "none opposite" : why) + ")";
+  return s.str();
 }
 
 }  // namespace
@@ -124,6 +150,7 @@ std::string Config::motor_loss_summary() const {
     s << "motor loss: spin landing (" << motor_loss->settings.spin_rate_rad_s << " rad/s, down at "
       << motor_loss->settings.descent_rate_mps << " m/s); needs attitude_t on " << channels.attitude
       << " (with velocity, or it follows the throttle); without a fresh one it mixes as before";
+    s << two_rotor_summary(motor_loss->model);
     return s.str();
   }
   if (motors() == 4 && thrust_range() != ThrustRange::kBipolar) {

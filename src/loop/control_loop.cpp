@@ -213,7 +213,8 @@ void ControlLoop::land(std::int64_t now_us, double ramp) {
   }
   const LandingReport& after = landing_->report();
   result_.landing = after;
-  result_.landing_changed = after.state != before.state || after.motor != before.motor;
+  result_.landing_changed =
+      after.state != before.state || after.motor != before.motor || after.failed != before.failed;
 }
 
 void ControlLoop::record_vehicle_state(std::int64_t now_us) {

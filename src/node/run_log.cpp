@@ -19,10 +19,20 @@ void log_landing(std::ostream& log, const config::Config& config, const loop::Cy
     return m >= 0 ? config.motor_names()[static_cast<std::size_t>(m)] : std::string("?");
   };
   switch (r.landing.state) {
-    case DescentPhase::kDescending:
-      log << "motormix: motor " << name(r.landing.motor)
-          << " failed: yaw given up, landing spinning on the other three" << std::endl;
+    case DescentPhase::kDescending: {
+      int second = -1;
+      for (int i = r.landing.motor + 1; i < config.motors() && second < 0; ++i) {
+        if ((r.landing.failed >> i) & 1U) second = i;
+      }
+      if (second < 0) {
+        log << "motormix: motor " << name(r.landing.motor)
+            << " failed: yaw given up, landing spinning on the other three" << std::endl;
+      } else {
+        log << "motormix: motors " << name(r.landing.motor) << " and " << name(second)
+            << " failed: yaw given up, landing spinning on the other two" << std::endl;
+      }
       break;
+    }
     case DescentPhase::kLanded:
       log << "motormix: spin landing touched down: disarmed (arm again only after a "
              "disarmed setpoint)"

@@ -4,7 +4,9 @@
 # stops at 8 s at 10 m, twice: once with nobody reporting it (the mixer's
 # own detector, ESC telemetry and rates, finds it, as a real stack would
 # without a motor_status publisher), once reported on motor_status 100 ms
-# later. The simulated vehicle publishes its attitude, rates and velocity.
+# later; and a third time with motors 1 and 2 (opposite) stopping together,
+# found by the detector, landing on the other two. The simulated vehicle
+# publishes its attitude, rates and velocity.
 # Each flight passes when the quad did not crash, touched down no faster
 # than 2 m/s, and the mixer logged taking over and disarming on touchdown.
 # With all of the simulator's realism (rotor momentum, a filtered vibrating
@@ -17,10 +19,11 @@ config=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 failed=0
-# fly NAME [SIM ARGS...]
+# fly NAME EXPECTED-LOG-LINE [SIM ARGS...]
 fly() {
   name=$1
-  shift
+  expected=$2
+  shift 2
   # The mixer stops by itself after 25 s of cycles (400 Hz) if nothing else stops it.
   "$mm" run --config "$config" --set failure_detection.enabled=true \
     --max-cycles 10000 > "$tmp/run.log" 2>&1 &
@@ -36,7 +39,7 @@ fly() {
   speed=$(sed -n 's/.*"touchdown_speed_mps":\([0-9.e+-]*\).*/\1/p' "$tmp/sim.json")
   if [ "$code" -ne 0 ] || ! grep -q '"crashed":false' "$tmp/sim.json" || [ -z "$speed" ] ||
     ! awk -v s="$speed" 'BEGIN { exit !(s <= 2.0) }' ||
-    ! grep -q 'landing spinning on the other three' "$tmp/run.log" ||
+    ! grep -q "$expected" "$tmp/run.log" ||
     ! grep -q 'spin landing touched down: disarmed' "$tmp/run.log"; then
     echo "FAILED $name (exit $code, touchdown at ${speed:-no} m/s)"
     cat "$tmp/run.log"
@@ -45,6 +48,8 @@ fly() {
   fi
   grep 'spin landing\|landing spinning' "$tmp/run.log"
 }
-fly "found by the detector" --undetected
-fly "reported after 100 ms"
+fly "found by the detector" 'landing spinning on the other three' --undetected
+fly "reported after 100 ms" 'landing spinning on the other three'
+fly "two opposite motors, found by the detector" 'landing spinning on the other two' \
+  --undetected --no-scenario-failures --fail 1@8 --fail 2@8
 exit $failed

@@ -19,6 +19,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <future>
 #include <iostream>
 #include <sstream>
@@ -226,6 +227,107 @@ TEST(SpinLanding, SettlesNearTheRelaxedHoverEquilibrium) {
     EXPECT_NEAR(r.settled_thrust_n[k], eq.thrust_n[j], kSettledSpinShare * eq.thrust_n[j])
         << "motor " << k + 1;
   }
+}
+
+// Two opposite motors (issue 48: each pair of the quad X, at least five
+// seeds, touchdown at most 3 m/s). The two left carry 92 % of the weight
+// with room to steer (thrust twice the weight): the vehicle comes down
+// faster than the descent rate, the air's drag limiting its speed.
+constexpr double kTwoMotorTouchdownMaxMps = 3.0;
+
+Scenario with_failures(const std::string& name, const std::array<int, 2>& motors) {
+  Scenario s = load_scenario(name);
+  s.failure_detection_s = kReportedAfterS;
+  int n = 0;
+  for (ScenarioEvent& e : s.timeline) {
+    if (e.fail) e.fail = motors[static_cast<std::size_t>(std::min(n++, 1))];
+  }
+  return s;
+}
+
+void expect_two_motor_landings(const Vehicle& v, const std::vector<std::array<int, 2>>& pairs,
+                               const Realism& realism = kRealism, bool undetected = false) {
+  const config::Config c = undetected ? load(v, {"failure_detection.enabled=true"}) : load(v);
+  ASSERT_TRUE(c.motor_loss.has_value()) << c.motor_loss_off;
+  std::vector<std::future<std::string>> runs;
+  for (const auto& pair : pairs) {
+    for (int seed = 1; seed <= test::sim_grid_seeds(kSeeds); ++seed) {
+      runs.push_back(std::async(std::launch::async, [&, pair, seed] {
+        SimOptions o;
+        o.seed = static_cast<std::uint64_t>(seed);
+        o.realism = realism;
+        o.undetected = undetected;
+        const SimResult r =
+            run_lockstep(c, config::build_mixer(c), with_failures("two_motor_landing", pair), o);
+        std::ostringstream why;
+        // The simulator calls a touchdown above 2 m/s a crash; the target here is 3.
+        const bool hard_landing = r.crashed && r.crash_reason.rfind("hit the ground", 0) == 0;
+        if (r.crashed && !hard_landing)
+          why << "crashed (" << r.crash_reason << ") at " << r.crash_time_s << " s; ";
+        if (!r.crashed && r.touchdown_time_s < 0) why << "never touched down; ";
+        if (!(r.touchdown_speed_mps <= kTwoMotorTouchdownMaxMps))
+          why << "touched down at " << r.touchdown_speed_mps << " m/s; ";
+        // Found by the detector: both motors named, and no other.
+        if (undetected) {
+          MotorMask named = 0;
+          for (const auto& f : r.failures) {
+            if (f.detected_motor >= 0) named |= MotorMask{1} << f.detected_motor;
+          }
+          if (named != ((MotorMask{1} << pair[0]) | (MotorMask{1} << pair[1])) ||
+              r.false_detections != 0)
+            why << "the detector named motors " << named << "; ";
+        }
+        std::cout << v.name << " motors " << pair[0] + 1 << "+" << pair[1] + 1 << " seed " << seed
+                  << ": touchdown " << r.touchdown_speed_mps << " m/s, tilt "
+                  << r.max_thrust_axis_tilt_deg << " deg, spin " << r.max_spin_rate_rad_s
+                  << " rad/s\n";
+        const std::string w = why.str();
+        return w.empty()
+                   ? w
+                   : std::string(v.name) + " motors " + std::to_string(pair[0] + 1) + "+" +
+                         std::to_string(pair[1] + 1) + " seed " + std::to_string(seed) + ": " + w;
+      }));
+      if (runs.size() % 2 == 0) {
+        for (auto& f : runs) f.wait();
+      }
+    }
+  }
+  std::string failures;
+  for (auto& f : runs) failures += f.get();
+  EXPECT_EQ(failures, "");
+}
+
+// Quad X numbering: 1 front right and 2 rear left, 3 front left and 4 rear
+// right; the team quad's: 1 front left and 4 rear right, 2 front right and 3
+// rear left.
+const std::vector<std::array<int, 2>> kQuadXPairs{{0, 1}, {2, 3}};
+const std::vector<std::array<int, 2>> kTeamQuadPairs{{0, 3}, {1, 2}};
+
+TEST(SpinLanding, QuadXLandsOnTwoOppositeMotors) {
+  expect_two_motor_landings(kQuadX, kQuadXPairs);
+  expect_two_motor_landings(kTeamQuad, kTeamQuadPairs);
+}
+
+TEST(SpinLanding, TwoOppositeMotorsFoundByTheDetector) {
+  expect_two_motor_landings(kQuadX, kQuadXPairs, kRealism, true);
+  expect_two_motor_landings(kTeamQuad, kTeamQuadPairs, kRealism, true);
+}
+
+// In still air. A vehicle 30 % heavier than configured is not among them:
+// two rotors carry 75 % of it and it hits the ground (SIM.md). Torque gusts
+// in the first seconds are not either: see docs/motor-loss-landing.md.
+TEST(SpinLanding, TwoOppositeMotorsWithTheVehicleOffItsConfiguration) {
+  const auto off = [](double ModelError::*factor, double x) {
+    Realism r;
+    r.truth.*factor = x;
+    return r;
+  };
+  expect_two_motor_landings(kQuadX, kQuadXPairs, off(&ModelError::rotor_inertia, 2.0));
+  for (double ModelError::*factor : {&ModelError::inertia, &ModelError::drag}) {
+    expect_two_motor_landings(kQuadX, kQuadXPairs, off(factor, 1.0 + kModelErrorFactor));
+    expect_two_motor_landings(kQuadX, kQuadXPairs, off(factor, 1.0 - kModelErrorFactor));
+  }
+  expect_two_motor_landings(kQuadX, kQuadXPairs, off(&ModelError::mass, 1.0 - kModelErrorFactor));
 }
 
 }  // namespace

@@ -257,13 +257,27 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   const auto unloaded = [&](std::size_t k) {
     return load_median > 0.0 && load[k] > 0.0 && load[k] < s_.load_ratio * load_median;
   };
+  // A fast motor is judged against the motors that are not too slow: two
+  // motors stopped on a quad put the median halfway to zero, and the two
+  // healthy ones would look twice too fast.
+  std::array<double, kMaxMotors> spinning{};
+  int n_spinning = 0;
+  for (int i = 0; i < s_.motors && rpm_median > 0.0; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (kind[k] == 1 && best[k] >= s_.rpm_ratio * rpm_median)
+      spinning[static_cast<std::size_t>(n_spinning++)] = ratio[k];
+  }
+  const double fast_median = n_spinning >= s_.min_reporting ? median(spinning, n_spinning) : 0.0;
+  const auto too_fast = [&](std::size_t k) {
+    return fast_median > 0.0 && fastest[k] > s_.rpm_high_ratio * fast_median;
+  };
 
   detection_.telemetry_silent = 0;
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     telemetry_healthy_[k] =
-        (kind[k] == 1 && rpm_median > 0 && best[k] >= s_.rpm_ratio * rpm_median &&
-         fastest[k] <= s_.rpm_high_ratio * rpm_median && !unloaded(k)) ||
+        (kind[k] == 1 && rpm_median > 0 && best[k] >= s_.rpm_ratio * rpm_median && !too_fast(k) &&
+         !unloaded(k)) ||
         (kind[k] == 2 && current_median > 0 && best[k] >= s_.current_ratio * current_median);
   }
   // Silence alone stops a motor only where that costs nothing the vehicle
@@ -280,8 +294,7 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     // thrown or broken unloads the motor, which then outruns its command.
     const bool low =
         (kind[k] == 1 && rpm_median > 0 &&
-         (best[k] < s_.rpm_ratio * rpm_median || fastest[k] > s_.rpm_high_ratio * rpm_median ||
-          unloaded(k))) ||
+         (best[k] < s_.rpm_ratio * rpm_median || too_fast(k) || unloaded(k))) ||
         (kind[k] == 2 && current_median > 0 && best[k] < s_.current_ratio * current_median);
     if (!allowed) {
       telemetry_suspicion_[k] = 0.0;

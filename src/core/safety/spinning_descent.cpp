@@ -1,5 +1,7 @@
 #include <motormix/spinning_descent.hpp>
 
+#include "descent_collective.hpp"
+
 #include <Eigen/LU>
 
 #include <algorithm>
@@ -42,9 +44,8 @@ constexpr double kRateLoopLagRad = 3.14159265358979323846 / 4.0;
 constexpr double kLoopSeparation = 2.5;
 constexpr double kMaxDtS = 0.05;  // a longer gap is taken as this (a stalled process)
 constexpr double kThrustWeight = 0.3;
-constexpr double kMaxRateRadS = 100.0;            // beyond any gyro: clipped
-constexpr double kMaxSpeedMps = 200.0;            // beyond: taken as unknown
-constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees
+constexpr double kMaxRateRadS = 100.0;  // beyond any gyro: clipped
+using detail::kMaxSpeedMps;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -364,29 +365,11 @@ void SpinningDescent::stop() {
 
 double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d& up_body,
                                    double dt) {
-  const double weight = m_.mass_kg * kStandardGravity;
-  double up_force = 0.0;
-  if (std::isfinite(in.velocity.z()) && std::abs(in.velocity.z()) < kMaxSpeedMps) {
-    const double error = in.velocity.z() - s_.descent_rate_mps;  // NED: positive is too fast down
-    // The integral learns the thrust model's error while upright only.
-    if (-up_body.z() > kMinTiltCompensationCos) {
-      velocity_integral_ = std::clamp(velocity_integral_ + s_.velocity_integral * error * dt,
-                                      -0.4 * kStandardGravity, 0.4 * kStandardGravity);
-    }
-    up_force = m_.mass_kg * (kStandardGravity + s_.velocity_gain * error + velocity_integral_);
-    up_force = std::clamp(up_force, 0.3 * weight, 1.6 * weight);
-    up_force_ = up_force;
-  } else {
-    double full = 0.0;
-    for (double t : m_.max_thrust_n) full += t;
-    up_force = (std::isfinite(in.throttle) ? std::clamp(in.throttle, 0.0, 1.0) : 0.0) * full;
-    up_force_ = up_force;
-  }
-  // The thrust axis is body -z; only its upward part carries the weight.
-  // Far from upright more thrust buys little and takes the differential
-  // the neighbours need to right the vehicle.
-  const double cos_tilt = std::max(-up_body.z(), kMinTiltCompensationCos);
-  return up_force / cos_tilt;
+  detail::CollectiveState state{velocity_integral_, up_force_};
+  const double thrust = detail::descent_collective(m_, s_, in, up_body, dt, state);
+  velocity_integral_ = state.velocity_integral;
+  up_force_ = state.up_force;
+  return thrust;
 }
 
 const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64_t now_us) {

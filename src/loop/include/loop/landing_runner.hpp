@@ -1,14 +1,15 @@
 #pragma once
 // The spin landing inside the control loop (config `motor_loss:`): when a
-// four-rotor aircraft has exactly one failed motor, is armed and spooled up,
-// and a fresh attitude is at hand, the core's SpinningDescent takes over the
-// outputs: the controller's roll, pitch and yaw are no longer followed; with
+// four-rotor aircraft has exactly one failed motor (or two opposite ones
+// that the vehicle's two-rotor plan can land), is armed and spooled up, and
+// a fresh attitude is at hand, the core's SpinningDescent (TwoRotorDescent)
+// takes over the outputs: the controller's roll, pitch and yaw are no longer followed; with
 // a velocity in the attitude message its throttle is not either (the
 // configured descent rate is flown), without one the throttle is the
 // collective. Each cycle it turns the three thrusts into output-stage values
 // through the vehicle's ESC curve and range (`vehicle:` section), the dead
-// motor at its disarmed value. It lets go (and the loop mixes as before)
-// when the attitude goes stale, when another motor fails as well, or when
+// motors at their disarmed value. It lets go (and the loop mixes as before)
+// when the attitude goes stale, when the failure set changes, or when
 // the loop disarms; once it reports the vehicle landed, the loop disarms.
 
 #include "loop/esc_curve.hpp"
@@ -18,6 +19,7 @@
 #include <motormix/config/config.hpp>
 #include <motormix/mixer.hpp>
 #include <motormix/spinning_descent.hpp>
+#include <motormix/two_rotor_descent.hpp>
 
 #include <cstdint>
 #include <vector>
@@ -26,7 +28,8 @@ namespace motormix::loop {
 
 struct LandingReport {
   DescentPhase state = DescentPhase::kOff;
-  int motor = -1;  // the failed motor it lands without (0-based), -1 when off
+  int motor = -1;  // the failed motor it lands without (0-based; the first of two), -1 when off
+  MotorMask failed = 0;  // every motor it lands without
   double measured_rate_rad_s =
       0.0;                      // |rates| measured (the configured one: motor_loss.spin_rate_rad_s)
   double axis_error_deg = 0.0;  // spin axis from where it should point
@@ -53,9 +56,16 @@ class LandingRunner {
   void armed();
   const LandingReport& report() const { return report_; }
   const SpinningDescent& descent() const { return descent_; }
+  const TwoRotorDescent& two_rotor_descent() const { return two_rotor_; }
 
  private:
+  void stop();
+  bool two_rotor_cycle(const Inputs& in, std::int64_t now_us, const OutputStage& stage,
+                       MixerOutput& out);
+  void drive(const DescentCommand& c, MotorMask failed, const OutputStage& stage, MixerOutput& out);
+
   SpinningDescent descent_;
+  TwoRotorDescent two_rotor_;
   std::int64_t attitude_timeout_us_;
   EscCurve curve_;
   LandingReport report_;

@@ -1,0 +1,53 @@
+#pragma once
+// The collective thrust of a spinning descent, shared by the three-rotor
+// (spinning_descent.cpp) and the two-rotor (two_rotor_descent.cpp) landings:
+// the vertical speed flown down by a proportional-integral loop on the
+// measured velocity, or, without one, the setpoint's throttle. Internal to
+// the core.
+
+#include <motormix/spinning_descent.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace motormix::detail {
+
+// Far from upright more thrust buys little and takes the differential the
+// rotors need to right the vehicle: the tilt compensation stops here.
+inline constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees
+inline constexpr double kMaxSpeedMps = 200.0;            // beyond: taken as unknown
+
+struct CollectiveState {
+  double velocity_integral = 0.0;
+  double up_force = 0.0;  // the vertical force asked for last (N)
+};
+
+// The thrust along the body's -z axis (N) that gives the vertical force the
+// descent asks for; `up_body`: the world's up in body axes.
+inline double descent_collective(const SpinningDescentModel& m, const SpinningDescentSettings& s,
+                                 const DescentInput& in, const Eigen::Vector3d& up_body, double dt,
+                                 CollectiveState& state) {
+  const double weight = m.mass_kg * kStandardGravity;
+  double up_force = 0.0;
+  if (std::isfinite(in.velocity.z()) && std::abs(in.velocity.z()) < kMaxSpeedMps) {
+    const double error = in.velocity.z() - s.descent_rate_mps;  // NED: positive is too fast down
+    // The integral learns the thrust model's error while upright only.
+    if (-up_body.z() > kMinTiltCompensationCos) {
+      state.velocity_integral =
+          std::clamp(state.velocity_integral + s.velocity_integral * error * dt,
+                     -0.4 * kStandardGravity, 0.4 * kStandardGravity);
+    }
+    up_force = m.mass_kg * (kStandardGravity + s.velocity_gain * error + state.velocity_integral);
+    up_force = std::clamp(up_force, 0.3 * weight, 1.6 * weight);
+  } else {
+    double full = 0.0;
+    for (double t : m.max_thrust_n) full += t;
+    up_force = (std::isfinite(in.throttle) ? std::clamp(in.throttle, 0.0, 1.0) : 0.0) * full;
+  }
+  state.up_force = up_force;
+  // The thrust axis is body -z; only its upward part carries the weight.
+  const double cos_tilt = std::max(-up_body.z(), kMinTiltCompensationCos);
+  return up_force / cos_tilt;
+}
+
+}  // namespace motormix::detail
