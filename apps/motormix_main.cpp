@@ -165,10 +165,10 @@ int main(int argc, char** argv) {
       "sim",
       "fly the configuration in closed loop: lockstep (default) or live beside motormix run");
   add_vehicle(sim_app, sim_cmd.common);
-  sim_app->add_option(
-      "--scenario", sim_cmd.scenario,
-      "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
-      "drive, spin_landing, spin_landing_gusts, two_motor_landing) or a YAML file (default hover)");
+  sim_app->add_option("--scenario", sim_cmd.scenario,
+                      "a shipped scenario (hover, steps, flips, motor_out, battery_sag, gusts, "
+                      "drive, spin_landing, spin_landing_gusts, two_motor_landing, "
+                      "two_motor_landing_gusts) or a YAML file (default hover)");
   sim_app->add_option("--fail", sim_cmd.fail,
                       "fail a motor: MOTOR@SECONDS[:KIND], motor numbered as motormix matrix "
                       "prints it or named; KIND stop (default), half_thrust, intermittent, "

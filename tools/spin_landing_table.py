@@ -14,7 +14,10 @@ flights landed (not crashed, touched down no faster than 2 m/s), the worst
 touchdown speed, tilt of the flights that landed and of all, spin and drift,
 and the spin and opposite/neighbour thrusts settled before touchdown next to
 the relaxed-hover equilibrium (motor 1's flights, first seed). Then the
-robustness table: landed share against rotor inertia and model error.
+robustness table: landed share against rotor inertia and model error. Then
+two opposite motors stopping together (two_motor_landing and
+two_motor_landing_gusts, each opposite pair): landed means not tipped over,
+reached 10 m first, and touched down no faster than 3 m/s.
 """
 
 import argparse
@@ -47,6 +50,15 @@ ERRORS = ["rotor_inertia=2", "rotor_inertia=0.5", "mass=1.3", "mass=0.7", "inert
           "mass=1.3,inertia=1.3,drag=1.3", "mass=0.7,inertia=0.7,drag=0.7"]
 COLUMNS = [("quad_x", "spin_landing"), ("quad_x", "spin_landing_gusts"),
            ("team_quad", "spin_landing"), ("team_quad", "spin_landing_gusts")]
+# Two opposite motors: the pairs (numbered as motormix matrix prints them),
+# and the worlds flown: scenario, how the failures became known, model error.
+PAIRS = {"quad_x": [(1, 2), (3, 4)], "team_quad": [(1, 4), (2, 3)]}
+TWO_ROWS = [("two_motor_landing", "reported", ON), ("two_motor_landing", "detected", ON),
+            ("two_motor_landing_gusts", "reported", ON),
+            ("two_motor_landing_gusts", "detected", ON)] + [
+    ("two_motor_landing", "reported", (e, ["--truth", e]))
+    for e in ["rotor_inertia=2", "mass=1.3", "mass=0.7", "inertia=1.3", "inertia=0.7", "drag=1.3",
+              "drag=0.7", "time_constant=1.3", "time_constant=0.7"]]
 
 
 def landed_ok(r):
@@ -55,13 +67,24 @@ def landed_ok(r):
             and r["touchdown_speed_mps"] <= 2.0)
 
 
+def two_landed_ok(r):
+    """Reached 10 m, not tipped over, touched down no faster than 3 m/s (the
+    simulator calls above 2 m/s a crash)."""
+    hard = r["crashed"] and r.get("crash_reason", "").startswith("hit the ground")
+    return (r["reached_altitude"] and (not r["crashed"] or hard)
+            and r.get("touchdown_speed_mps") is not None and r["touchdown_speed_mps"] <= 3.0)
+
+
 def fly(motormix, config, scenario, known, world, motor, seed):
+    """motor: 0-based, or a pair of 1-based motors stopping together."""
     args = [motormix, "sim", "--config", f"config/{config}.yaml", "--scenario", scenario,
             "--seed", str(seed), "--json"] + world[1]
     if known == "detected":
         args += ["--undetected", "--set", "failure_detection.enabled=true"]
-    # The scenario stops motor 1; another motor instead.
-    args += ["--no-scenario-failures", "--fail", f"{motor + 1}@8"]
+    # The scenario stops motor 1 (and 2); others instead.
+    args += ["--no-scenario-failures"]
+    for m in (motor if isinstance(motor, tuple) else (motor + 1,)):
+        args += ["--fail", f"{m}@8"]
     out = subprocess.run(args, capture_output=True, text=True)
     return json.loads(out.stdout)
 
@@ -85,9 +108,16 @@ def main():
             for motor in range(4):
                 for seed in range(a.first_seed, a.first_seed + a.seeds):
                     robust.append((row, motor, seed))
+    two = []
+    for config, pairs in PAIRS.items():
+        for (scenario, known, world) in TWO_ROWS:
+            for pair in pairs:
+                for seed in range(a.first_seed, a.first_seed + a.seeds):
+                    two.append(((config, scenario, known, world), pair, seed))
     with ThreadPoolExecutor(a.jobs) as pool:
         results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), jobs))
         robust_results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), robust))
+        two_results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), two))
     print("| vehicle | scenario | failure | world | landed | touchdown max (m/s) "
           "| tilt max, landed / all (deg) | spin max (rad/s) | drift max (m) "
           "| settled spin / equilibrium (rad/s) "
@@ -138,6 +168,29 @@ def main():
             n = sum(1 for r in rs if landed_ok(r))
             cells.append(f"{n} of {len(rs)}, {max(r['max_thrust_axis_tilt_deg'] for r in rs):.0f} deg")
         print(f"| {error.replace(',', ', ')} | " + " | ".join(cells) + " |")
+    print()
+    print("Two opposite motors stopping together at 8 s at 10 m, each opposite pair (quad X 1+2 and")
+    print("3+4, team quad 1+4 and 2+3): landed (reached 10 m, not tipped over, touchdown no faster")
+    print("than 3 m/s), the worst touchdown, tilt and spin of the flights that landed, and the")
+    print("detector's latency for the later of the two motors.")
+    print()
+    print("| vehicle | scenario | failure | world | landed | touchdown max (m/s) "
+          "| tilt max, landed / all (deg) | spin max (rad/s) | named within (ms) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for config in PAIRS:
+        for (scenario, known, world) in TWO_ROWS:
+            rs = [r for (j, r) in zip(two, two_results) if j[0] == (config, scenario, known, world)]
+            landed = [r for r in rs if two_landed_ok(r)]
+            touchdown = max((r["touchdown_speed_mps"] for r in landed), default=None)
+            tilt_landed = max((r["max_thrust_axis_tilt_deg"] for r in landed), default=None)
+            spin = max((r["max_spin_rate_rad_s"] for r in landed), default=None)
+            latency = [f["detected_at_s"] - f["at_s"] for r in rs for f in r["failures"]
+                       if f.get("detected_at_s") is not None]
+            fmt = lambda v, d: "n/a" if v is None else f"{v:.{d}f}"
+            print(f"| {config} | {scenario} | {known} | {world[0]} | {len(landed)} of {len(rs)} "
+                  f"| {fmt(touchdown, 2)} | {fmt(tilt_landed, 1)} / "
+                  f"{max(r['max_thrust_axis_tilt_deg'] for r in rs):.1f} | {fmt(spin, 1)} "
+                  f"| {fmt(max(latency) * 1000 if latency and known == 'detected' else None, 0)} |")
 
 
 if __name__ == "__main__":

@@ -85,15 +85,16 @@ std::string two_rotor_summary(const SpinningDescentModel& model) {
     for (int b = a + 1; b < 4; ++b) {
       const TwoRotorPlan p = plan_two_rotor_descent(model, a, b);
       if (p.found) {
-        s << (found++ == 0 ? "; two motors lost: lands on " : ", on ") << p.working[0] + 1 << "+"
-          << p.working[1] + 1 << " (" << p.weight_share * 100 << " % of the weight carried)";
+        s << (found++ == 0 ? "; two opposite motors lost: " : ", ") << p.failed[0] + 1 << "+"
+          << p.failed[1] + 1 << " lands on " << p.working[0] + 1 << "+" << p.working[1] + 1 << " ("
+          << p.weight_share * 100 << " % of the weight carried)";
       } else if (why.empty() && p.why.find("not opposite") == std::string::npos) {
         why = p.why;
       }
     }
   }
   if (found == 0)
-    return "; two motors lost: no landing (" + (why.empty() ? "none opposite" : why) + ")";
+    return "; two opposite motors lost: no landing (" + (why.empty() ? "none opposite" : why) + ")";
   return s.str();
 }
 

@@ -265,6 +265,7 @@ void expect_two_motor_landings(const Vehicle& v, const std::vector<std::array<in
         if (r.crashed && !hard_landing)
           why << "crashed (" << r.crash_reason << ") at " << r.crash_time_s << " s; ";
         if (!r.crashed && r.touchdown_time_s < 0) why << "never touched down; ";
+        if (!r.reached_altitude) why << "never reached 10 m; ";
         if (!(r.touchdown_speed_mps <= kTwoMotorTouchdownMaxMps))
           why << "touched down at " << r.touchdown_speed_mps << " m/s; ";
         // Found by the detector: both motors named, and no other.
