@@ -368,6 +368,8 @@ int monitor(const MonitorCommand& cmd) {
     if (!config) return kExitUsage;
     o.status_channel = config->channels.status;
     o.pwm_channel = config->channels.motor_pwm;
+    o.output_status_channel = config->channels.output_status;
+    o.expect_output = config->hardware.driver != config::HardwareDriver::kNone;
     o.motor_names = config->motor_names();
     o.output_unit = config->output_unit;
     try {

@@ -90,6 +90,63 @@ std::string bar(double command, bool bipolar, int width) {
 
 }  // namespace
 
+namespace {
+
+const char* pins_name(int8_t p) {
+  switch (p) {
+    case output_status_t::PINS_STARTING:
+      return "disarmed (nothing taken yet)";
+    case output_status_t::PINS_ARMED:
+      return "ARMED";
+    case output_status_t::PINS_DISARMED:
+      return "disarmed";
+    case output_status_t::PINS_STALE:
+      return "disarmed (motor_pwm_t STALE)";
+    default:
+      return "?";
+  }
+}
+
+// motormix output's lines: the pins, what it took and refused, the chip.
+std::string output_lines(const MonitorSnapshot& snap, const MonitorOptions& o) {
+  std::ostringstream s;
+  if (!snap.output) {
+    if (o.expect_output)
+      s << "output    NOT HEARD on " << o.output_status_channel
+        << " (is motormix output running?)\n";
+    return s.str();
+  }
+  const output_status_t& out = *snap.output;
+  s << "output    "
+    << (out.driver == output_status_t::DRIVER_SERIAL  ? "serial"
+        : out.driver == output_status_t::DRIVER_SYSFS ? "sysfs"
+                                                      : "?")
+    << "   pins " << pins_name(out.pins) << "   age " << fixed(snap.output_age_s * 1e3, 0)
+    << " ms   taken " << out.taken << "   refused: signature " << out.refused_signature
+    << "   malformed " << out.refused_malformed << "   size " << out.refused_wrong_size
+    << "   non-finite " << out.refused_not_finite << "   range " << out.refused_out_of_range
+    << "   clamped " << out.clamped << "   stale " << out.stale_events << "   write failures "
+    << out.write_failures;
+  if (out.telemetry_frames > 0) s << "   esc_telemetry " << out.telemetry_frames;
+  s << "\n";
+  if (out.firmware_report) {
+    s << "firmware  "
+      << ((out.firmware_flags & output_status_t::FIRMWARE_CONFIGURED) ? "configured"
+                                                                      : "NOT CONFIGURED")
+      << ((out.firmware_flags & output_status_t::FIRMWARE_ARMED) ? ", armed" : ", disarmed")
+      << ((out.firmware_flags & output_status_t::FIRMWARE_TIMED_OUT) ? " (LINK TIMED OUT)" : "")
+      << "   frames " << out.firmware_frames << "   crc errors " << out.firmware_crc_errors
+      << "   malformed " << out.firmware_malformed << "   link timeouts "
+      << out.firmware_link_timeouts << "   watchdog resets " << out.firmware_watchdog_resets
+      << "   rejected " << out.firmware_rejected << "\n";
+  } else if (out.driver == output_status_t::DRIVER_SERIAL) {
+    s << "firmware  no report from the chip yet\n";
+  }
+  return s.str();
+}
+
+}  // namespace
+
 std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o, int bar_width) {
   std::ostringstream s;
   s << "motormix monitor: status '" << o.status_channel << "', outputs '" << o.pwm_channel << "'\n";
@@ -253,7 +310,12 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
   s << "events    failsafe " << st.failsafe_events << "   arming refused " << st.arming_refused
     << "   motor tests " << st.motor_tests_started << " (refused " << st.motor_tests_refused
     << ")\n";
+  s << output_lines(snap, o);
   return s.str();
+}
+
+bool monitor_shows(const output_status_t& status) {
+  return status.num_motors >= 1 && status.num_motors <= kMaxMotors;
 }
 
 bool monitor_shows(const mixer_status_t& status) {
@@ -278,6 +340,17 @@ class Listener {
     status = status_msg_;
     status_at = Clock::now();
   }
+  void on_output(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    if (bus::receive(*policy_, rbuf, channel, bus::wall_us(), output_msg_, refused_) !=
+        bus::Refusal::kNone)
+      return;
+    if (!monitor_shows(output_msg_)) {
+      refused_.refuse_taken(bus::Refusal::kBadLength);
+      return;
+    }
+    output = output_msg_;
+    output_at = Clock::now();
+  }
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     if (bus::receive(*policy_, rbuf, channel, bus::wall_us(), pwm_msg_, refused_) !=
         bus::Refusal::kNone)
@@ -292,19 +365,24 @@ class Listener {
     const auto now = Clock::now();
     s.status_age_s = std::chrono::duration<double>(now - status_at).count();
     s.pwm_age_s = std::chrono::duration<double>(now - pwm_at).count();
+    s.output = output;
+    s.output_age_s = std::chrono::duration<double>(now - output_at).count();
     s.refused = refused_;
     return s;
   }
 
   std::optional<mixer_status_t> status;
   std::optional<motor_pwm_t> pwm;
+  std::optional<output_status_t> output;
   Clock::time_point status_at;
+  Clock::time_point output_at;
   Clock::time_point pwm_at;
 
  private:
   signing::Policy* policy_;
   mixer_status_t status_msg_{};
   motor_pwm_t pwm_msg_{};
+  output_status_t output_msg_{};
   bus::Refusals refused_;
 };
 
@@ -326,6 +404,7 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
   Listener listener(o.policy ? o.policy.get() : &off);
   lcm.subscribe(o.status_channel, &Listener::on_status, &listener);
   lcm.subscribe(o.pwm_channel, &Listener::on_pwm, &listener);
+  lcm.subscribe(o.output_status_channel, &Listener::on_output, &listener);
 
   const auto start = Clock::now();
   const auto refresh = std::chrono::duration<double>(1.0 / o.refresh_hz);

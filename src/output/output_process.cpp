@@ -15,6 +15,7 @@
 #include <motormix/config/security.hpp>
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/output_status_t.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -110,8 +111,8 @@ class OutputNode {
   void step(double now, bool message) {
     const GateState state = gate_.decide(now, values_.data());
     if (message || state != state_ || now - last_write_s_ >= kKeepAliveS) {
-      if (!driver_.write(values_.data(), gate_.outputs(), state == GateState::kArmed))
-        ++write_failures_;
+      written_armed_ = state == GateState::kArmed;
+      if (!driver_.write(values_.data(), gate_.outputs(), written_armed_)) ++write_failures_;
       last_write_s_ = now;
     }
     if (state != state_) {
@@ -132,6 +133,7 @@ class OutputNode {
     for (int i = 0; i < gate_.outputs(); ++i)
       values_[static_cast<std::size_t>(i)] = gate_.range(i).disarmed;
     driver_.write(values_.data(), gate_.outputs(), false);
+    written_armed_ = false;
   }
 
   void status_line() {
@@ -150,6 +152,57 @@ class OutputNode {
     log_ << write_failures_ << " hardware writes failed; " << driver_.describe() << std::endl;
   }
 
+  // output_status_t: what the pins carry and why, the counts, the chip's report.
+  void publish_status() {
+    const GateCounters& c = gate_.counters();
+    motormix::output_status_t msg{};
+    msg.utime = wall_us();
+    msg.driver = config_.hardware.driver == config::HardwareDriver::kSerial
+                     ? motormix::output_status_t::DRIVER_SERIAL
+                     : motormix::output_status_t::DRIVER_SYSFS;
+    switch (state_) {
+      case GateState::kStarting:
+        msg.pins = motormix::output_status_t::PINS_STARTING;
+        break;
+      case GateState::kArmed:
+        // Armed by the gate, but the last write was disarmed (on the way out).
+        msg.pins = written_armed_ ? motormix::output_status_t::PINS_ARMED
+                                  : motormix::output_status_t::PINS_DISARMED;
+        break;
+      case GateState::kDisarmed:
+        msg.pins = motormix::output_status_t::PINS_DISARMED;
+        break;
+      case GateState::kStale:
+        msg.pins = motormix::output_status_t::PINS_STALE;
+        break;
+    }
+    msg.num_motors = gate_.outputs();
+    for (int i = 0; i < gate_.outputs() && i < 16; ++i)
+      msg.pulse[i] = static_cast<float>(values_[static_cast<std::size_t>(i)]);
+    const auto count = [](std::uint64_t v) { return static_cast<std::int64_t>(v); };
+    msg.taken = count(c.accepted);
+    msg.refused_signature = count(refusals_.signature);
+    msg.refused_malformed = count(refusals_.malformed());
+    msg.refused_wrong_size = count(c.wrong_size);
+    msg.refused_not_finite = count(c.not_finite);
+    msg.refused_out_of_range = count(c.out_of_range);
+    msg.clamped = count(c.clamped);
+    msg.stale_events = count(c.stale_events);
+    msg.write_failures = count(write_failures_);
+    msg.telemetry_frames = count(telemetry_frames_);
+    if (const std::optional<FirmwareReport> r = driver_.firmware_report()) {
+      msg.firmware_report = true;
+      msg.firmware_frames = count(r->frames);
+      msg.firmware_crc_errors = count(r->crc_errors);
+      msg.firmware_malformed = count(r->malformed);
+      msg.firmware_link_timeouts = static_cast<std::int32_t>(r->link_timeouts);
+      msg.firmware_watchdog_resets = static_cast<std::int32_t>(r->watchdog_resets);
+      msg.firmware_rejected = static_cast<std::int32_t>(r->rejected);
+      msg.firmware_flags = static_cast<std::int8_t>(r->flags);
+    }
+    publisher_.publish(config_.channels.output_status, msg);
+  }
+
   void publish_telemetry(const TelemetryWire& wire, const KissReading& r) {
     motormix::esc_telemetry_t msg{};
     msg.utime = wall_us();
@@ -162,6 +215,7 @@ class OutputNode {
     msg.temperature_c = {static_cast<float>(r.temperature_c)};
     msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
     publisher_.publish(config_.channels.esc_telemetry, msg);
+    ++telemetry_frames_;
   }
 
  private:
@@ -193,6 +247,8 @@ class OutputNode {
   bus::Refusals refusals_;
   bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;
+  std::uint64_t telemetry_frames_ = 0;
+  bool written_armed_ = false;  // what the last write put on the pins
 };
 
 }  // namespace
@@ -270,6 +326,9 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   for (const TelemetryWire& w : wires) fds.push_back({w.fd, POLLIN, 0});
   const double start = monotonic_s();
   double next_status = start + kStatusEveryS;
+  // output_status_t at the configuration's status rate, from the first tick.
+  const double status_period = 1.0 / config.status_rate_hz;
+  double next_published = start;
   int code = 0;
   while (true) {
     if (poll(fds.data(), fds.size(), -1) < 0) {
@@ -311,6 +370,10 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
         if (wires[i].parser.feed(buf[k], t_us, r)) node.publish_telemetry(wires[i], r);
       }
     }
+    if (now >= next_published) {
+      node.publish_status();
+      next_published = std::max(next_published + status_period, now - status_period);
+    }
     if (now >= next_status) {
       node.status_line();
       next_status = now + kStatusEveryS;
@@ -319,6 +382,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   }
   for (int i = 0; i < 3; ++i) node.write_disarmed();
   node.status_line();
+  node.publish_status();
   close_wires();
   ::close(timer_fd);
   return code;

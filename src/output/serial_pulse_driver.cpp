@@ -94,6 +94,19 @@ bool SerialPulseDriver::service(double now_s) {
   return true;
 }
 
+std::optional<FirmwareReport> SerialPulseDriver::firmware_report() const {
+  if (reports_ == 0) return std::nullopt;
+  FirmwareReport r;
+  r.frames = report_.frames;
+  r.crc_errors = report_.crc_errors;
+  r.malformed = report_.malformed;
+  r.link_timeouts = report_.link_timeouts;
+  r.watchdog_resets = report_.watchdog_resets;
+  r.rejected = report_.rejected;
+  r.flags = report_.flags;  // MM_LINK_FLAG_* are output_status_t's FIRMWARE_* bits
+  return r;
+}
+
 std::string SerialPulseDriver::describe() const {
   std::ostringstream s;
   s << "serial: " << frames_sent_ << " frames sent, " << write_failures_ << " not written";

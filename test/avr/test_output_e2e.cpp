@@ -21,6 +21,7 @@
 #include "test_support.hpp"
 
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/output_status_t.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -34,6 +35,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -202,7 +204,22 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
       "/tmp/motormix-e2e-output.log");
   lcm::LCM lcm;
   ASSERT_TRUE(lcm.good());
+  // motormix output's status: the chip's report reaches the bus.
+  struct StatusTaker {
+    std::optional<motormix::output_status_t> last;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
+      last = *m;
+    }
+  } statuses;
+  lcm.subscribe("OUTPUT_STATUS", &StatusTaker::on, &statuses)->setQueueCapacity(1000);
   std::this_thread::sleep_for(std::chrono::milliseconds(600));  // configured: disarmed pulses
+  for (int i = 0; i < 100000 && lcm.handleTimeout(0) > 0; ++i) {
+  }
+  // What the chip counted before the run (the line opening may cost a frame).
+  const std::int64_t malformed_before =
+      statuses.last && statuses.last->firmware_report ? statuses.last->firmware_malformed : 0;
+  const std::int64_t crc_before =
+      statuses.last && statuses.last->firmware_report ? statuses.last->firmware_crc_errors : 0;
   bridge.take_pulses();
   bridge.reset_max_lag();  // from here the timings count
 
@@ -296,6 +313,35 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
   EXPECT_LE(held_ms, kHeldBoundMs + bridge.max_lag_us() / 1000.0);
   EXPECT_GT(mixer_gone_ms, 0.0) << "armed again after disarming, or never disarmed";
   EXPECT_LE(mixer_gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  // Everything queued (this process hears its own motor_pwm_t too), then a
+  // fresh status (10 Hz).
+  for (int i = 0; i < 100000 && lcm.handleTimeout(0) > 0; ++i) {
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  for (int i = 0; i < 100000 && lcm.handleTimeout(0) > 0; ++i) {
+  }
+  ASSERT_TRUE(statuses.last.has_value()) << "no output_status_t";
+  const motormix::output_status_t& st = *statuses.last;
+  std::printf(
+      "output_status_t: taken %lld, firmware frames %lld, crc errors %lld (%lld before the run), "
+      "malformed %lld (%lld before), flags %d\n",
+      static_cast<long long>(st.taken), static_cast<long long>(st.firmware_frames),
+      static_cast<long long>(st.firmware_crc_errors), static_cast<long long>(crc_before),
+      static_cast<long long>(st.firmware_malformed), static_cast<long long>(malformed_before),
+      st.firmware_flags);
+  EXPECT_EQ(st.driver, motormix::output_status_t::DRIVER_SERIAL);
+  EXPECT_EQ(st.pins, motormix::output_status_t::PINS_STALE);  // the "mixer" went quiet
+  EXPECT_GE(st.taken, kMessages * 9 / 10);
+  ASSERT_TRUE(st.firmware_report);
+  // The output writes a frame at least every 20 ms (its keep-alive), and
+  // has run for at least the 3.8 s above.
+  EXPECT_GE(st.firmware_frames, 3800 / 20);
+  // The run itself: no frame lost to its CRC or its length.
+  EXPECT_EQ(st.firmware_crc_errors - crc_before, 0);
+  EXPECT_EQ(st.firmware_malformed - malformed_before, 0);
+  EXPECT_EQ(st.firmware_link_timeouts, 0);
+  EXPECT_EQ(st.firmware_watchdog_resets, 0);
+  EXPECT_TRUE(st.firmware_flags & motormix::output_status_t::FIRMWARE_CONFIGURED);
 
   // Armed again, then the output process killed outright.
   for (int k = 0; k < 200; ++k) {

@@ -56,6 +56,8 @@ bool take(const std::uint8_t* data, std::size_t size, Message& out, bus::Refusal
 constexpr int kChannels = 1;
 #elif defined(MOTORMIX_FUZZ_BRINGUP)
 constexpr int kChannels = 1;
+#elif defined(MOTORMIX_FUZZ_MONITOR)
+constexpr int kChannels = 3;  // status, outputs, output_status
 #else
 constexpr int kChannels = 2;
 #endif
@@ -77,6 +79,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   bringup::MonitorOptions options;
   mixer_status_t status{};
   motor_pwm_t pwm{};
+  output_status_t output{};
 #elif defined(MOTORMIX_FUZZ_SIM)
   motor_pwm_t pwm{};
   mixer_status_t status{};
@@ -114,6 +117,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       consistent(pwm);
       snap.pwm = pwm;
     }
+    if (channel == 2 && take(msg, len, output, counts) && bringup::monitor_shows(output))
+      snap.output = output;
     snap.refused = counts;
     const std::string screen = bringup::render_monitor(snap, options);
     if (screen.empty()) violation("empty screen");

@@ -7,7 +7,9 @@
 // - KISS telemetry frames from a generator, a third of them corrupted,
 //   come out as esc_telemetry_t, every good one and no bad one;
 // - under security.mode require, only a motor_pwm_t signed with the key
-//   moves a pin: unsigned, forged and replayed ones are refused and counted.
+//   moves a pin: unsigned, forged and replayed ones are refused and counted;
+// - output_status_t says what the pins carry (starting, armed, disarmed,
+//   stale) and counts what was taken and refused, by reason.
 
 #include "integration/process.hpp"
 #include "integration/sysfs_pwm_tree.hpp"
@@ -16,6 +18,7 @@
 
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/output_status_t.hpp>
 #include <motormix/signing_policy.hpp>
 
 #include <lcm/lcm-cpp.hpp>
@@ -32,6 +35,7 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
@@ -201,6 +205,82 @@ TEST_F(OutputProcess, KissTelemetryFromAWireComesOutAsEscTelemetry) {
     EXPECT_GE(m.voltage_v[0], 15.0f);
     EXPECT_LE(m.voltage_v[0], 16.0f);
   }
+}
+
+TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
+  ChildProcess output({motormix_binary(), "output", "--config", config_}, root_ + "/output.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  std::mutex mutex;
+  std::vector<motormix::output_status_t> got;
+  struct Handler {
+    std::mutex* mutex;
+    std::vector<motormix::output_status_t>* got;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
+      std::lock_guard<std::mutex> lock(*mutex);
+      got->push_back(*m);
+    }
+  } handler{&mutex, &got};
+  lcm.subscribe("OUTPUT_STATUS", &Handler::on, &handler);
+  std::atomic<bool> stop{false};
+  std::thread receiver([&] {
+    while (!stop) lcm.handleTimeout(20);
+  });
+  struct Join {  // on every way out, failed assertions included
+    std::atomic<bool>* stop;
+    std::thread* t;
+    ~Join() {
+      *stop = true;
+      if (t->joinable()) t->join();
+    }
+  } join{&stop, &receiver};
+  // The newest status once it satisfies `ok`, within 2 s (it comes at 10
+  // Hz); `each` runs every 2.5 ms meanwhile (a publisher keeping it armed).
+  const auto wait_status = [&](auto ok, auto each) -> std::optional<motormix::output_status_t> {
+    for (int i = 0; i < 800; ++i) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!got.empty() && ok(got.back())) return got.back();
+      }
+      each();
+      std::this_thread::sleep_for(2500us);
+    }
+    return std::nullopt;
+  };
+  const auto nothing = [] {};
+  using S = motormix::output_status_t;
+  auto st = wait_status([](const S& m) { return m.pins == S::PINS_STARTING; }, nothing);
+  ASSERT_TRUE(st) << "no output_status_t while starting";
+  EXPECT_EQ(st->driver, S::DRIVER_SYSFS);
+  EXPECT_EQ(st->num_motors, 4);
+  EXPECT_FALSE(st->firmware_report);
+  EXPECT_EQ(st->pulse[0], 1000.0f);
+
+  // Armed, a NaN, two bytes that are no message, armed again.
+  for (int i = 0; i < 10; ++i) {
+    publish(lcm, {1500, 1600, 1700, 1800}, true);
+    std::this_thread::sleep_for(2500us);
+  }
+  publish(lcm, {std::numeric_limits<float>::quiet_NaN(), 1900, 1900, 1900}, true);
+  const std::uint8_t junk[2] = {1, 2};
+  lcm.publish("MOTOR_PWM", junk, sizeof junk);
+  st = wait_status(
+      [](const S& m) {
+        return m.pins == S::PINS_ARMED && m.refused_not_finite == 1 && m.refused_malformed == 1;
+      },
+      [&] {
+        publish(lcm, {1500, 1600, 1700, 1800}, true);
+      });
+  ASSERT_TRUE(st) << "armed, with the NaN and the junk counted";
+  EXPECT_GE(st->taken, 11);
+  EXPECT_EQ(st->refused_signature, 0);
+  // Quiet: stale after the timeout, counted once.
+  st = wait_status([](const S& m) { return m.pins == S::PINS_STALE; }, nothing);
+  ASSERT_TRUE(st) << "never stale";
+  EXPECT_EQ(st->stale_events, 1);
+  EXPECT_EQ(st->pulse[3], 1000.0f);
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(3s), 0);
 }
 
 TEST_F(OutputProcess, UnderRequireOnlySignedMotorPwmMovesThePins) {

@@ -2,6 +2,8 @@
 
 #include "bringup/monitor.hpp"
 
+#include <motormix/output_status_t.hpp>
+
 #include <gtest/gtest.h>
 
 namespace motormix::test {
@@ -38,7 +40,7 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   pwm.pwm = {2000.0F, 1000.0F, 1500.0F};
   pwm.direction = {0, 0, 0};
   pwm.armed = 1;
-  bringup::MonitorSnapshot snap{st, pwm, 0.05, 0.01, {}};
+  bringup::MonitorSnapshot snap{st, pwm, 0.05, 0.01, {}, std::nullopt, 0.0};
   bringup::MonitorOptions o;
   o.motor_names = {"FL", "FR", "RR"};
   const std::string view = bringup::render_monitor(snap, o, 10);
@@ -61,7 +63,7 @@ TEST(MonitorView, SaysWhenNothingOrOldStatusArrived) {
   EXPECT_TRUE(has(bringup::render_monitor(bringup::MonitorSnapshot{}, o), "no mixer_status"));
   mixer_status_t st{};
   st.num_motors = 1;
-  bringup::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0, {}};
+  bringup::MonitorSnapshot old{st, std::nullopt, 4.0, 0.0, {}, std::nullopt, 0.0};
   const std::string view = bringup::render_monitor(old, o);
   EXPECT_TRUE(has(view, "STATUS STALE")) << view;
   EXPECT_TRUE(has(view, "m1")) << view;
@@ -76,13 +78,15 @@ TEST(MonitorView, ShowsWhatTheDetectorAndTheLandingAreFed) {
   st.num_motors = 4;
   st.attitude_age_ms = -1.0F;
   st.esc_telemetry_age_ms = -1.0F;
-  const std::string off = bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}}, o);
+  const std::string off =
+      bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}, std::nullopt, 0.0}, o);
   EXPECT_FALSE(has(off, "feeds")) << off;
 
   st.detector_sources = mixer_status_t::DETECTOR_TELEMETRY | mixer_status_t::DETECTOR_RATES;
   st.motor_loss_on = 1;
   st.attitude_age_ms = 3.0F;
-  const std::string unfed = bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}}, o);
+  const std::string unfed =
+      bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}, std::nullopt, 0.0}, o);
   EXPECT_TRUE(has(unfed, "detection telemetry rates   spin landing on")) << unfed;
   EXPECT_TRUE(has(unfed, "esc_telemetry never NOT FED")) << unfed;
   EXPECT_TRUE(has(unfed, "attitude 3 ms\n")) << unfed;
@@ -90,10 +94,47 @@ TEST(MonitorView, ShowsWhatTheDetectorAndTheLandingAreFed) {
   st.detector_sources = 0;
   st.esc_telemetry_age_ms = 12.0F;
   st.attitude_age_ms = -1.0F;
-  const std::string landing_only = bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}}, o);
+  const std::string landing_only =
+      bringup::render_monitor({st, std::nullopt, 0.0, 0.0, {}, std::nullopt, 0.0}, o);
   EXPECT_TRUE(has(landing_only, "detection off   spin landing on   attitude never NOT FED"))
       << landing_only;
   EXPECT_FALSE(has(landing_only, "esc_telemetry 12")) << "telemetry is not read without detection";
+}
+
+// motormix output's state (output_status_t): its pins, its counts and the
+// chip's report; a configuration that drives pins says when none is heard.
+TEST(MonitorView, ShowsTheOutputProcessAndItsFirmware) {
+  bringup::MonitorOptions o;
+  mixer_status_t st{};
+  st.num_motors = 4;
+  bringup::MonitorSnapshot snap{st, std::nullopt, 0.0, 0.0, {}, std::nullopt, 0.0};
+  EXPECT_FALSE(has(bringup::render_monitor(snap, o), "output ")) << "no driver, no line";
+  o.expect_output = true;
+  EXPECT_TRUE(has(bringup::render_monitor(snap, o), "output    NOT HEARD on OUTPUT_STATUS"));
+
+  output_status_t out{};
+  out.driver = output_status_t::DRIVER_SERIAL;
+  out.pins = output_status_t::PINS_STALE;
+  out.num_motors = 4;
+  out.taken = 1200;
+  out.refused_malformed = 3;
+  out.refused_out_of_range = 2;
+  out.firmware_report = true;
+  out.firmware_flags = output_status_t::FIRMWARE_CONFIGURED | output_status_t::FIRMWARE_TIMED_OUT;
+  out.firmware_crc_errors = 5;
+  out.firmware_link_timeouts = 1;
+  out.firmware_watchdog_resets = 2;
+  snap.output = out;
+  snap.output_age_s = 0.1;
+  const std::string view = bringup::render_monitor(snap, o);
+  EXPECT_TRUE(has(view, "output    serial   pins disarmed (motor_pwm_t STALE)   age 100 ms"))
+      << view;
+  EXPECT_TRUE(has(view, "taken 1200   refused: signature 0   malformed 3")) << view;
+  EXPECT_TRUE(has(view, "range 2")) << view;
+  EXPECT_TRUE(has(view, "firmware  configured, disarmed (LINK TIMED OUT)")) << view;
+  EXPECT_TRUE(has(view, "crc errors 5")) << view;
+  EXPECT_TRUE(has(view, "link timeouts 1   watchdog resets 2")) << view;
+  EXPECT_FALSE(bringup::monitor_shows(output_status_t{})) << "0 motors: refused";
 }
 
 }  // namespace

@@ -42,6 +42,7 @@ struct Channels {
   std::string motor_test = "MOTOR_TEST";
   std::string esc_telemetry = "ESC_TELEMETRY";
   std::string attitude = "ATTITUDE";
+  std::string output_status = "OUTPUT_STATUS";  // motormix output's own state
 };
 
 // `motormix motor-test`: a disarmed mixer spins one motor alone on request.

@@ -9,6 +9,7 @@
 
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/output_status_t.hpp>
 
 #include <cstdint>
 #include <iosfwd>
@@ -25,6 +26,10 @@ struct MonitorOptions {
   std::string lcm_url;  // empty: LCM_DEFAULT_URL, then LCM's default
   std::string status_channel = "MIXER_STATUS";
   std::string pwm_channel = "MOTOR_PWM";
+  std::string output_status_channel = "OUTPUT_STATUS";  // motormix output's state
+  // The configuration drives pins (hardware.driver): a silent output process
+  // is then shown as such.
+  bool expect_output = false;
   std::vector<std::string> motor_names;  // empty: m1, m2, ...
   std::string output_unit = "us";
   bool once = false;         // one snapshot, then exit 0
@@ -47,11 +52,17 @@ struct MonitorSnapshot {
   // What the monitor itself refused on both channels, by reason (bus::receive;
   // a status whose num_motors is outside 1..16 counts as a bad length).
   bus::Refusals refused;
+  std::optional<output_status_t> output;  // from motormix output, if one runs
+  double output_age_s = 0.0;
 };
 
 // Whether the monitor draws a status: one row per motor, so a count no mixer
 // has (outside 1..16) is refused (counted as a bad length).
 bool monitor_shows(const mixer_status_t& status);
+
+// Whether the monitor draws an output status (num_motors 1..16; else
+// refused as a bad length).
+bool monitor_shows(const output_status_t& status);
 
 // The whole screen as text (no escape codes); `width` columns for the bars.
 std::string render_monitor(const MonitorSnapshot& snapshot, const MonitorOptions& options,

@@ -3,9 +3,19 @@
 // Linux hardware PWM. One call per decision, with every motor's pulse in
 // microseconds (already the disarmed ones when not armed).
 
+#include <cstdint>
+#include <optional>
 #include <string>
 
 namespace motormix::output {
+
+// What the hardware behind the driver says of itself (the pulse firmware's
+// report; output_status_t's firmware_* fields).
+struct FirmwareReport {
+  std::uint64_t frames = 0, crc_errors = 0, malformed = 0;
+  std::uint32_t link_timeouts = 0, watchdog_resets = 0, rejected = 0;
+  std::uint8_t flags = 0;  // output_status_t FIRMWARE_* bits
+};
 
 class PulseDriver {
  public:
@@ -18,6 +28,8 @@ class PulseDriver {
     (void)now_s;
     return true;
   }
+  // The hardware's latest report, when it sends one.
+  virtual std::optional<FirmwareReport> firmware_report() const { return std::nullopt; }
   // One line on the hardware's own state, for the log.
   virtual std::string describe() const = 0;
 };

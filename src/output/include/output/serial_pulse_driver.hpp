@@ -31,6 +31,7 @@ class SerialPulseDriver : public PulseDriver {
   bool write(const double* pulse_us, int count, bool armed) override;
   bool service(double now_s) override;
   std::string describe() const override;
+  std::optional<FirmwareReport> firmware_report() const override;
 
   bool have_report() const { return reports_ > 0; }
   std::uint64_t reports() const { return reports_; }
