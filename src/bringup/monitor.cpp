@@ -128,6 +128,8 @@ std::string output_lines(const MonitorSnapshot& snap, const MonitorOptions& o) {
     << "   clamped " << out.clamped << "   stale " << out.stale_events << "   write failures "
     << out.write_failures;
   if (out.telemetry_frames > 0) s << "   esc_telemetry " << out.telemetry_frames;
+  if (!out.device_open) s << "   DEVICE LOST (reopening)";
+  if (out.device_reopened > 0) s << "   reopened " << out.device_reopened;
   s << "\n";
   if (out.firmware_report) {
     s << "firmware  "

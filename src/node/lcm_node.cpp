@@ -10,11 +10,11 @@
 #include <motormix/config/matrix_export.hpp>
 #include <motormix/config/security.hpp>
 #include <motormix/signing_policy.hpp>
+#include "bus/realtime.hpp"
 #include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
 #include "node/messages.hpp"
 #include "node/run_log.hpp"
-#include "realtime.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"
 
@@ -193,7 +193,7 @@ class Node {
   }
 
   // The whole run's loop timing as JSON (`motormix run --timing-report`).
-  void write_timing_report(std::ostream& out, const RealtimeGranted& granted,
+  void write_timing_report(std::ostream& out, const bus::RealtimeGranted& granted,
                            std::int64_t ticks) const {
     const auto section = [](const LatencyHistogram& h) {
       return nlohmann::json{{"count", h.count()},
@@ -416,8 +416,8 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   node.subscribe();  // starts LCM's receive thread
   // After every other thread has started: they keep the default scheduler,
   // and move off the loop's CPUs (realtime.hpp).
-  const RealtimeGranted granted = apply_realtime(config.realtime, log);
-  log << "motormix: scheduling: " << describe(granted) << std::endl;
+  const bus::RealtimeGranted granted = bus::apply_realtime(config.realtime, log);
+  log << "motormix: scheduling: " << bus::describe(granted) << std::endl;
 
   const auto period_ns = static_cast<long long>(std::llround(1e9 / config.loop_rate_hz));
   itimerspec spec{};

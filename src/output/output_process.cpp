@@ -8,6 +8,7 @@
 
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
+#include "bus/realtime.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
 #include "bus/shutdown_signals.hpp"
@@ -42,6 +43,7 @@ namespace {
 constexpr double kTickS = 0.005;       // the gate is checked this often without input
 constexpr double kKeepAliveS = 0.020;  // and the hardware written at least this often
 constexpr double kStatusEveryS = 5.0;
+constexpr double kReopenEveryS = 0.5;  // a lost serial device is tried again this often
 // LCM's receive queue keeps 30 messages by default and drops the newest
 // when full: for the process that moves the pins the newest is the one that
 // matters. Deep enough for any burst, and drained whole at every wake-up
@@ -97,7 +99,7 @@ class OutputNode {
         policy_(std::move(policy)),
         lcm_(lcm),
         publisher_(lcm, policy_),
-        driver_(driver),
+        driver_(&driver),
         log_(log),
         gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s),
         values_(static_cast<std::size_t>(config.motors())) {}
@@ -112,13 +114,24 @@ class OutputNode {
     const GateState state = gate_.decide(now, values_.data());
     if (message || state != state_ || now - last_write_s_ >= kKeepAliveS) {
       written_armed_ = state == GateState::kArmed;
-      if (!driver_.write(values_.data(), gate_.outputs(), written_armed_)) ++write_failures_;
+      // No device (lost, being reopened): nothing to write, the chip has
+      // disarmed on its own.
+      if (driver_ == nullptr) written_armed_ = false;
+      if (driver_ != nullptr && !driver_->write(values_.data(), gate_.outputs(), written_armed_))
+        ++write_failures_;
       last_write_s_ = now;
     }
     if (state != state_) {
       log_ << "motormix output: " << to_string(state_) << " -> " << to_string(state) << std::endl;
       state_ = state;
     }
+  }
+
+  // The device was lost (null) or opened again: writes go to `driver`.
+  void set_driver(PulseDriver* driver) {
+    if (driver != nullptr && driver_ == nullptr) ++reopened_;
+    driver_ = driver;
+    if (driver_ == nullptr) written_armed_ = false;
   }
 
   // Writes the newest message taken since the last call (on_motor_pwm),
@@ -132,7 +145,7 @@ class OutputNode {
   void write_disarmed() {
     for (int i = 0; i < gate_.outputs(); ++i)
       values_[static_cast<std::size_t>(i)] = gate_.range(i).disarmed;
-    driver_.write(values_.data(), gate_.outputs(), false);
+    if (driver_ != nullptr) driver_->write(values_.data(), gate_.outputs(), false);
     written_armed_ = false;
   }
 
@@ -149,7 +162,9 @@ class OutputNode {
            << sc.rejected_bad_signature << " bad, " << sc.rejected_replayed << " replayed, "
            << sc.rejected_stale + sc.rejected_other << " stale; ";
     }
-    log_ << write_failures_ << " hardware writes failed; " << driver_.describe() << std::endl;
+    log_ << write_failures_ << " hardware writes failed; "
+         << (driver_ != nullptr ? driver_->describe() : std::string("device lost, reopening"))
+         << std::endl;
   }
 
   // output_status_t: what the pins carry and why, the counts, the chip's report.
@@ -190,7 +205,10 @@ class OutputNode {
     msg.stale_events = count(c.stale_events);
     msg.write_failures = count(write_failures_);
     msg.telemetry_frames = count(telemetry_frames_);
-    if (const std::optional<FirmwareReport> r = driver_.firmware_report()) {
+    msg.device_open = driver_ != nullptr;
+    msg.device_reopened = static_cast<std::int32_t>(reopened_);
+    if (const std::optional<FirmwareReport> r =
+            driver_ != nullptr ? driver_->firmware_report() : std::nullopt) {
       msg.firmware_report = true;
       msg.firmware_frames = count(r->frames);
       msg.firmware_crc_errors = count(r->crc_errors);
@@ -237,7 +255,7 @@ class OutputNode {
   signing::Policy policy_;
   lcm::LCM& lcm_;
   bus::SealedPublisher publisher_;  // signs with policy_ when it signs
-  PulseDriver& driver_;
+  PulseDriver* driver_;             // null while a lost device is being reopened
   std::ostream& log_;
   OutputGate gate_;
   std::vector<double> values_;
@@ -249,6 +267,7 @@ class OutputNode {
   std::uint64_t write_failures_ = 0;
   std::uint64_t telemetry_frames_ = 0;
   bool written_armed_ = false;  // what the last write put on the pins
+  std::uint64_t reopened_ = 0;  // lost devices opened again
 };
 
 }  // namespace
@@ -321,10 +340,16 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     close_wires();
     return 1;
   }
+  // realtime: as `motormix run` takes it: requests, each refusal logged,
+  // what was granted read back (after LCM's threads have started).
+  const bus::RealtimeGranted granted = bus::apply_realtime(config.realtime, log);
+  log << "motormix output: scheduling: " << bus::describe(granted) << std::endl;
   std::vector<pollfd> fds = {
       {lcm.getFileno(), POLLIN, 0}, {timer_fd, POLLIN, 0}, {signals.fd(), POLLIN, 0}};
   for (const TelemetryWire& w : wires) fds.push_back({w.fd, POLLIN, 0});
   const double start = monotonic_s();
+  double next_reopen = start;
+  int reopen_failures = 0;
   double next_status = start + kStatusEveryS;
   // output_status_t at the configuration's status rate, from the first tick.
   const double status_period = 1.0 / config.status_rate_hz;
@@ -352,12 +377,30 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
       std::uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);
       node.step(now, false);
-      if (!driver->service(now)) {
-        log << "motormix output: the serial device failed; disarmed pulses follow from the "
-               "firmware's own link watchdog"
-            << std::endl;
-        code = 1;
-        break;
+      if (driver != nullptr && !driver->service(now)) {
+        // The chip disarms on its own after its link timeout; reopened, it
+        // is configured again before its first pulses.
+        log << "motormix output: lost " << config.hardware.serial.device << " ("
+            << driver->describe() << "); the firmware disarms on its own after "
+            << config.hardware.serial.link_timeout_s * 1e3 << " ms; reopening every "
+            << kReopenEveryS << " s" << std::endl;
+        node.set_driver(nullptr);
+        driver.reset();
+        next_reopen = now;
+        reopen_failures = 0;
+      }
+      if (driver == nullptr && now >= next_reopen) {
+        try {
+          driver = make_driver(config);
+          node.set_driver(driver.get());
+          node.write_disarmed();
+          log << "motormix output: reopened " << config.hardware.serial.device
+              << " and configured the firmware again" << std::endl;
+        } catch (const std::exception& e) {
+          // Once, then every tenth try: a device that stays away is no news.
+          if (reopen_failures++ % 10 == 0) log << "motormix output: " << e.what() << std::endl;
+          next_reopen = now + kReopenEveryS;
+        }
       }
     }
     for (std::size_t i = 0; i < wires.size(); ++i) {
@@ -380,7 +423,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     }
     if (options.max_run_s > 0 && now - start >= options.max_run_s) break;
   }
-  for (int i = 0; i < 3; ++i) node.write_disarmed();
+  for (int i = 0; i < 3 && driver != nullptr; ++i) node.write_disarmed();
   node.status_line();
   node.publish_status();
   close_wires();

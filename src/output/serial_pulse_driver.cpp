@@ -42,6 +42,10 @@ bool SerialPulseDriver::send(const std::uint8_t* bytes, std::size_t n) {
   const ssize_t w = ::write(fd_, bytes, n);
   if (w != static_cast<ssize_t>(n)) {
     ++write_failures_;
+    // Gone, not busy: a USB adapter pulled out, a pty whose other end closed.
+    if (w < 0 &&
+        (errno == EIO || errno == ENODEV || errno == ENXIO || errno == EPIPE || errno == EBADF))
+      lost_ = true;
     return false;
   }
   return true;
@@ -69,6 +73,7 @@ bool SerialPulseDriver::write(const double* pulse_us, int count, bool armed) {
 }
 
 bool SerialPulseDriver::service(double now_s) {
+  if (lost_) return false;
   std::uint8_t buf[256];
   for (;;) {
     const ssize_t n = ::read(fd_, buf, sizeof buf);

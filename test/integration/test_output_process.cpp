@@ -9,10 +9,14 @@
 // - under security.mode require, only a motor_pwm_t signed with the key
 //   moves a pin: unsigned, forged and replayed ones are refused and counted;
 // - output_status_t says what the pins carry (starting, armed, disarmed,
-//   stale) and counts what was taken and refused, by reason.
+//   stale) and counts what was taken and refused, by reason;
+// - with the serial driver, a device that goes away (the pseudo-terminal's
+//   other end closed) is reopened when it comes back, and the firmware is
+//   configured again before the first pulses.
 
 #include "integration/process.hpp"
 #include "integration/sysfs_pwm_tree.hpp"
+#include "motormix_link.h"
 #include "output/kiss_telemetry.hpp"
 #include "test_paths.hpp"
 
@@ -254,6 +258,8 @@ TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
   EXPECT_EQ(st->driver, S::DRIVER_SYSFS);
   EXPECT_EQ(st->num_motors, 4);
   EXPECT_FALSE(st->firmware_report);
+  EXPECT_TRUE(st->device_open);
+  EXPECT_EQ(st->device_reopened, 0);
   EXPECT_EQ(st->pulse[0], 1000.0f);
 
   // Armed, a NaN, two bytes that are no message, armed again.
@@ -281,6 +287,113 @@ TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
   EXPECT_EQ(st->pulse[3], 1000.0f);
   output.signal(SIGTERM);
   EXPECT_EQ(output.wait_for(3s), 0);
+}
+
+// A pseudo-terminal whose slave side the output opens by a path that the
+// test points at it (a symlink, as udev names a USB adapter).
+struct Pty {
+  int master = -1;
+  std::string slave;
+  Pty() {
+    // Close-on-exec: a copy in the output process would keep the line up.
+    master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (master < 0) return;
+    grantpt(master);
+    unlockpt(master);
+    char name[128];
+    ptsname_r(master, name, sizeof name);
+    slave = name;
+  }
+  ~Pty() { close(); }
+  void close() {
+    if (master >= 0) ::close(master);
+    master = -1;
+  }
+  // The frame types read within `bound_ms`, up to and including `until`.
+  std::vector<int> frames_until(int until, double bound_ms) {
+    std::vector<int> types;
+    mm_link_parser parser;
+    mm_link_parser_init(&parser);
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+               .count() < bound_ms) {
+      std::uint8_t buf[256];
+      const ssize_t n = ::read(master, buf, sizeof buf);
+      for (ssize_t i = 0; i < n; ++i) {
+        mm_link_frame f{};
+        const std::uint8_t type = mm_link_feed(&parser, buf[i], &f);
+        if (type == 0) continue;
+        types.push_back(type);
+        if (type == until) return types;
+      }
+      if (n <= 0) std::this_thread::sleep_for(1ms);
+    }
+    return types;
+  }
+};
+
+TEST_F(OutputProcess, ALostSerialDeviceIsReopenedAndTheFirmwareConfiguredAgain) {
+  auto first = std::make_unique<Pty>();
+  ASSERT_GE(first->master, 0);
+  const std::string link = root_ + "/ttyMOTORS";
+  ASSERT_EQ(::symlink(first->slave.c_str(), link.c_str()), 0);
+  const std::string config = root_ + "/serial.yaml";
+  std::ofstream(config) << "geometry: {preset: quad_x}\n"
+                           "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                           "hardware:\n"
+                           "  driver: serial\n"
+                           "  serial: {device: "
+                        << link << ", link_timeout_ms: 100}\n";
+  ChildProcess output({motormix_binary(), "output", "--config", config}, root_ + "/serial.log");
+  // Configured, then pulses.
+  std::vector<int> types = first->frames_until(MM_LINK_CONFIG, 3000);
+  ASSERT_FALSE(types.empty()) << "no CONFIG frame at start";
+  EXPECT_EQ(types.back(), MM_LINK_CONFIG);
+  types = first->frames_until(MM_LINK_PULSES, 1000);
+  ASSERT_FALSE(types.empty());
+  EXPECT_EQ(types.back(), MM_LINK_PULSES);
+
+  // The adapter goes away; a new one appears under the same name.
+  first->close();
+  std::this_thread::sleep_for(200ms);
+  Pty second;
+  ASSERT_GE(second.master, 0);
+  const std::string tmp_link = link + ".new";
+  ASSERT_EQ(::symlink(second.slave.c_str(), tmp_link.c_str()), 0);
+  ASSERT_EQ(::rename(tmp_link.c_str(), link.c_str()), 0);
+  // Reopened (tried every 0.5 s): CONFIG before any PULSES.
+  types = second.frames_until(MM_LINK_CONFIG, 3000);
+  const auto log_text = [&] {
+    std::ifstream in(root_ + "/serial.log");
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  ASSERT_FALSE(types.empty()) << "never reopened: " << log_text();
+  EXPECT_EQ(types.front(), MM_LINK_CONFIG) << "pulses before the configuration";
+  types = second.frames_until(MM_LINK_PULSES, 1000);
+  ASSERT_FALSE(types.empty());
+  EXPECT_EQ(types.back(), MM_LINK_PULSES);
+  EXPECT_TRUE(output.running());
+  // Its status says so.
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  struct Last {
+    std::optional<motormix::output_status_t> status;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
+      status = *m;
+    }
+  } last;
+  lcm.subscribe("OUTPUT_STATUS", &Last::on, &last);
+  for (int i = 0; i < 100 && !(last.status && last.status->device_reopened == 1); ++i)
+    lcm.handleTimeout(20);
+  ASSERT_TRUE(last.status.has_value()) << "no output_status_t";
+  EXPECT_TRUE(last.status->device_open);
+  EXPECT_EQ(last.status->device_reopened, 1);
+  EXPECT_EQ(last.status->driver, motormix::output_status_t::DRIVER_SERIAL);
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(3s), 0);
+  const std::string text = log_text();
+  EXPECT_NE(text.find("motormix output: lost " + link), std::string::npos) << text;
+  EXPECT_NE(text.find("motormix output: reopened " + link), std::string::npos) << text;
 }
 
 TEST_F(OutputProcess, UnderRequireOnlySignedMotorPwmMovesThePins) {

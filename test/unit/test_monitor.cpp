@@ -119,6 +119,8 @@ TEST(MonitorView, ShowsTheOutputProcessAndItsFirmware) {
   out.taken = 1200;
   out.refused_malformed = 3;
   out.refused_out_of_range = 2;
+  out.device_open = false;
+  out.device_reopened = 2;
   out.firmware_report = true;
   out.firmware_flags = output_status_t::FIRMWARE_CONFIGURED | output_status_t::FIRMWARE_TIMED_OUT;
   out.firmware_crc_errors = 5;
@@ -131,6 +133,7 @@ TEST(MonitorView, ShowsTheOutputProcessAndItsFirmware) {
       << view;
   EXPECT_TRUE(has(view, "taken 1200   refused: signature 0   malformed 3")) << view;
   EXPECT_TRUE(has(view, "range 2")) << view;
+  EXPECT_TRUE(has(view, "DEVICE LOST (reopening)   reopened 2")) << view;
   EXPECT_TRUE(has(view, "firmware  configured, disarmed (LINK TIMED OUT)")) << view;
   EXPECT_TRUE(has(view, "crc errors 5")) << view;
   EXPECT_TRUE(has(view, "link timeouts 1   watchdog resets 2")) << view;

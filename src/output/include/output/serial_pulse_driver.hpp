@@ -2,7 +2,8 @@
 // The pulse firmware (firmware/pulses) behind a serial port: a CONFIG frame
 // at start, again whenever a report says the chip has none (it was reset)
 // and once a second; one PULSES frame per write; the firmware's reports
-// read back.
+// read back. A write that finds the device gone makes service() return
+// false: the caller reopens it (a new driver).
 
 #include "output/pulse_driver.hpp"
 
@@ -52,6 +53,7 @@ class SerialPulseDriver : public PulseDriver {
   double next_config_s_ = 0.0;
   bool resend_config_ = true;
   std::uint64_t frames_sent_ = 0, write_failures_ = 0;
+  bool lost_ = false;  // a write found the device gone: service() says so
 };
 
 }  // namespace motormix::output

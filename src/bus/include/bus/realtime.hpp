@@ -1,5 +1,5 @@
 #pragma once
-// The `realtime:` settings of `motormix run` (SCHED_FIFO priority, CPU
+// The `realtime:` settings of `motormix run` and `motormix output` (SCHED_FIFO priority, CPU
 // affinity, locked and prefaulted memory), applied as requests: what the
 // system refuses is logged and the loop runs on without it. What was
 // actually granted is read back from the kernel, logged, and reported in
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::bus {
 
 struct RealtimeGranted {
   std::string policy;     // "SCHED_FIFO", "SCHED_OTHER", ... as the kernel reports it
@@ -37,4 +37,4 @@ RealtimeGranted apply_realtime(const config::Realtime& rt, std::ostream& log);
 // One line: "SCHED_FIFO 80, cpus 1, memory locked, stack prefaulted".
 std::string describe(const RealtimeGranted& granted);
 
-}  // namespace motormix::node
+}  // namespace motormix::bus
