@@ -1,9 +1,9 @@
 #pragma once
-// The collective thrust of a spinning descent, shared by the three-rotor
-// (spinning_descent.cpp) and the two-rotor (two_rotor_descent.cpp) landings:
-// the vertical speed flown down by a proportional-integral loop on the
-// measured velocity, or, without one, the setpoint's throttle. Internal to
-// the core.
+// What the three-rotor (spinning_descent.cpp) and the two-rotor
+// (two_rotor_descent.cpp) landings share: the collective thrust (the
+// vertical speed flown down by a proportional-integral loop on the measured
+// velocity, or, without one, the setpoint's throttle) and where the thrust
+// should point (up, tilted against the drift). Internal to the core.
 
 #include <motormix/spinning_descent.hpp>
 
@@ -48,6 +48,22 @@ inline double descent_collective(const SpinningDescentModel& m, const SpinningDe
   // The thrust axis is body -z; only its upward part carries the weight.
   const double cos_tilt = std::max(-up_body.z(), kMinTiltCompensationCos);
   return up_force / cos_tilt;
+}
+
+// The world's up as the thrust should point it, seen from the body: tilted
+// against the horizontal velocity (drift_gain, at most max_tilt_deg), plain
+// up without a velocity. `body_to_world`: the attitude's rotation.
+inline Eigen::Vector3d wanted_up_body(const SpinningDescentSettings& s, const DescentInput& in,
+                                      const Eigen::Matrix3d& body_to_world) {
+  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+  Eigen::Vector3d thrust_world(0.0, 0.0, -kStandardGravity);
+  if (in.velocity.allFinite() && in.velocity.cwiseAbs().maxCoeff() < kMaxSpeedMps) {
+    Eigen::Vector2d brake = -s.drift_gain * Eigen::Vector2d(in.velocity.x(), in.velocity.y());
+    const double most = kStandardGravity * std::tan(s.max_tilt_deg / kDegPerRad);
+    if (brake.norm() > most) brake *= most / brake.norm();
+    thrust_world.head<2>() = brake;
+  }
+  return body_to_world.transpose() * thrust_world.normalized();
 }
 
 }  // namespace motormix::detail

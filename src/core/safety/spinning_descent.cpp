@@ -45,7 +45,6 @@ constexpr double kLoopSeparation = 2.5;
 constexpr double kMaxDtS = 0.05;  // a longer gap is taken as this (a stalled process)
 constexpr double kThrustWeight = 0.3;
 constexpr double kMaxRateRadS = 100.0;  // beyond any gyro: clipped
-using detail::kMaxSpeedMps;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -389,14 +388,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
 
   // Where the spin axis should point: up, tilted against the horizontal
   // velocity (at most max_tilt).
-  Eigen::Vector3d thrust_world(0.0, 0.0, -kStandardGravity);
-  if (in.velocity.allFinite() && in.velocity.cwiseAbs().maxCoeff() < kMaxSpeedMps) {
-    Eigen::Vector2d brake = -s_.drift_gain * Eigen::Vector2d(in.velocity.x(), in.velocity.y());
-    const double most = kStandardGravity * std::tan(s_.max_tilt_deg / kDegPerRad);
-    if (brake.norm() > most) brake *= most / brake.norm();
-    thrust_world.head<2>() = brake;
-  }
-  const Eigen::Vector3d desired = rot.transpose() * thrust_world.normalized();  // body
+  const Eigen::Vector3d desired = detail::wanted_up_body(s_, in, rot);
   const Eigen::Vector3d& axis = eq.up;
   cmd_.axis_error_deg = std::acos(std::clamp(axis.dot(desired), -1.0, 1.0)) * kDegPerRad;
 

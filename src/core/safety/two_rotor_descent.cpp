@@ -328,14 +328,7 @@ const DescentCommand& TwoRotorDescent::update(const DescentInput& in, std::int64
 
   // Where the thrust axis should point (the world's up, tilted against the
   // horizontal velocity), seen from the body.
-  Eigen::Vector3d thrust_world(0.0, 0.0, -kStandardGravity);
-  if (in.velocity.allFinite() && in.velocity.cwiseAbs().maxCoeff() < detail::kMaxSpeedMps) {
-    Eigen::Vector2d brake = -s_.drift_gain * Eigen::Vector2d(in.velocity.x(), in.velocity.y());
-    const double most = kStandardGravity * std::tan(s_.max_tilt_deg / kDegPerRad);
-    if (brake.norm() > most) brake *= most / brake.norm();
-    thrust_world.head<2>() = brake;
-  }
-  const Eigen::Vector3d desired = rot.transpose() * thrust_world.normalized();
+  const Eigen::Vector3d desired = detail::wanted_up_body(s_, in, rot);
   cmd_.axis_error_deg = std::acos(std::clamp(-desired.z(), -1.0, 1.0)) * kDegPerRad;
 
   Eigen::Matrix<double, kStates, 1> x;
