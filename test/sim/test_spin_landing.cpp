@@ -235,18 +235,24 @@ TEST(SpinLanding, SettlesNearTheRelaxedHoverEquilibrium) {
 // faster than the descent rate, the air's drag limiting its speed.
 constexpr double kTwoMotorTouchdownMaxMps = 3.0;
 
-Scenario with_failures(const std::string& name, const std::array<int, 2>& motors) {
+// The scenario's two failures replaced by `motors`, the second `later_s`
+// after the first.
+Scenario with_failures(const std::string& name, const std::array<int, 2>& motors,
+                       double later_s = 0.0) {
   Scenario s = load_scenario(name);
   s.failure_detection_s = kReportedAfterS;
   int n = 0;
   for (ScenarioEvent& e : s.timeline) {
-    if (e.fail) e.fail = motors[static_cast<std::size_t>(std::min(n++, 1))];
+    if (!e.fail) continue;
+    if (n == 1) e.at_s += later_s;
+    e.fail = motors[static_cast<std::size_t>(std::min(n++, 1))];
   }
   return s;
 }
 
 void expect_two_motor_landings(const Vehicle& v, const std::vector<std::array<int, 2>>& pairs,
-                               const Realism& realism = kRealism, bool undetected = false) {
+                               const Realism& realism = kRealism, bool undetected = false,
+                               double later_s = 0.0) {
   const config::Config c = undetected ? load(v, {"failure_detection.enabled=true"}) : load(v);
   ASSERT_TRUE(c.motor_loss.has_value()) << c.motor_loss_off;
   std::vector<std::future<std::string>> runs;
@@ -257,8 +263,8 @@ void expect_two_motor_landings(const Vehicle& v, const std::vector<std::array<in
         o.seed = static_cast<std::uint64_t>(seed);
         o.realism = realism;
         o.undetected = undetected;
-        const SimResult r =
-            run_lockstep(c, config::build_mixer(c), with_failures("two_motor_landing", pair), o);
+        const SimResult r = run_lockstep(c, config::build_mixer(c),
+                                         with_failures("two_motor_landing", pair, later_s), o);
         std::ostringstream why;
         // The simulator calls a touchdown above 2 m/s a crash; the target here is 3.
         const bool hard_landing = r.crashed && r.crash_reason.rfind("hit the ground", 0) == 0;
@@ -307,6 +313,15 @@ const std::vector<std::array<int, 2>> kTeamQuadPairs{{0, 3}, {1, 2}};
 TEST(SpinLanding, QuadXLandsOnTwoOppositeMotors) {
   expect_two_motor_landings(kQuadX, kQuadXPairs);
   expect_two_motor_landings(kTeamQuad, kTeamQuadPairs);
+}
+
+// One motor, then the one across from it: the three-rotor landing hands
+// over to the two-rotor one mid-descent.
+TEST(SpinLanding, TwoOppositeMotorsOneAfterTheOther) {
+  for (double later_s : {0.5, 2.0, 4.0}) {
+    SCOPED_TRACE("second motor " + std::to_string(later_s) + " s later");
+    expect_two_motor_landings(kQuadX, kQuadXPairs, kRealism, false, later_s);
+  }
 }
 
 TEST(SpinLanding, TwoOppositeMotorsFoundByTheDetector) {
