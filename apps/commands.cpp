@@ -3,6 +3,7 @@
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
 #include <motormix/config/matrix_export.hpp>
+#include <motormix/config/px4_import.hpp>
 #include <motormix/config/security.hpp>
 #include "bringup/monitor.hpp"
 #include "log/log_replay.hpp"
@@ -19,6 +20,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -135,6 +137,39 @@ int keygen(const KeygenCommand& cmd) {
   std::cout << "wrote a new signing key to " << cmd.path
             << " (readable by its owner only); copy it to the other hosts of the bus over a "
                "channel you trust\n";
+  return kExitOk;
+}
+
+int import_px4(const ImportPx4Command& cmd) {
+  config::Px4Import imported;
+  try {
+    const config::Px4Parameters params = config::read_px4_parameters(cmd.path);
+    imported = config::import_px4(params, cmd.path);
+    // What it wrote must load: a mapping error is found here, not at start-up.
+    config::load_config_text(imported.yaml, "the imported configuration");
+  } catch (const std::exception& e) {
+    std::cerr << "motormix import px4-params: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  for (const std::string& n : imported.not_mapped)
+    std::cerr << "motormix import px4-params: not mapped: " << n << "\n";
+  for (const std::string& n : imported.notes)
+    std::cerr << "motormix import px4-params: note: " << n << "\n";
+  if (cmd.out.empty()) {
+    std::cout << imported.yaml;
+    return kExitOk;
+  }
+  if (!cmd.force && std::ifstream(cmd.out).good()) {
+    std::cerr << "motormix import px4-params: " << cmd.out << " exists; --force to overwrite it\n";
+    return kExitUsage;
+  }
+  std::ofstream file(cmd.out);
+  file << imported.yaml;
+  if (!file) {
+    std::cerr << "motormix import px4-params: cannot write " << cmd.out << "\n";
+    return kExitRuntime;
+  }
+  std::cerr << "motormix import px4-params: wrote " << cmd.out << "\n";
   return kExitOk;
 }
 

@@ -63,6 +63,15 @@ int keygen(const KeygenCommand& cmd);
 // and returns nothing.
 std::optional<config::Config> load_vehicle(const CommonOptions& common, const char* command);
 
+struct ImportPx4Command {
+  std::string path;  // .params or .ulg
+  std::string out;   // empty: standard output
+  bool force = false;
+};
+// A PX4 airframe's parameters as a configuration; what is not mapped is
+// listed on stderr.
+int import_px4(const ImportPx4Command& cmd);
+
 struct MixCommand {
   CommonOptions common;
   double throttle = 0.0;

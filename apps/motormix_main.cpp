@@ -80,6 +80,21 @@ int main(int argc, char** argv) {
       "keygen", "write a new key for signed messages (mode 0600; never overwrites)");
   keygen_app->add_option("file", keygen_cmd.path, "where to write it")->required();
 
+  ImportPx4Command import_cmd;
+  CLI::App* import_app = app.add_subcommand(
+      "import", "turn another stack's description of a vehicle into a motormix configuration");
+  import_app->require_subcommand(1);
+  CLI::App* import_px4_app = import_app->add_subcommand(
+      "px4-params",
+      "a PX4 airframe's parameters (QGroundControl .params, or a flight log .ulg) as a "
+      "configuration; what is not mapped is listed on stderr");
+  import_px4_app->add_option("file", import_cmd.path, ".params or .ulg")
+      ->required()
+      ->check(CLI::ExistingFile);
+  import_px4_app->add_option("-o,--out", import_cmd.out,
+                             "write the configuration here (default: standard output)");
+  import_px4_app->add_flag("--force", import_cmd.force, "overwrite --out if it exists");
+
   MixCommand mix_cmd;
   CLI::App* mix_app = app.add_subcommand(
       "mix", "evaluate the configured mixer once, as if armed with fresh inputs");
@@ -275,6 +290,7 @@ int main(int argc, char** argv) {
   if (run_app->parsed()) return run(run_cmd);
   if (output_app->parsed()) return output(output_cmd);
   if (keygen_app->parsed()) return keygen(keygen_cmd);
+  if (import_px4_app->parsed()) return import_px4(import_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);

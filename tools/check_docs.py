@@ -11,7 +11,7 @@
   `motor-test`, the --failed motors of `mix`), lines continued with a
   backslash joined first;
 - and a line that needs no hardware and no bus (keygen, sign-log, matrix,
-  mix, replay, a lockstep sim, `run --check`, `output --check`) and writes
+  mix, replay, import, a lockstep sim, `run --check`, `output --check`) and writes
   nowhere outside the scratch directory (no absolute path, no sudo) is then
   run as written, through the shell (so `$PWD`, `&&` and redirections are the
   reader's), and must exit 0; `mkdir` lines are carried out too;
@@ -82,7 +82,7 @@ def anchors(text):
 
 
 # Subcommands a reader can run with no hardware and no bus.
-RUNNABLE = {"keygen", "sign-log", "matrix", "mix", "replay"}
+RUNNABLE = {"keygen", "sign-log", "matrix", "mix", "replay", "import"}
 
 
 def runnable(words):

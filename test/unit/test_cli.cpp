@@ -2,6 +2,8 @@
 
 #include "test_support.hpp"
 
+#include <motormix/config/load_config.hpp>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -114,6 +116,18 @@ TEST(Cli, EveryBundledConfigChecksAndEveryPresetHasOne) {
   for (const std::string& preset : preset_names()) {
     EXPECT_EQ(covered.count(preset), 1U) << "no config/*.yaml for preset " << preset;
   }
+}
+
+// import px4-params: the configuration on stdout loads (what is not mapped
+// goes to stderr); a missing file and one of another format exit 2.
+TEST(Cli, ImportPx4ParamsWritesAConfigurationThatLoads) {
+  const Result r = run("import px4-params " + source_path("test/data/px4/hexa_outputs.params"));
+  ASSERT_EQ(r.exit_code, 0);
+  const config::Config c = config::load_config_text(r.out, "stdout");
+  EXPECT_EQ(c.motors(), 6);
+  EXPECT_EQ(run("import px4-params /nonexistent.params").exit_code, 2);
+  EXPECT_EQ(run("import px4-params " + source_path("config/quad_x.yaml")).exit_code, 2);
+  EXPECT_EQ(run("import").exit_code, 2);
 }
 
 TEST(Cli, MatrixFormatsOfOtherStacks) {

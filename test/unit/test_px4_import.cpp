@@ -1,0 +1,143 @@
+// `motormix import px4-params`: a PX4 flight log's parameters (the shared
+// SITL log) and a hand-written .params file become configurations that
+// load, with every rotor, spin, output range and strategy setting where
+// PX4 had it; what is not mapped is named; damaged input is refused with
+// the file and the reason.
+
+#include "test_support.hpp"
+
+#include <motormix/config/load_config.hpp>
+#include <motormix/config/px4_import.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+
+#include <unistd.h>
+
+namespace motormix::test {
+namespace {
+
+constexpr double kCopiedExactly = 1e-6;  // values written with 7 significant digits
+
+bool lists(const std::vector<std::string>& v, const std::string& text) {
+  return std::any_of(v.begin(), v.end(),
+                     [&](const std::string& s) { return s.find(text) != std::string::npos; });
+}
+
+TEST(Px4Import, TheSharedFlightLogsAirframe) {
+  const std::string path = source_path("test/data/px4/sample_px4_events.ulg");
+  const config::Px4Parameters p = config::read_px4_parameters(path);
+  EXPECT_EQ(p.format, "ulog");
+  ASSERT_EQ(p.values.count("CA_ROTOR_COUNT"), 1U);
+  EXPECT_EQ(p.values.at("CA_ROTOR_COUNT"), 4.0);
+  const config::Px4Import imported = config::import_px4(p, path);
+  const config::Config c = config::load_config_text(imported.yaml, "imported");
+  ASSERT_EQ(c.motors(), 4);
+  ASSERT_EQ(c.geometry.rotors.size(), 4U);
+  for (int i = 0; i < 4; ++i) {
+    SCOPED_TRACE("rotor " + std::to_string(i));
+    const std::string k = "CA_ROTOR" + std::to_string(i) + "_";
+    const Rotor& r = c.geometry.rotors[static_cast<std::size_t>(i)];
+    EXPECT_NEAR(r.position.x(), p.values.at(k + "PX"), kCopiedExactly);
+    EXPECT_NEAR(r.position.y(), p.values.at(k + "PY"), kCopiedExactly);
+    const double km = p.values.count(k + "KM") ? p.values.at(k + "KM") : 0.05;
+    EXPECT_EQ(r.spin, km >= 0.0 ? Spin::kCcw : Spin::kCw);
+    EXPECT_NEAR(r.torque_ratio, std::abs(km), kCopiedExactly);
+  }
+  // Unequal arms: the Iris shape, not a square.
+  EXPECT_GT(std::abs(std::abs(c.geometry.rotors[0].position.x()) -
+                     std::abs(c.geometry.rotors[0].position.y())),
+            0.05);
+  EXPECT_EQ(c.strategy, config::Strategy::kPrioritized);
+  EXPECT_EQ(c.airmode, Airmode::kOff);  // MC_AIRMODE 0
+  EXPECT_NE(imported.yaml.find("normalization: px4"), std::string::npos) << imported.yaml;
+}
+
+TEST(Px4Import, AParamsFileWithMotorsOnOtherOutputs) {
+  const std::string path = source_path("test/data/px4/hexa_outputs.params");
+  const config::Px4Parameters p = config::read_px4_parameters(path);
+  EXPECT_EQ(p.format, "params");
+  const config::Px4Import imported = config::import_px4(p, path);
+  const config::Config c = config::load_config_text(imported.yaml, "imported");
+  ASSERT_EQ(c.motors(), 6);
+  EXPECT_EQ(c.geometry.rotors[0].spin, Spin::kCw);  // KM -0.05
+  EXPECT_EQ(c.geometry.rotors[1].spin, Spin::kCcw);
+  EXPECT_NEAR(c.geometry.rotors[0].position.y(), 0.25, kCopiedExactly);
+  EXPECT_NEAR(c.geometry.rotors[5].thrust_coefficient, 6.0, kCopiedExactly);
+  EXPECT_NEAR(c.geometry.rotors[4].thrust_coefficient, 6.5, kCopiedExactly);  // PX4's default
+  EXPECT_EQ(c.airmode, Airmode::kRollPitch);                                  // MC_AIRMODE 1
+  // Motor 1 is on output 2 (FUNC2 = 101), motor 2 on output 1.
+  EXPECT_EQ(c.outputs[0].min, 1050.0);
+  EXPECT_EQ(c.outputs[0].max, 1950.0);
+  EXPECT_EQ(c.outputs[0].disarmed, 950.0);
+  EXPECT_EQ(c.outputs[1].min, 1100.0);
+  EXPECT_EQ(c.outputs[1].max, 2000.0);
+  EXPECT_EQ(c.outputs[1].disarmed, 900.0);
+  EXPECT_EQ(c.outputs[5].min, 1000.0);
+  EXPECT_NEAR(c.outputs[0].thrust_model_factor, 0.3, kCopiedExactly);
+  // Named: the servo output and the control surface count; not the seventh
+  // rotor (beyond CA_ROTOR_COUNT), the servo's own range, nor the
+  // parameters of other modules.
+  EXPECT_TRUE(lists(imported.not_mapped, "PWM_MAIN_FUNC7 = 201")) << imported.yaml;
+  EXPECT_TRUE(lists(imported.not_mapped, "CA_SV_CS_COUNT = 1"));
+  EXPECT_FALSE(lists(imported.not_mapped, "CA_ROTOR6"));
+  EXPECT_FALSE(lists(imported.not_mapped, "PWM_MAIN_MIN7"));
+  EXPECT_FALSE(lists(imported.not_mapped, "MPC_XY_VEL_MAX"));
+  EXPECT_TRUE(lists(imported.notes, "2 more mixing and output parameters at 0"));
+}
+
+TEST(Px4Import, ABeforeControlAllocationAirframeIsAPreset) {
+  config::Px4Parameters p;
+  p.values = {{"SYS_AUTOSTART", 6001}, {"MC_AIRMODE", 2}};
+  const config::Px4Import imported = config::import_px4(p, "test");
+  const config::Config c = config::load_config_text(imported.yaml, "imported");
+  EXPECT_EQ(c.motors(), 6);
+  EXPECT_EQ(c.airmode, Airmode::kRollPitchYaw);
+  EXPECT_TRUE(lists(imported.notes, "preset hexa_x"));
+  p.values = {{"SYS_AUTOSTART", 10016}};  // a quad wide frame: no preset
+  EXPECT_THROW(config::import_px4(p, "test"), std::runtime_error);
+}
+
+TEST(Px4Import, DamagedOrForeignInputIsRefusedWithTheReason) {
+  const auto expect_refused = [](const std::string& text, const std::string& why) {
+    const std::string path = "/tmp/motormix-px4-import-" + std::to_string(::getpid());
+    std::ofstream(path, std::ios::binary) << text;
+    try {
+      const config::Px4Parameters p = config::read_px4_parameters(path);
+      config::import_px4(p, path);
+      ADD_FAILURE() << "taken: " << text.substr(0, 40);
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    std::remove(path.c_str());
+  };
+  expect_refused("1\t1\tCA_ROTOR_COUNT\tfour\t6\n", "is not a number");
+  expect_refused("just some words\n", "not a parameter line");
+  expect_refused(std::string("\x7f"
+                             "ELF\0\0\0",
+                             7),
+                 "neither");
+  expect_refused("1\t1\tCA_AIRFRAME\t1\t6\n1\t1\tCA_ROTOR_COUNT\t4\t6\n", "not a multicopter");
+  expect_refused("1\t1\tCA_ROTOR_COUNT\t40\t6\n", "1 to 16 rotors");
+  expect_refused("1\t1\tMPC_XY_VEL_MAX\t12\t9\n", "no multirotor geometry");
+  EXPECT_THROW(config::read_px4_parameters("/nonexistent/x.params"), std::runtime_error);
+  // A ULog cut short keeps the parameters before the cut.
+  std::ifstream in(source_path("test/data/px4/sample_px4_events.ulg"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string path = "/tmp/motormix-px4-cut-" + std::to_string(::getpid()) + ".ulg";
+  std::ofstream(path, std::ios::binary) << bytes.substr(0, bytes.size() / 3);
+  const config::Px4Parameters cut = config::read_px4_parameters(path);
+  EXPECT_EQ(cut.values.at("CA_ROTOR_COUNT"), 4.0);
+  std::ofstream(path, std::ios::binary) << bytes.substr(0, 20);  // the header and no more
+  EXPECT_THROW(config::read_px4_parameters(path), std::runtime_error);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace motormix::test
