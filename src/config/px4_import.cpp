@@ -3,6 +3,7 @@
 // commented configuration.
 
 #include <motormix/config/px4_import.hpp>
+#include <motormix/config/ulog.hpp>
 
 #include <motormix/motor_vector.hpp>
 
@@ -24,8 +25,6 @@ namespace motormix::config {
 
 namespace {
 
-constexpr std::array<std::uint8_t, 7> kUlogMagic{0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35};
-constexpr std::size_t kUlogHeaderBytes = 16;  // magic, version, start time
 // PX4's defaults where a parameter is absent.
 constexpr double kDefaultKm = 0.05;
 constexpr double kDefaultCt = 6.5;
@@ -38,46 +37,10 @@ std::string read_all(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// ULog: a 16-byte header, then messages of {uint16 size, uint8 type,
-// payload}. A 'P' message is a parameter: uint8 key length, the key ("float
-// NAME" or "int32_t NAME"), the 4-byte little-endian value. The first value
-// of each name is taken (the airframe as the flight started); later ones are
-// changes in flight.
 Px4Parameters read_ulog(const std::string& bytes, const std::string& path) {
   Px4Parameters p;
   p.format = "ulog";
-  std::size_t at = kUlogHeaderBytes;
-  while (at + 3 <= bytes.size()) {
-    const auto size = static_cast<std::size_t>(static_cast<std::uint8_t>(bytes[at]) |
-                                               (static_cast<std::uint8_t>(bytes[at + 1]) << 8));
-    const char type = bytes[at + 2];
-    const std::size_t body = at + 3;
-    if (body + size > bytes.size()) break;  // a log cut short: what came before stands
-    if (type == 'P' && size >= 1) {
-      const auto key_len = static_cast<std::size_t>(static_cast<std::uint8_t>(bytes[body]));
-      if (1 + key_len + 4 <= size) {
-        const std::string key = bytes.substr(body + 1, key_len);
-        const std::size_t space = key.find(' ');
-        const std::string kind = key.substr(0, space);
-        const std::string name = space == std::string::npos ? "" : key.substr(space + 1);
-        const char* v = bytes.data() + body + 1 + key_len;
-        std::uint32_t raw = 0;
-        for (int i = 3; i >= 0; --i) raw = (raw << 8) | static_cast<std::uint8_t>(v[i]);
-        double value = std::numeric_limits<double>::quiet_NaN();
-        if (kind == "float") {
-          float f = 0.0F;
-          std::memcpy(&f, &raw, sizeof f);
-          value = f;
-        } else if (kind == "int32_t") {
-          std::int32_t n = 0;
-          std::memcpy(&n, &raw, sizeof n);
-          value = n;
-        }
-        if (!name.empty() && std::isfinite(value)) p.values.emplace(name, value);
-      }
-    }
-    at = body + size;
-  }
+  p.values = Ulog::parse(bytes, path).parameters();
   if (p.values.empty()) throw std::runtime_error(path + ": a ULog without parameters");
   return p;
 }
@@ -172,11 +135,7 @@ struct Range {
 
 Px4Parameters read_px4_parameters(const std::string& path) {
   const std::string bytes = read_all(path);
-  if (bytes.size() >= kUlogHeaderBytes &&
-      std::equal(kUlogMagic.begin(), kUlogMagic.end(), bytes.begin(),
-                 [](std::uint8_t m, char b) { return m == static_cast<std::uint8_t>(b); })) {
-    return read_ulog(bytes, path);
-  }
+  if (Ulog::is_ulog(bytes)) return read_ulog(bytes, path);
   if (bytes.find('\0') != std::string::npos) {
     throw std::runtime_error(path + ": neither a QGroundControl .params file nor a ULog");
   }

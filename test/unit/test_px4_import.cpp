@@ -6,15 +6,19 @@
 
 #include "test_support.hpp"
 
+#include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
 #include <motormix/config/px4_import.hpp>
+#include <motormix/config/ulog.hpp>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -24,6 +28,11 @@ namespace motormix::test {
 namespace {
 
 constexpr double kCopiedExactly = 1e-6;  // values written with 7 significant digits
+// motormix's commands against PX4's own actuator_motors on the shared flight
+// (issue 50: fails below a 1e-5 match; measured by hand at 1e-7, with the
+// geometry at full precision: the import writes seven digits).
+constexpr double kPx4MatchTolerance = 1e-5;
+constexpr std::size_t kPx4MatchedSamplesMin = 300;  // of 313 logged
 
 bool lists(const std::vector<std::string>& v, const std::string& text) {
   return std::any_of(v.begin(), v.end(),
@@ -57,6 +66,47 @@ TEST(Px4Import, TheSharedFlightLogsAirframe) {
   EXPECT_EQ(c.strategy, config::Strategy::kPrioritized);
   EXPECT_EQ(c.airmode, Airmode::kOff);  // MC_AIRMODE 0
   EXPECT_NE(imported.yaml.find("normalization: px4"), std::string::npos) << imported.yaml;
+}
+
+// The imported configuration mixes the flight's logged torque and thrust
+// setpoints into PX4's own motor commands, sample by sample (paired by the
+// sample time the control allocator carries from its inputs).
+TEST(Px4Import, MotormixMixesTheSharedFlightAsPx4Did) {
+  const std::string path = source_path("test/data/px4/sample_px4_events.ulg");
+  const config::Ulog log = config::Ulog::read(path);
+  const config::Px4Parameters p = config::read_px4_parameters(path);
+  const config::Config c = config::load_config_text(config::import_px4(p, path).yaml, "imported");
+  const Mixer mixer = config::build_mixer(c);
+  const std::vector<std::string> xyz{"timestamp_sample", "xyz[0]", "xyz[1]", "xyz[2]"};
+  std::map<double, std::vector<double>> torque, thrust;
+  for (auto& row : log.samples("vehicle_torque_setpoint", xyz)) torque[row[0]] = row;
+  for (auto& row : log.samples("vehicle_thrust_setpoint", xyz)) thrust[row[0]] = row;
+  const auto motors = log.samples("actuator_motors", {"timestamp_sample", "control[0]",
+                                                      "control[1]", "control[2]", "control[3]"});
+  std::size_t compared = 0;
+  double worst = 0.0;
+  MixerOutput out;
+  for (const auto& m : motors) {
+    const auto t = torque.find(m[0]);
+    const auto f = thrust.find(m[0]);
+    if (t == torque.end() || f == thrust.end()) continue;
+    if (std::any_of(m.begin() + 1, m.end(), [](double v) { return std::isnan(v); })) continue;
+    mixer.mix(AxisVector(t->second[1], t->second[2], t->second[3], -f->second[3]), out);
+    for (int i = 0; i < 4; ++i)
+      worst = std::max(worst, std::abs(out.command[i] - m[static_cast<std::size_t>(i) + 1]));
+    ++compared;
+  }
+  std::printf("%zu of %zu actuator_motors samples compared; largest difference %.3g\n", compared,
+              motors.size(), worst);
+  // A nested field: each ESC's report inside esc_status.
+  const auto rpm = log.samples("esc_status", {"esc_count", "esc[0].esc_rpm", "esc[3].esc_rpm"});
+  ASSERT_FALSE(rpm.empty());
+  EXPECT_EQ(rpm.size(), 126U);
+  EXPECT_EQ(rpm.back()[0], 6.0);  // as logged (the SITL's ESC count), decoded independently too
+  EXPECT_THROW(log.samples("esc_status", {"esc[0].no_such_field"}), std::runtime_error);
+  EXPECT_THROW(log.samples("no_such_topic", {"timestamp"}), std::runtime_error);
+  EXPECT_GE(compared, kPx4MatchedSamplesMin);
+  EXPECT_LE(worst, kPx4MatchTolerance);
 }
 
 TEST(Px4Import, AParamsFileWithMotorsOnOtherOutputs) {
