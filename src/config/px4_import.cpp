@@ -134,7 +134,10 @@ struct Range {
 }  // namespace
 
 Px4Parameters read_px4_parameters(const std::string& path) {
-  const std::string bytes = read_all(path);
+  return parse_px4_parameters(read_all(path), path);
+}
+
+Px4Parameters parse_px4_parameters(const std::string& bytes, const std::string& path) {
   if (Ulog::is_ulog(bytes)) return read_ulog(bytes, path);
   if (bytes.find('\0') != std::string::npos) {
     throw std::runtime_error(path + ": neither a QGroundControl .params file nor a ULog");

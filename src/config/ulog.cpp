@@ -19,6 +19,10 @@ namespace {
 constexpr std::array<std::uint8_t, 7> kMagic{0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35};
 constexpr std::size_t kHeaderBytes = 16;  // magic, version, start time
 constexpr int kMaxNesting = 8;
+// Bounds a damaged or hostile format cannot push the reader past (PX4's
+// largest arrays hold a few hundred elements).
+constexpr std::size_t kMaxArray = 4096;
+constexpr std::size_t kMaxFields = 65536;
 
 std::size_t primitive_size(const std::string& type) {
   if (type == "int8_t" || type == "uint8_t" || type == "char" || type == "bool") return 1;
@@ -134,6 +138,10 @@ void Ulog::resolve(const std::string& name, int depth) const {
       count = static_cast<std::size_t>(std::strtoul(type.c_str() + open + 1, nullptr, 10));
       type.resize(open);
       array = true;
+      if (count > kMaxArray)
+        throw std::runtime_error(name_ + ": " + name + "." + member + ": an array of " +
+                                 std::to_string(count) + " (at most " + std::to_string(kMaxArray) +
+                                 ")");
     }
     const std::size_t primitive = primitive_size(type);
     for (std::size_t i = 0; i < count; ++i) {
@@ -148,6 +156,9 @@ void Ulog::resolve(const std::string& name, int depth) const {
           f.fields[at_name + "." + sub] = {where.type, f.size + where.offset};
         f.size += nested.size;
       }
+      if (f.fields.size() > kMaxFields)
+        throw std::runtime_error(name_ + ": " + name + " has more than " +
+                                 std::to_string(kMaxFields) + " fields");
     }
   }
   f.resolved = true;

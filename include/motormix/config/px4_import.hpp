@@ -31,6 +31,8 @@ struct Px4Parameters {
 // Reads a .params or .ulg file. Throws std::runtime_error naming the file
 // and what is wrong (missing, truncated, not either format).
 Px4Parameters read_px4_parameters(const std::string& path);
+// The same from the file's bytes (`name` for the messages).
+Px4Parameters parse_px4_parameters(const std::string& bytes, const std::string& name);
 
 struct Px4Import {
   std::string yaml;                     // the configuration, with comments
