@@ -150,6 +150,13 @@ class TwoRotorDescentTest : public ::testing::Test {
   TwoRotorDescent d_{c_.motor_loss->model, c_.motor_loss->settings};
   std::int64_t now_ = 0;
 
+  // Takes over from four motors at half thrust with `failed` stopped.
+  void start_at_hover(unsigned failed) {
+    MotorVector hover(4);
+    hover.setConstant(0.5);
+    d_.start(failed, now_, hover);
+  }
+
   const DescentCommand& step(const DescentInput& in) {
     now_ += 2500;
     return d_.update(in, now_);
@@ -157,9 +164,7 @@ class TwoRotorDescentTest : public ::testing::Test {
 };
 
 TEST_F(TwoRotorDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
-  MotorVector hover(4);
-  hover.setConstant(0.5);
-  d_.start(mask(0, 1), now_, hover);
+  start_at_hover(mask(0, 1));
   ASSERT_TRUE(d_.running());
   const SpinningDescentModel& m = c_.motor_loss->model;
   std::vector<DescentInput> inputs(6);
@@ -183,9 +188,7 @@ TEST_F(TwoRotorDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
 }
 
 TEST_F(TwoRotorDescentTest, TiltedItSteersWithTheDifferentialAndKeepsTheCollective) {
-  MotorVector hover(4);
-  hover.setConstant(0.5);
-  d_.start(mask(0, 1), now_, hover);
+  start_at_hover(mask(0, 1));
   DescentInput in;
   in.velocity = {0.0, 0.0, 1.0};  // at the descent rate
   const DescentCommand& level = step(in);
@@ -198,9 +201,7 @@ TEST_F(TwoRotorDescentTest, TiltedItSteersWithTheDifferentialAndKeepsTheCollecti
 }
 
 TEST_F(TwoRotorDescentTest, LandsOnceStillAfterTheDescent) {
-  MotorVector hover(4);
-  hover.setConstant(0.5);
-  d_.start(mask(2, 3), now_, hover);
+  start_at_hover(mask(2, 3));
   DescentInput in;
   in.velocity = {0.0, 0.0, 1.5};
   for (int k = 0; k < 400; ++k) EXPECT_EQ(step(in).phase, DescentPhase::kDescending);  // 1 s down
@@ -213,9 +214,7 @@ TEST_F(TwoRotorDescentTest, LandsOnceStillAfterTheDescent) {
 }
 
 TEST_F(TwoRotorDescentTest, HoveringAfterTheTakeOverIsNotLanded) {
-  MotorVector hover(4);
-  hover.setConstant(0.5);
-  d_.start(mask(0, 1), now_, hover);
+  start_at_hover(mask(0, 1));
   DescentInput in;
   in.velocity = {0.0, 0.0, 0.0};
   in.rates = {0.0, 0.0, 3.0};  // turning: in the air

@@ -16,6 +16,8 @@ namespace motormix::detail {
 // rotors need to right the vehicle: the tilt compensation stops here.
 inline constexpr double kMinTiltCompensationCos = 0.85;  // 32 degrees
 inline constexpr double kMaxSpeedMps = 200.0;            // beyond: taken as unknown
+inline constexpr double kMaxRateRadS = 100.0;            // rates beyond any gyro: clipped
+inline constexpr double kMaxDtS = 0.05;  // a longer gap is taken as this (a stalled process)
 
 struct CollectiveState {
   double velocity_integral = 0.0;

@@ -42,9 +42,7 @@ constexpr double kSpinLostShare = 0.3;
 // this many times slower than the rate loop.
 constexpr double kRateLoopLagRad = 3.14159265358979323846 / 4.0;
 constexpr double kLoopSeparation = 2.5;
-constexpr double kMaxDtS = 0.05;  // a longer gap is taken as this (a stalled process)
 constexpr double kThrustWeight = 0.3;
-constexpr double kMaxRateRadS = 100.0;  // beyond any gyro: clipped
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -373,7 +371,7 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
 
 const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64_t now_us) {
   if (failed_ < 0 || cmd_.phase != DescentPhase::kDescending) return cmd_;
-  const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, kMaxDtS);
+  const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, detail::kMaxDtS);
   last_us_ = now_us;
   // The loop's checks keep non-finite inputs out; should one arrive anyway,
   // the previous command stands (it is inside the motors' range).
@@ -383,7 +381,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   const auto fk = static_cast<std::size_t>(failed_);
   const SpinEquilibrium& eq = equilibria_[fk];
   const Eigen::Matrix3d rot = in.attitude.normalized().toRotationMatrix();  // body -> NED
-  const Eigen::Vector3d w = in.rates.cwiseMax(-kMaxRateRadS).cwiseMin(kMaxRateRadS);
+  const Eigen::Vector3d w = in.rates.cwiseMax(-detail::kMaxRateRadS).cwiseMin(detail::kMaxRateRadS);
   cmd_.measured_rate_rad_s = w.norm();
 
   // Where the spin axis should point: up, tilted against the horizontal

@@ -37,8 +37,6 @@ constexpr double kDesignPeriodS = 0.0025;
 constexpr int kDoublingIterations = 80;
 // The gyro is trusted up to this share of its range; beyond, the model.
 constexpr double kGyroTrustShare = 0.9;
-constexpr double kMaxDtS = 0.05;
-constexpr double kMaxRateRadS = 100.0;
 // Landing (see spinning_descent.cpp for the three-rotor rules): still is
 // under this share of the descent rate; the descent has been flown after
 // this share for this long; a spin lost is under this share of its peak.
@@ -299,7 +297,7 @@ void TwoRotorDescent::stop() {
 
 const DescentCommand& TwoRotorDescent::update(const DescentInput& in, std::int64_t now_us) {
   if (pair_ < 0 || cmd_.phase != DescentPhase::kDescending) return cmd_;
-  const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, kMaxDtS);
+  const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, detail::kMaxDtS);
   last_us_ = now_us;
   // Non-finite inputs are kept out by the loop's checks; should one arrive
   // anyway, the previous command stands (it is inside the motors' range).
@@ -310,7 +308,7 @@ const DescentCommand& TwoRotorDescent::update(const DescentInput& in, std::int64
   const auto ka = static_cast<std::size_t>(p.working[0]);
   const auto kb = static_cast<std::size_t>(p.working[1]);
   const Eigen::Matrix3d rot = in.attitude.normalized().toRotationMatrix();  // body -> NED
-  const Eigen::Vector3d w = in.rates.cwiseMax(-kMaxRateRadS).cwiseMin(kMaxRateRadS);
+  const Eigen::Vector3d w = in.rates.cwiseMax(-detail::kMaxRateRadS).cwiseMin(detail::kMaxRateRadS);
   cmd_.measured_rate_rad_s = w.norm();
 
   // The spin: the gyro's inside its range; at the rail, the rotors' yaw
