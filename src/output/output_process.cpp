@@ -113,10 +113,9 @@ class OutputNode {
   void step(double now, bool message) {
     const GateState state = gate_.decide(now, values_.data());
     if (message || state != state_ || now - last_write_s_ >= kKeepAliveS) {
-      written_armed_ = state == GateState::kArmed;
       // No device (lost, being reopened): nothing to write, the chip has
       // disarmed on its own.
-      if (driver_ == nullptr) written_armed_ = false;
+      written_armed_ = driver_ != nullptr && state == GateState::kArmed;
       if (driver_ != nullptr && !driver_->write(values_.data(), gate_.outputs(), written_armed_))
         ++write_failures_;
       last_write_s_ = now;
