@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <functional>
 #include <future>
 #include <iostream>
 #include <sstream>
@@ -81,17 +82,45 @@ std::string check_landing(const SimResult& r) {
   return why.str();
 }
 
+// Flies each flight (its check: "" when it passed), two at a time (the
+// machines have two cores): how many passed, and the failures, one a line.
+struct Flown {
+  int flown = 0;
+  int passed = 0;
+  std::string failures;
+};
+Flown fly_two_at_a_time(const std::vector<std::function<std::string()>>& flights) {
+  std::vector<std::future<std::string>> runs;
+  for (const auto& flight : flights) {
+    runs.push_back(std::async(std::launch::async, flight));
+    if (runs.size() % 2 == 0) {
+      for (auto& f : runs) f.wait();
+    }
+  }
+  Flown out;
+  for (auto& f : runs) {
+    const std::string why = f.get();
+    ++out.flown;
+    if (why.empty()) {
+      ++out.passed;
+    } else {
+      out.failures += why + "\n";
+    }
+  }
+  return out;
+}
+
 // Every motor on every seed; `landed_at_least` of the 20 flights must land.
 void expect_landings(const Vehicle& v, const char* scenario, double reported_after_s,
                      bool undetected, int landed_at_least, std::vector<std::string> extra = {},
                      const Realism& realism = kRealism, double max_tilt_deg = 90.0) {
   const config::Config c = load(v, extra);
   ASSERT_TRUE(c.motor_loss.has_value()) << c.motor_loss_off;
-  std::vector<std::future<std::string>> runs;
+  std::vector<std::function<std::string()>> flights;
   for (int motor = 0; motor < 4; ++motor) {
     if (!test::in_sim_grid(motor, 4)) continue;
     for (int seed = 1; seed <= test::sim_grid_seeds(kSeeds); ++seed) {
-      runs.push_back(std::async(std::launch::async, [&, motor, seed] {
+      flights.push_back([&, motor, seed] {
         SimOptions o;
         o.seed = static_cast<std::uint64_t>(seed);
         o.undetected = undetected;
@@ -111,30 +140,20 @@ void expect_landings(const Vehicle& v, const char* scenario, double reported_aft
                    ? why
                    : std::string(v.name) + " " + scenario + " motor " + std::to_string(motor + 1) +
                          " seed " + std::to_string(seed) + ": " + why;
-      }));
-      if (runs.size() % 2 == 0) {  // two at a time: the machines have two cores
-        for (auto& f : runs) f.wait();
-      }
+      });
     }
   }
-  int landed = 0;
-  std::string failures;
-  for (auto& f : runs) {
-    const std::string why = f.get();
-    if (why.empty()) {
-      ++landed;
-    } else {
-      failures += why + "\n";
-    }
-  }
+  const Flown result = fly_two_at_a_time(flights);
+  const int landed = result.passed;
+  const std::string& failures = result.failures;
   // A reduced grid (the sanitizer build) needs the same share.
-  const int flown = static_cast<int>(runs.size());
+  const int flown = result.flown;
   landed_at_least = (landed_at_least * flown + kSeeds * 4 - 1) / (kSeeds * 4);
   EXPECT_GE(landed, landed_at_least) << failures;
   if (landed_at_least == flown) {
     EXPECT_EQ(failures, "");
   }
-  std::cout << v.name << " " << scenario << ": " << landed << " of " << runs.size() << " landed\n"
+  std::cout << v.name << " " << scenario << ": " << landed << " of " << flown << " landed\n"
             << failures;
 }
 
@@ -255,10 +274,10 @@ void expect_two_motor_landings(const Vehicle& v, const std::vector<std::array<in
                                double later_s = 0.0) {
   const config::Config c = undetected ? load(v, {"failure_detection.enabled=true"}) : load(v);
   ASSERT_TRUE(c.motor_loss.has_value()) << c.motor_loss_off;
-  std::vector<std::future<std::string>> runs;
+  std::vector<std::function<std::string()>> flights;
   for (const auto& pair : pairs) {
     for (int seed = 1; seed <= test::sim_grid_seeds(kSeeds); ++seed) {
-      runs.push_back(std::async(std::launch::async, [&, pair, seed] {
+      flights.push_back([&, pair, seed] {
         SimOptions o;
         o.seed = static_cast<std::uint64_t>(seed);
         o.realism = realism;
@@ -293,15 +312,10 @@ void expect_two_motor_landings(const Vehicle& v, const std::vector<std::array<in
                    ? w
                    : std::string(v.name) + " motors " + std::to_string(pair[0] + 1) + "+" +
                          std::to_string(pair[1] + 1) + " seed " + std::to_string(seed) + ": " + w;
-      }));
-      if (runs.size() % 2 == 0) {
-        for (auto& f : runs) f.wait();
-      }
+      });
     }
   }
-  std::string failures;
-  for (auto& f : runs) failures += f.get();
-  EXPECT_EQ(failures, "");
+  EXPECT_EQ(fly_two_at_a_time(flights).failures, "");
 }
 
 // Quad X numbering: 1 front right and 2 rear left, 3 front left and 4 rear
