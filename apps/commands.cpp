@@ -8,6 +8,7 @@
 #include "bringup/monitor.hpp"
 #include "log/log_replay.hpp"
 #include "log/log_signing.hpp"
+#include "log/ulog_import.hpp"
 #include "node/describe.hpp"
 #include "node/lcm_node.hpp"
 #include "output/output_process.hpp"
@@ -173,6 +174,33 @@ int import_px4(const ImportPx4Command& cmd) {
   return kExitOk;
 }
 
+int import_ulog(const ImportUlogCommand& cmd) {
+  lcmlog::UlogImportOptions options;
+  options.reference = cmd.reference;
+  if (!cmd.config_path.empty()) {
+    CommonOptions common;
+    common.config_path = cmd.config_path;
+    const auto config = load_vehicle(common, "import ulog");
+    if (!config) return kExitUsage;
+    options.channels = config->channels;
+    options.motors = config->motors();
+  }
+  if (!cmd.force && std::ifstream(cmd.out).good()) {
+    std::cerr << "motormix import ulog: " << cmd.out << " exists; --force to overwrite it\n";
+    return kExitUsage;
+  }
+  lcmlog::UlogImportSummary s;
+  if (!lcmlog::import_ulog(cmd.ulog, cmd.out, options, s, std::cerr)) return kExitRuntime;
+  for (const std::string& n : s.notes) std::cerr << "motormix import ulog: note: " << n << "\n";
+  std::cout << std::fixed << std::setprecision(2) << "imported " << cmd.ulog << " -> " << cmd.out
+            << " (" << s.duration_s << " s of flight)\n";
+  for (const auto& [channel, count] : s.events)
+    std::cout << "  " << channel << ": " << count << "\n";
+  std::cout << "inputs clamped into motormix's ranges: " << s.clamped
+            << "; samples skipped (not finite): " << s.skipped << "\n";
+  return kExitOk;
+}
+
 int mix(const MixCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "mix");
   if (!config) return kExitUsage;
@@ -311,6 +339,35 @@ int mix(const MixCommand& cmd) {
   return kExitOk;
 }
 
+namespace {
+
+// The replay against the log's reference mixer (PX4's commands, imported).
+void print_comparison(const lcmlog::ReferenceComparison& c) {
+  std::cout << "compared with   " << c.channel << ": " << c.compared << " of " << c.references
+            << " commands (" << c.reference_disarmed << " stopped there, " << c.motormix_disarmed
+            << " with motormix disarmed, " << c.unpaired
+            << " without motormix's answer to the same "
+            << "inputs)\n";
+  if (c.compared == 0) return;
+  std::cout << std::scientific << std::setprecision(2);
+  std::cout << "  largest difference per motor:";
+  for (double d : c.max_difference) std::cout << " " << d;
+  std::cout << "\n  p99 difference per motor:    ";
+  for (double d : c.p99_difference) std::cout << " " << d;
+  std::cout << "\n  largest " << c.worst << " (motor " << c.worst_motor << ", " << std::fixed
+            << std::setprecision(3) << c.worst_at_s << " s into the log)\n"
+            << "  commands differing by more than " << std::scientific << std::setprecision(0)
+            << lcmlog::ReferenceComparison::kSameCommand << ": " << c.differing_spool_up
+            << " while motormix spooled up after arming (output.spool_up_s), "
+            << c.differing_saturated << " with a motor at 0 or 1 (saturation), "
+            << c.differing_limited
+            << " with an axis motormix could not deliver (airmode, priorities), "
+            << c.differing_other << " elsewhere\n"
+            << std::fixed << std::setprecision(2);
+}
+
+}  // namespace
+
 int replay(const ReplayCommand& cmd) {
   const auto config = load_vehicle(cmd.common, "replay");
   if (!config) return kExitUsage;
@@ -319,6 +376,7 @@ int replay(const ReplayCommand& cmd) {
   options.cycle_on_every_input = cmd.every_input;
   options.max_gap_s = cmd.max_gap_s;
   options.verify = cmd.verify;
+  options.reference_channel = cmd.reference;
   if (cmd.verify) {
     // The key is configuration: without it, or unreadable, a usage error
     // (exit 2) before anything is read, as every other command says it.
@@ -376,6 +434,7 @@ int replay(const ReplayCommand& cmd) {
     std::cout << (s.unverified == 0 ? "every event verified\n"
                                     : std::to_string(s.unverified) + " events refused\n");
   }
+  if (s.reference.present()) print_comparison(s.reference);
   if (s.damaged()) return kExitDamagedLog;
   return cmd.verify && s.unverified > 0 ? kExitRefused : kExitOk;
 }

@@ -72,6 +72,16 @@ struct ImportPx4Command {
 // listed on stderr.
 int import_px4(const ImportPx4Command& cmd);
 
+struct ImportUlogCommand {
+  std::string ulog;
+  std::string out;
+  std::string config_path;  // optional: its channels and motor count
+  std::string reference = "PX4_MOTORS";
+  bool force = false;
+};
+// A PX4 flight log as an LCM event log for `motormix replay`.
+int import_ulog(const ImportUlogCommand& cmd);
+
 struct MixCommand {
   CommonOptions common;
   double throttle = 0.0;
@@ -110,6 +120,7 @@ struct ReplayCommand {
   bool every_input = false;
   double max_gap_s = 10.0;
   bool verify = false;
+  std::string reference = "PX4_MOTORS";
 };
 int replay(const ReplayCommand& cmd);
 

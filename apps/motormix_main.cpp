@@ -94,6 +94,24 @@ int main(int argc, char** argv) {
   import_px4_app->add_option("-o,--out", import_cmd.out,
                              "write the configuration here (default: standard output)");
   import_px4_app->add_flag("--force", import_cmd.force, "overwrite --out if it exists");
+  ImportUlogCommand import_ulog_cmd;
+  CLI::App* import_ulog_app = import_app->add_subcommand(
+      "ulog",
+      "a PX4 flight log (.ulg) as an LCM log for motormix replay and lcm-logplayer: PX4's "
+      "torque and thrust setpoints as setpoint and pid, rates and attitude, ESC reports, and "
+      "PX4's own motor commands on a channel of their own for comparison");
+  import_ulog_app->add_option("flight", import_ulog_cmd.ulog, "the PX4 flight log (.ulg)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  import_ulog_app->add_option("out", import_ulog_cmd.out, "the LCM log to write")->required();
+  import_ulog_app->add_option("--config", import_ulog_cmd.config_path,
+                              "take channel names and the motor count from this configuration "
+                              "(default: motormix's channels, CA_ROTOR_COUNT motors)");
+  import_ulog_app
+      ->add_option("--reference", import_ulog_cmd.reference,
+                   "the channel for PX4's own motor commands")
+      ->capture_default_str();
+  import_ulog_app->add_flag("--force", import_ulog_cmd.force, "overwrite the output if it exists");
 
   MixCommand mix_cmd;
   CLI::App* mix_app = app.add_subcommand(
@@ -141,6 +159,11 @@ int main(int argc, char** argv) {
   replay_app->add_flag("--verify", replay_cmd.verify,
                        "check every event's signature with security.key_file (per-channel "
                        "report; exit 5 if any is refused) and mix as under security.mode require");
+  replay_app
+      ->add_option("--reference", replay_cmd.reference,
+                   "a channel of another mixer's motor_pwm_t to compare with, when the log holds "
+                   "it (motormix import ulog puts PX4's there); empty: none")
+      ->capture_default_str();
 
   SignLogCommand sign_log_cmd;
   CLI::App* sign_log_app = app.add_subcommand(
@@ -291,6 +314,7 @@ int main(int argc, char** argv) {
   if (output_app->parsed()) return output(output_cmd);
   if (keygen_app->parsed()) return keygen(keygen_cmd);
   if (import_px4_app->parsed()) return import_px4(import_cmd);
+  if (import_ulog_app->parsed()) return import_ulog(import_ulog_cmd);
   if (mix_app->parsed()) return mix(mix_cmd);
   if (matrix_app->parsed()) return matrix(matrix_cmd);
   if (replay_app->parsed()) return replay(replay_cmd);

@@ -6,7 +6,15 @@ frames (angles and spins as PX4/ArduPilot number them), and seeded random
 rotor geometries, computes pinv + normalization with numpy, and compares with
 what `motormix matrix --format json` prints. Exit status 0 when all agree.
 
+With --px4-params FILE...: each QGroundControl parameter file is read here
+(its own parser), PX4's effectiveness is built from CA_ROTOR* as PX4's
+control allocation builds it (thrust ct * axis, moment ct * (position x axis)
+- ct * km * axis, defaults ct 6.5, km 0.05, axis straight up), inverted and
+normalized as PX4 normalizes it, and compared with the matrix of the
+configuration `motormix import px4-params` writes for that file.
+
     tools/mixing_oracle.py --motormix build/motormix [--random 200] [--seed 12345]
+    tools/mixing_oracle.py --motormix build/motormix --px4-params hexa.params octo.params
 """
 
 import argparse
@@ -156,12 +164,70 @@ def rotors_yaml(rotors):
     return "\n".join(lines) + "\n"
 
 
+def px4_params(path):
+    """A QGroundControl parameter file: name -> value (its own reading)."""
+    values = {}
+    with open(path) as f:
+        for line in f:
+            fields = line.split()
+            if not fields or fields[0].startswith("#"):
+                continue
+            values[fields[2]] = float(fields[3])
+    return values
+
+
+def px4_effectiveness(values):
+    """PX4's 6 x n rotor effectiveness (moments, then thrust), FRD."""
+    n = int(values["CA_ROTOR_COUNT"])
+    cols = []
+    for i in range(n):
+        k = f"CA_ROTOR{i}_"
+        pos = np.array([values.get(k + a, 0.0) for a in ("PX", "PY", "PZ")])
+        axis = np.array([values.get(k + "AX", 0.0), values.get(k + "AY", 0.0), values.get(k + "AZ", -1.0)])
+        axis /= np.linalg.norm(axis)
+        ct, km = values.get(k + "CT", 6.5), values.get(k + "KM", 0.05)
+        cols.append(np.concatenate([ct * np.cross(pos, axis) - ct * km * axis, ct * axis]))
+    return np.array(cols).T
+
+
+def check_px4_params(binary, paths):
+    failures = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for path in paths:
+            e6 = px4_effectiveness(px4_params(path))
+            if np.any(np.abs(e6[3:5]) > 0):
+                failures.append(f"{path}: tilted rotors (thrust in x or y): not checked by this oracle")
+                continue
+            # The thrust row as motormix keeps it: upwards, positive.
+            e = np.vstack([e6[0:3], -e6[5]])
+            expected = oracle(e, "px4")
+            out = os.path.join(tmp, "imported.yaml")
+            r = subprocess.run([binary, "import", "px4-params", path, "-o", out, "--force"], capture_output=True,
+                               text=True)
+            if r.returncode != 0:
+                failures.append(f"{path}: import exit {r.returncode}: {r.stderr.strip()}")
+                continue
+            rc, got = motormix_json(binary, ["--config", out])
+            diff = np.max(np.abs(got - expected)) if rc == 0 and got.shape == expected.shape else None
+            print(f"{os.path.basename(path)}: {e.shape[1]} rotors, largest difference from PX4's "
+                  f"normalized inverse {diff if diff is not None else 'exit ' + str(rc)}")
+            if diff is None or diff > TOLERANCE:
+                failures.append(f"{path}: motormix {got} vs PX4 {expected}")
+    for f in failures:
+        print("MISMATCH", f)
+    print(f"{len(paths) - len(failures)} of {len(paths)} PX4 parameter files agree, tolerance {TOLERANCE}")
+    return 1 if failures else 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--motormix", required=True)
     ap.add_argument("--random", type=int, default=200)
     ap.add_argument("--seed", type=int, default=12345)
+    ap.add_argument("--px4-params", nargs="+", metavar="FILE")
     args = ap.parse_args()
+    if args.px4_params:
+        return check_px4_params(args.motormix, args.px4_params)
     failures = []
     checked = 0
 

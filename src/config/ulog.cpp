@@ -171,6 +171,16 @@ bool Ulog::logged(const std::string& topic, int instance) const {
   return false;
 }
 
+bool Ulog::has_field(const std::string& topic, const std::string& field) const {
+  if (!logged(topic)) return false;
+  try {
+    resolve(topic, 0);
+  } catch (const std::runtime_error&) {
+    return false;
+  }
+  return formats_.at(topic).fields.count(field) > 0;
+}
+
 std::vector<std::vector<double>> Ulog::samples(const std::string& topic,
                                                const std::vector<std::string>& fields,
                                                int instance) const {

@@ -3,6 +3,7 @@
 #include <motormix/config/build_mixer.hpp>
 #include "log/log_reader.hpp"
 #include "log/log_writer.hpp"
+#include "log/reference_comparison.hpp"
 #include "loop/control_loop.hpp"
 #include "node/messages.hpp"
 
@@ -119,6 +120,21 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     return sum;
   };
 
+  // Another mixer's commands to compare with: when the log holds them, a
+  // cycle follows every input so each of them has motormix's answer to the
+  // same inputs.
+  std::optional<ReferenceComparer> reference;
+  if (!options.reference_channel.empty()) {
+    LogReader scan(in_path);
+    while (const LogEventView* ev = scan.next()) {
+      if (ev->channel == options.reference_channel) {
+        reference.emplace(options.reference_channel, config.motors());
+        break;
+      }
+    }
+  }
+  const bool cycle_on_every_input = options.cycle_on_every_input || reference.has_value();
+
   LogWriter out(out_path);
   if (!out.good()) {
     log << "motormix replay: cannot write " << out_path << "\n";
@@ -159,6 +175,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     const loop::CycleResult& r = loop->cycle(t);
     fill_pwm_message(pwm, r, t);
     out.write(config.channels.motor_pwm, t, pwm);
+    if (reference) reference->on_output(pwm, r.mix.allocation.axis_limited, r.spooling_up);
     ++summary.outputs;
     if (r.failed != last_failed) {
       ++summary.failure_changes;
@@ -198,6 +215,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     summary.duration_s += static_cast<double>(last + tail_us - segment_first) / 1e6;
   };
 
+  const std::int64_t first_time = first_event->timestamp;
   start_segment(first_event->timestamp);
   std::int64_t previous = first_event->timestamp;
   int last_drawn = -1;
@@ -247,12 +265,16 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       const int size = static_cast<int>(verdict.payload_size);
       const bool accepted = verdict.accept && deliver_input(*loop, *kind, ev->data.data(), size,
                                                             ev->timestamp, ev->timestamp);
-      if (options.cycle_on_every_input || (accepted && *kind == InputKind::kPid &&
-                                           config.publish == config::PublishMode::kOnInput)) {
+      if (cycle_on_every_input || (accepted && *kind == InputKind::kPid &&
+                                   config.publish == config::PublishMode::kOnInput)) {
         cycle_at(ev->timestamp);
       }
     } else {
       ++summary.other_events;
+      if (reference && ev->channel == options.reference_channel) {
+        reference->on_reference(ev->data.data(), static_cast<int>(ev->data.size()),
+                                static_cast<double>(ev->timestamp - first_time) / 1e6);
+      }
     }
     if (options.progress && in.size() > 0) {
       const int percent = static_cast<int>(100 * ev->offset / in.size());
@@ -278,6 +300,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       summary.verification.push_back({channel, policy.counts()});
     }
   }
+  if (reference) summary.reference = reference->finish();
   summary.skipped = in.skipped();
   for (const SkippedRange& r : summary.skipped) {
     log << "motormix replay: warning: " << in_path << " is damaged: bytes " << r.begin << ".."

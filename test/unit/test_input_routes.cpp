@@ -10,7 +10,7 @@
 #include "log/log_writer.hpp"
 #include "loop/control_loop.hpp"
 #include "node/messages.hpp"
-#include "test_paths.hpp"
+#include "test_support.hpp"
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>

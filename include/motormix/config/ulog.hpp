@@ -32,6 +32,9 @@ class Ulog {
                                            const std::vector<std::string>& fields,
                                            int instance = 0) const;
   bool logged(const std::string& topic, int instance = 0) const;
+  // Whether `topic` was logged with `field` (PX4's messages change between
+  // releases: a reader picks the fields the log has).
+  bool has_field(const std::string& topic, const std::string& field) const;
 
  private:
   struct Field {

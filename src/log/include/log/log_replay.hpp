@@ -24,6 +24,7 @@
 #include <motormix/config/config.hpp>
 #include <motormix/signing_policy.hpp>
 #include "log/log_reader.hpp"
+#include "log/reference_comparison.hpp"
 
 #include <array>
 #include <cstdint>
@@ -62,7 +63,8 @@ struct ReplaySummary {
   std::int64_t skipped_events = 0;    // of those, single events skipped as damaged timestamps
   std::vector<SkippedRange> skipped;  // byte ranges of the input that held no valid event
   std::vector<ChannelVerification> verification;  // ReplayOptions::verify: per channel, sorted
-  std::int64_t unverified = 0;  // ReplayOptions::verify: events (any channel) refused
+  std::int64_t unverified = 0;    // ReplayOptions::verify: events (any channel) refused
+  ReferenceComparison reference;  // when the log holds ReplayOptions::reference_channel
   bool damaged() const { return !skipped.empty(); }
 };
 
@@ -79,6 +81,9 @@ struct ReplayOptions {
   // Verify every event's signature with security.key_file, whatever
   // security.mode says, and mix as under `require`.
   bool verify = false;
+  // A channel of another mixer's motor_pwm_t to compare with (see
+  // ReferenceComparison); empty: none.
+  std::string reference_channel = "PX4_MOTORS";
 };
 
 // Returns false (with a message on `log`) if a log cannot be read or written.
