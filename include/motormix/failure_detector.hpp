@@ -96,7 +96,7 @@ struct FailureDetectorSettings {
 
   // Telemetry.
   double telemetry_timeout_s = 0.1;   // a reading older than this is stale (silent)
-  double telemetry_persist_s = 0.03;  // a suspicion held this long is declared
+  double telemetry_persist_s = 0.01;  // a suspicion held this long is declared
   // How late a reading may arrive after its ESC measured it (serial
   // telemetry's frame, the ESC's averaging, the request round-robin): a
   // motor's rpm is judged against the least its thrust was since this long

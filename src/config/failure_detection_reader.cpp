@@ -111,7 +111,7 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
 
   MapReader telemetry = section.map("telemetry");
   s.telemetry_timeout_s = telemetry.number("timeout_ms", 100.0, 1.0, 10000.0) / 1e3;
-  s.telemetry_persist_s = telemetry.number("persist_ms", 25.0, 0.0, 10000.0) / 1e3;
+  s.telemetry_persist_s = telemetry.number("persist_ms", 10.0, 0.0, 10000.0) / 1e3;
   s.telemetry_latency_s = telemetry.number("latency_ms", 20.0, 0.0, 100.0) / 1e3;
   s.rpm_ratio = telemetry.number("rpm_ratio", 0.7, 0.05, 0.95);
   s.rpm_high_ratio = telemetry.number("rpm_high_ratio", 1.25, 1.05, 5.0);

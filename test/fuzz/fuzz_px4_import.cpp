@@ -45,11 +45,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (i > 0) check(events[i - 1].t <= e.t, "events out of time order");
         const int n = static_cast<int>(e.bytes.size());
         if (e.channel == "PID") {
-          pid_t m;
+          motormix::pid_t m;
           check(m.decode(e.bytes.data(), 0, n) == n, "an imported message does not decode");
           for (float v : {m.roll, m.pitch, m.yaw}) check(std::abs(v) <= 1.0F, "pid outside -1..1");
         } else if (e.channel == "SETPOINT") {
-          setpoint_t m;
+          motormix::setpoint_t m;
           check(m.decode(e.bytes.data(), 0, n) == n, "an imported message does not decode");
           check(m.throttle >= 0.0F && m.throttle <= 1.0F, "throttle outside 0..1");
         }

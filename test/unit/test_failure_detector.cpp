@@ -142,6 +142,26 @@ TEST(FailureDetector, APropDrawingTooLittleForItsRpmIsNamed) {
   EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
 }
 
+TEST(FailureDetector, ACurrentReadingAtOrBelowZeroIsTheMostUnloaded) {
+  // A thrown prop draws nothing: its ESC's current is noise around zero,
+  // and a reading of -0.1 A or 0 A is the least load of all, not "no load
+  // measured" (so it was once skipped, and the prop found only when its rpm
+  // had risen, up to 85 ms later in the simulator).
+  for (const double current : {-0.1, 0.0}) {
+    FailureDetector d(hexa(bits(DetectorSources::kTelemetry)));
+    const std::int64_t fail_at = 500'000;
+    std::int64_t t = 0;
+    for (; t < 1'500'000 && d.detection().failed == 0; t += kCycleUs) {
+      feed_rpm_and_current(d, hover(6), -1, 1.0, t);
+      if (t >= fail_at) d.on_telemetry(2, kFullRpm * std::sqrt(kHover), current, t);
+      d.update(hover(6), 0, true, t);
+    }
+    ASSERT_EQ(d.detection().failed, MotorMask{1} << 2) << current << " A";
+    const double latency = static_cast<double>(d.detection().at_us - fail_at) / 1e6;
+    EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS) << current << " A";
+  }
+}
+
 TEST(FailureDetector, ALoadIsNotWeighedNearIdleNorWithTheCheckOff) {
   // At 15 % thrust an ESC's current offset swamps the load; with
   // load_ratio 0 it is never judged.

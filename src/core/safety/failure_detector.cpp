@@ -215,6 +215,9 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   // most); kind: 1 rpm, 2 current, 0 not judged.
   std::array<double, kMaxMotors> ratio{}, best{}, fastest{}, load{};
   std::array<std::uint8_t, kMaxMotors> kind{};
+  // Whether load[k] was measured: a thrown prop's current is noise around
+  // zero, so a load at or below zero is the most unloaded, not "none".
+  std::array<bool, kMaxMotors> has_load{};
   std::array<double, kMaxMotors> rpm_ratios{}, current_ratios{}, loads{};
   int n_rpm = 0, n_current = 0, n_load = 0, fresh = 0;
   for (int i = 0; i < s_.motors; ++i) {
@@ -241,6 +244,7 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
       if (s_.load_ratio > 0.0 && std::isfinite(e.current) && krpm > 0.0 &&
           w.least >= kLoadMinThrust && lagged_[i] >= kSteadyShare * w.most) {
         load[k] = e.current / (krpm * krpm * krpm);
+        has_load[k] = true;
         loads[static_cast<std::size_t>(n_load++)] = load[k];
       }
     } else if (std::isfinite(e.current)) {
@@ -255,7 +259,7 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
       n_current >= s_.min_reporting ? median(current_ratios, n_current) : 0.0;
   const double load_median = n_load >= s_.min_reporting ? median(loads, n_load) : 0.0;
   const auto unloaded = [&](std::size_t k) {
-    return load_median > 0.0 && load[k] > 0.0 && load[k] < s_.load_ratio * load_median;
+    return load_median > 0.0 && has_load[k] && load[k] < s_.load_ratio * load_median;
   };
   // A fast motor is judged against the motors that are not too slow: two
   // motors stopped on a quad put the median halfway to zero, and the two
