@@ -45,7 +45,7 @@ std::int64_t now_us() {
 
 struct Relay {
   int fd;
-  std::uint8_t seq = 1;
+  std::uint32_t seq = 1;
   void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     motormix::motor_pwm_t m{};
     if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || m.num_motors < 1 ||
@@ -120,8 +120,19 @@ void measure_one(const char* name, const std::vector<std::string>& argv_without_
     mm_link_parser_init(&parser);
     std::uint8_t buf[512];
     pollfd pfd{master, POLLIN, 0};
+    // The chip's report every 50 ms names its session: motormix output
+    // sends nothing before it has one (the bare relay does not care).
+    auto next_report = std::chrono::steady_clock::now();
     while (!stop) {
-      if (poll(&pfd, 1, 50) <= 0) continue;
+      if (std::chrono::steady_clock::now() >= next_report) {
+        mm_link_report r{};
+        r.session = 0x10001;
+        r.version = MM_LINK_VERSION;
+        std::uint8_t out[MM_LINK_MAX_FRAME];
+        [[maybe_unused]] const ssize_t w = ::write(master, out, mm_link_encode_report(&r, 0, out));
+        next_report += std::chrono::milliseconds(50);
+      }
+      if (poll(&pfd, 1, 10) <= 0) continue;
       const ssize_t n = ::read(master, buf, sizeof buf);
       const std::int64_t t = now_us();
       for (ssize_t i = 0; i < n; ++i) {

@@ -6,7 +6,9 @@
  * Safe states, in order:
  * - at power-up and after any reset, no pulse at all until the host sends a
  *   configuration (an ESC without a signal does not start);
- * - configured, disarmed pulses until a valid, newer PULSES frame says armed;
+ * - configured, disarmed pulses until a valid, newer PULSES frame of the
+ *   current session says armed (src/link: a frame recorded before a link
+ *   timeout or a reset is never taken again);
  * - when no valid PULSES frame has come for the configured link timeout,
  *   disarmed pulses again, the first of them starting within the timeout of
  *   the last frame (the host died, was killed, or the cable came out);
@@ -61,7 +63,8 @@ static mm_link_config g_config;
 static uint8_t g_configured;
 static mm_link_parser g_parser;
 static mm_link_report g_report;
-static uint8_t g_have_sequence;
+/* The session frames must name, and the last sequence taken in it. */
+static uint32_t g_session;
 static uint32_t g_now_high, g_deadline, g_next_report;
 static uint16_t g_last_tcnt;
 static uint16_t g_timeout_ticks_high; /* link timeout - one period, in ticks >> 8 */
@@ -79,6 +82,31 @@ void early_init(void) {
 }
 
 #define WATCHDOG_COUNT_ADDRESS ((uint16_t*)0)
+/* The highest session base used (a multiple of 2^16): each reset starts
+ * above it, so no session number ever comes back. */
+#define SESSION_BASE_ADDRESS ((uint32_t*)4)
+#define SESSION_BASE_STEP 0x10000UL
+
+/* A session above every one used before: the next base, written down
+ * before it is used. */
+static void start_sessions(void) {
+  uint32_t base = eeprom_read_dword(SESSION_BASE_ADDRESS);
+  if (base == 0xFFFFFFFFUL) base = 0; /* a fresh EEPROM */
+  base += SESSION_BASE_STEP;
+  eeprom_update_dword(SESSION_BASE_ADDRESS, base);
+  g_session = base + 1u;
+}
+
+/* The next session (after a link timeout); past a base's 2^16 numbers the
+ * next base is written down first. */
+static void next_session(void) {
+  ++g_session;
+  if ((g_session & (SESSION_BASE_STEP - 1u)) == 0u) {
+    eeprom_update_dword(SESSION_BASE_ADDRESS, g_session);
+    ++g_session;
+  }
+  g_report.last_sequence = 0;
+}
 
 void mm_isr_period_start(void) {
   g_rise_at = (uint16_t)(g_rise_at + g_period_ticks);
@@ -149,7 +177,6 @@ static void apply_config(const mm_link_config* c) {
   g_ready = g_current = 0;
   g_link_ok = 0;
   g_out_armed = 0;
-  g_have_sequence = 0;
   mm_rise_ports(c->count, &mm_isr_rise.port_d, &mm_isr_rise.port_b);
   mm_isr_rise.flags = (uint8_t)(1u << MM_EDGE_RISE);
   /* The rise's next compare is never used: mm_isr_period_start sets the
@@ -171,10 +198,19 @@ static uint8_t same_config(const mm_link_config* a, const mm_link_config* b) {
   return memcmp(a->disarmed_us, b->disarmed_us, sizeof a->disarmed_us[0] * a->count) == 0;
 }
 
+/* For this session and newer than every frame taken in it; else counted. */
+static uint8_t current(uint32_t session, uint32_t sequence) {
+  if (session != g_session || sequence <= g_report.last_sequence) {
+    ++g_report.rejected;
+    return 0;
+  }
+  return 1;
+}
+
 static void take_pulses(const mm_link_pulses* p, uint32_t now) {
-  if (!g_configured || p->count != g_config.count ||
-      (g_have_sequence && (int8_t)(p->sequence - g_report.last_sequence) <= 0)) {
-    ++g_report.rejected; /* before a configuration, wrong count, old or repeated */
+  if (!current(p->session, p->sequence)) return;
+  if (!g_configured || p->count != g_config.count) {
+    ++g_report.rejected; /* before a configuration, wrong count */
     return;
   }
   uint16_t ticks[MM_LINK_MAX_CHANNELS];
@@ -193,7 +229,6 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
   g_ready = w;
   g_writing = 0;
   g_report.last_sequence = p->sequence;
-  g_have_sequence = 1;
   ++g_report.frames;
   g_deadline = now + ((uint32_t)g_timeout_ticks_high << 8);
   g_link_ok = 1;
@@ -203,6 +238,8 @@ static void take_frame(uint8_t type, const mm_link_frame* f, uint32_t now) {
   if (type == MM_LINK_PULSES) {
     take_pulses(&f->u.pulses, now);
   } else if (type == MM_LINK_CONFIG) {
+    if (!current(f->u.config.session, f->u.config.sequence)) return;
+    g_report.last_sequence = f->u.config.sequence;
     if (g_configured && same_config(&f->u.config, &g_config)) return;
     /* Never while the motors may be turning: armed pulses now, or an armed
      * frame taken that the next period will start. */
@@ -220,6 +257,8 @@ static void queue_report(void) {
   g_report.flags = (uint8_t)((g_configured ? MM_LINK_FLAG_CONFIGURED : 0u) |
                              (g_out_armed ? MM_LINK_FLAG_ARMED : 0u) |
                              (g_configured && !g_link_ok ? MM_LINK_FLAG_TIMED_OUT : 0u));
+  g_report.session = g_session;
+  g_report.version = MM_LINK_VERSION;
   g_tx_len = (uint8_t)mm_link_encode_report(&g_report, g_report_seq++, g_tx);
   g_tx_at = 0;
 }
@@ -229,6 +268,7 @@ int main(void) {
   if (resets == 0xFFFFu) resets = 0; /* a fresh EEPROM */
   if (g_mcusr & _BV(WDRF)) eeprom_update_word(WATCHDOG_COUNT_ADDRESS, ++resets);
   g_report.watchdog_resets = resets;
+  start_sessions();
 
   uint8_t d, b;
   mm_rise_ports(MM_LINK_MAX_CHANNELS, &d, &b);
@@ -265,8 +305,11 @@ int main(void) {
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;
-      g_have_sequence = 0; /* a host that comes back starts its own count */
+      /* Whatever was sent before this is never taken: a new session, told
+       * to the host at once. */
+      next_session();
       ++g_report.link_timeouts;
+      if (g_tx_at >= g_tx_len) g_next_report = now;
     }
     if (g_tx_at < g_tx_len) {
       if (UCSR0A & _BV(UDRE0)) UDR0 = g_tx[g_tx_at++];

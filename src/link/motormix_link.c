@@ -71,13 +71,14 @@ size_t mm_link_encode_config(const mm_link_config* c, uint8_t* out) {
   if (!mm_link_config_valid(c)) return 0;
   uint8_t* b = out + 3;
   b[0] = MM_LINK_CONFIG;
-  b[1] = c->sequence;
-  put16(b + 2, c->period_us);
-  put16(b + 4, c->link_timeout_ms);
-  put16(b + 6, c->min_us);
-  put16(b + 8, c->max_us);
-  b[10] = c->count;
-  for (uint8_t i = 0; i < c->count; ++i) put16(b + 11 + 2 * i, c->disarmed_us[i]);
+  put32(b + 1, c->session);
+  put32(b + 5, c->sequence);
+  put16(b + 9, c->period_us);
+  put16(b + 11, c->link_timeout_ms);
+  put16(b + 13, c->min_us);
+  put16(b + 15, c->max_us);
+  b[17] = c->count;
+  for (uint8_t i = 0; i < c->count; ++i) put16(b + 18 + 2 * i, c->disarmed_us[i]);
   return frame(out, (uint8_t)MM_LINK_CONFIG_BODY(c->count));
 }
 
@@ -85,10 +86,11 @@ size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out) {
   if (p->count < 1u || p->count > MM_LINK_MAX_CHANNELS) return 0;
   uint8_t* b = out + 3;
   b[0] = MM_LINK_PULSES;
-  b[1] = p->sequence;
-  b[2] = p->armed ? 1u : 0u;
-  b[3] = p->count;
-  for (uint8_t i = 0; i < p->count; ++i) put16(b + 4 + 2 * i, p->pulse_hus[i]);
+  put32(b + 1, p->session);
+  put32(b + 5, p->sequence);
+  b[9] = p->armed ? 1u : 0u;
+  b[10] = p->count;
+  for (uint8_t i = 0; i < p->count; ++i) put16(b + 11 + 2 * i, p->pulse_hus[i]);
   return frame(out, (uint8_t)MM_LINK_PULSES_BODY(p->count));
 }
 
@@ -102,8 +104,10 @@ size_t mm_link_encode_report(const mm_link_report* r, uint8_t sequence, uint8_t*
   put16(b + 14, r->link_timeouts);
   put16(b + 16, r->watchdog_resets);
   put16(b + 18, r->rejected);
-  b[20] = r->last_sequence;
-  b[21] = r->flags;
+  put32(b + 20, r->last_sequence);
+  b[24] = r->flags;
+  put32(b + 25, r->session);
+  b[29] = r->version;
   return frame(out, (uint8_t)MM_LINK_REPORT_BODY);
 }
 
@@ -124,31 +128,33 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
   const uint8_t* b = p->body;
   const uint8_t type = b[0];
   if (type == MM_LINK_PULSES) {
-    const uint8_t count = b[3];
+    const uint8_t count = b[10];
     if (count < 1u || count > MM_LINK_MAX_CHANNELS || p->length != MM_LINK_PULSES_BODY(count) ||
-        b[2] > 1u) {
+        b[9] > 1u) {
       ++p->malformed;
       return 0;
     }
     mm_link_pulses* out = &f->u.pulses;
-    out->sequence = b[1];
-    out->armed = b[2];
+    out->session = get32(b + 1);
+    out->sequence = get32(b + 5);
+    out->armed = b[9];
     out->count = count;
-    for (uint8_t i = 0; i < count; ++i) out->pulse_hus[i] = get16(b + 4 + 2 * i);
+    for (uint8_t i = 0; i < count; ++i) out->pulse_hus[i] = get16(b + 11 + 2 * i);
   } else if (type == MM_LINK_CONFIG) {
-    const uint8_t count = b[10];
+    const uint8_t count = b[17];
     mm_link_config* out = &f->u.config;
     if (count < 1u || count > MM_LINK_MAX_CHANNELS || p->length != MM_LINK_CONFIG_BODY(count)) {
       ++p->malformed;
       return 0;
     }
-    out->sequence = b[1];
-    out->period_us = get16(b + 2);
-    out->link_timeout_ms = get16(b + 4);
-    out->min_us = get16(b + 6);
-    out->max_us = get16(b + 8);
+    out->session = get32(b + 1);
+    out->sequence = get32(b + 5);
+    out->period_us = get16(b + 9);
+    out->link_timeout_ms = get16(b + 11);
+    out->min_us = get16(b + 13);
+    out->max_us = get16(b + 15);
     out->count = count;
-    for (uint8_t i = 0; i < count; ++i) out->disarmed_us[i] = get16(b + 11 + 2 * i);
+    for (uint8_t i = 0; i < count; ++i) out->disarmed_us[i] = get16(b + 18 + 2 * i);
     if (!mm_link_config_valid(out)) {
       ++p->malformed;
       return 0;
@@ -161,8 +167,10 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
     out->link_timeouts = get16(b + 14);
     out->watchdog_resets = get16(b + 16);
     out->rejected = get16(b + 18);
-    out->last_sequence = b[20];
-    out->flags = b[21];
+    out->last_sequence = get32(b + 20);
+    out->flags = b[24];
+    out->session = get32(b + 25);
+    out->version = b[29];
   } else {
     ++p->malformed;
     return 0;

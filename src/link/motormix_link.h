@@ -9,7 +9,19 @@
  * 10^5 corrupted frames, and a 16-bit check lets one random frame in 65536
  * through. Multi-byte fields are little-endian.
  *
- * Host -> MCU
+ * Link version 2 (MM_LINK_VERSION, in every REPORT). Sessions: the chip
+ * names a session in its reports, a 32-bit number that never repeats (its
+ * EEPROM keeps the highest base used across resets) and that it moves on
+ * at every link timeout. CONFIG and PULSES carry the session they are for
+ * and a 32-bit sequence number, and the chip takes one only for its
+ * current session and with a sequence above the last it took. So a frame
+ * recorded before a link timeout, or before a reset, is never taken again,
+ * whatever its sequence; within a session only a frame newer than every
+ * one taken, i.e. one younger than the link timeout. A host learns the
+ * session, and the last sequence taken, from the reports: it sends nothing
+ * before it has heard one.
+ *
+ * Host -> MCU (after type: session u32, sequence u32)
  *   MM_LINK_CONFIG: period (us), link timeout (ms), lowest and highest
  *     armed pulse (us), channel count, then one disarmed pulse (us) per
  *     channel. The firmware makes no pulse at all until it has one; it takes
@@ -20,11 +32,12 @@
  *     1234.5). Not armed: every channel gets its disarmed pulse, whatever
  *     the widths say.
  * MCU -> host
- *   MM_LINK_REPORT: frames accepted, CRC errors, malformed frames (u32
- *     each), link timeouts, watchdog resets, rejected frames (u16 each: well
- *     formed but refused: out of sequence, before a configuration, wrong
- *     count, a configuration while armed), the last accepted sequence number
- *     and state flags (MM_LINK_FLAG_*).
+ *   MM_LINK_REPORT (after type: a report counter u8): frames accepted, CRC
+ *     errors, malformed frames (u32 each), link timeouts, watchdog resets,
+ *     rejected frames (u16 each: well formed but refused: another session,
+ *     out of sequence, before a configuration, wrong count, a configuration
+ *     while armed), the last accepted sequence number (u32), state flags
+ *     (MM_LINK_FLAG_*), the session (u32) and the link version (u8).
  */
 #ifndef MOTORMIX_LINK_H
 #define MOTORMIX_LINK_H
@@ -42,6 +55,7 @@ extern "C" {
 #define MM_LINK_PULSES 0x01u
 #define MM_LINK_REPORT 0x02u
 #define MM_LINK_CONFIG 0x03u
+#define MM_LINK_VERSION 2u
 
 /* Limits both ends hold a configuration to (servo-style ESC pulses at
  * 40..500 Hz; a pulse ends at least MM_LINK_MIN_LOW_US before the next
@@ -54,9 +68,9 @@ extern "C" {
 #define MM_LINK_MIN_TIMEOUT_MS 10u
 #define MM_LINK_MAX_TIMEOUT_MS 1000u
 
-#define MM_LINK_CONFIG_BODY(count) (11u + 2u * (count))
-#define MM_LINK_PULSES_BODY(count) (4u + 2u * (count))
-#define MM_LINK_REPORT_BODY 22u
+#define MM_LINK_CONFIG_BODY(count) (18u + 2u * (count))
+#define MM_LINK_PULSES_BODY(count) (11u + 2u * (count))
+#define MM_LINK_REPORT_BODY 30u
 /* Largest length field: a configuration with every channel. */
 #define MM_LINK_MAX_BODY MM_LINK_CONFIG_BODY(MM_LINK_MAX_CHANNELS)
 /* Largest frame on the wire: sync, length, body, CRC. */
@@ -70,7 +84,8 @@ extern "C" {
 uint32_t mm_link_crc32(uint32_t crc, const uint8_t* data, size_t len);
 
 typedef struct {
-  uint8_t sequence;
+  uint32_t session;
+  uint32_t sequence;
   uint16_t period_us;
   uint16_t link_timeout_ms;
   uint16_t min_us; /* armed pulses are clamped into [min_us, max_us] */
@@ -80,7 +95,8 @@ typedef struct {
 } mm_link_config;
 
 typedef struct {
-  uint8_t sequence;
+  uint32_t session;
+  uint32_t sequence;
   uint8_t armed;
   uint8_t count;
   uint16_t pulse_hus[MM_LINK_MAX_CHANNELS]; /* half microseconds: 3000 is 1500 us */
@@ -93,8 +109,10 @@ typedef struct {
   uint16_t link_timeouts;
   uint16_t watchdog_resets;
   uint16_t rejected;
-  uint8_t last_sequence;
+  uint32_t last_sequence;
   uint8_t flags;
+  uint32_t session; /* the one frames must be for now */
+  uint8_t version;  /* MM_LINK_VERSION of the firmware that sent it */
 } mm_link_report;
 
 /* 1 if every field is within the limits above (pulses shorter than the

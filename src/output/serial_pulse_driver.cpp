@@ -30,7 +30,6 @@ SerialPulseDriver::SerialPulseDriver(int fd, const SerialPulseSettings& s) : fd_
     throw std::invalid_argument("the pulse firmware cannot take this configuration");
   }
   mm_link_parser_init(&parser_);
-  send_config();
 }
 
 SerialPulseDriver::~SerialPulseDriver() { ::close(fd_); }
@@ -52,17 +51,25 @@ bool SerialPulseDriver::send(const std::uint8_t* bytes, std::size_t n) {
 }
 
 void SerialPulseDriver::send_config() {
+  if (session_ == 0) return;  // the firmware has not named its session yet
   std::uint8_t buf[MM_LINK_MAX_FRAME];
-  config_.sequence = sequence_;
+  config_.session = session_;
+  config_.sequence = ++sequence_;
   send(buf, mm_link_encode_config(&config_, buf));
   resend_config_ = false;
 }
 
 bool SerialPulseDriver::write(const double* pulse_us, int count, bool armed) {
   if (count != config_.count) return false;
+  if (session_ == 0) {
+    // Nothing can be taken before the firmware's first report: it is
+    // unconfigured and makes no pulse; not a failure of the port.
+    ++held_;
+    return true;
+  }
   mm_link_pulses p{};
-  p.sequence = sequence_++;
-  if (sequence_ == 0) sequence_ = 1;
+  p.session = session_;
+  p.sequence = ++sequence_;
   p.armed = armed ? 1 : 0;
   p.count = static_cast<std::uint8_t>(count);
   for (int i = 0; i < count; ++i) p.pulse_hus[i] = us(2.0 * pulse_us[i]);
@@ -83,6 +90,15 @@ bool SerialPulseDriver::service(double now_s) {
         if (mm_link_feed(&parser_, buf[i], &f) == MM_LINK_REPORT) {
           report_ = f.u.report;
           ++reports_;
+          // A new session (the chip started, or its link timed out): go on
+          // from the last sequence it took.
+          if (report_.session != session_) {
+            session_ = report_.session;
+            sequence_ = report_.last_sequence;
+            ++sessions_;
+          } else {
+            sequence_ = std::max(sequence_, report_.last_sequence);
+          }
           if (!(report_.flags & MM_LINK_FLAG_CONFIGURED)) resend_config_ = true;
         }
       }
@@ -115,8 +131,11 @@ std::optional<FirmwareReport> SerialPulseDriver::firmware_report() const {
 std::string SerialPulseDriver::describe() const {
   std::ostringstream s;
   s << "serial: " << frames_sent_ << " frames sent, " << write_failures_ << " not written";
+  if (held_ > 0) s << ", " << held_ << " held before the firmware's first report";
   if (reports_ == 0) {
-    s << "; no report from the firmware yet";
+    s << "; no report from the firmware yet (it reports every 50 ms; a firmware older than "
+         "link version "
+      << MM_LINK_VERSION << " is not understood: flash firmware/pulses)";
     return s.str();
   }
   s << "; firmware: " << report_.frames << " frames taken, " << report_.crc_errors

@@ -40,7 +40,20 @@ constexpr double kUsPerCycle = 1.0 / 16.0;
 
 class Host {
  public:
-  Host() : board(MOTORMIX_FIRMWARE_ELF) { board.run_for_us(2000); }  // past the C start-up
+  // Past the C start-up and the first report, which names the session.
+  Host() : board(MOTORMIX_FIRMWARE_ELF) { learn_session(); }
+
+  // Runs until a report names a session other than the one known (bounded),
+  // as a host does: frames go for the chip's current session.
+  void learn_session() {
+    const std::uint32_t before = session;
+    for (int i = 0; i < 200 && session == before; ++i) {
+      board.run_for_us(1000);
+      last_report();
+      session = report.session;
+    }
+    seq = report.last_sequence + 1;
+  }
 
   mm_link_config config(std::uint8_t count = 4, std::uint16_t period_us = 2500,
                         std::uint16_t disarmed = 1000) {
@@ -55,6 +68,7 @@ class Host {
   }
   void send_config(const mm_link_config& c) {
     mm_link_config copy = c;
+    copy.session = session;
     copy.sequence = seq++;
     std::uint8_t buf[MM_LINK_MAX_FRAME];
     const std::size_t n = mm_link_encode_config(&copy, buf);
@@ -63,6 +77,7 @@ class Host {
   }
   std::vector<std::uint8_t> pulses_frame(const std::vector<double>& widths, bool armed) {
     mm_link_pulses p{};
+    p.session = session;
     p.sequence = seq++;
     p.armed = armed ? 1 : 0;
     p.count = static_cast<std::uint8_t>(widths.size());
@@ -94,7 +109,8 @@ class Host {
   }
 
   AvrBoard board;
-  std::uint8_t seq = 1;
+  std::uint32_t session = 0;
+  std::uint32_t seq = 1;
   mm_link_parser parser = [] {
     mm_link_parser p;
     mm_link_parser_init(&p);
@@ -226,13 +242,97 @@ TEST(PulseFirmware, LinkWatchdogDisarmsWithinTheTimeoutOfTheLastFrame) {
   EXPECT_EQ(r.link_timeouts, 1u);
   EXPECT_TRUE(r.flags & MM_LINK_FLAG_TIMED_OUT);
   EXPECT_FALSE(r.flags & MM_LINK_FLAG_ARMED);
-  // The link back: armed pulses again from the next frame, any sequence.
-  h.seq = 200;
+  // A new session: frames for the old one, newer or not, are refused...
+  const std::uint32_t old_session = h.session;
+  EXPECT_NE(r.session, old_session);
+  const std::uint16_t refused = r.rejected;
+  h.seq += 1000;
+  h.send_pulses(armed);
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.take_pulses();
+  h.board.run_for_us(kPeriodUs);
+  EXPECT_NEAR(Host::last_widths(h.board.take_pulses()).at(3), 1000.0, kExactToleranceUs);
+  h.board.run_for_us(60000);
+  EXPECT_EQ(h.last_report().rejected, refused + 1);
+  // ...and the link is back from the next frame for the new one.
+  h.learn_session();
+  EXPECT_EQ(h.session, r.session);
   h.send_pulses(armed);
   h.board.run_for_us(3 * kPeriodUs);
   h.board.take_pulses();
   h.board.run_for_us(kPeriodUs);
   EXPECT_NEAR(Host::last_widths(h.board.take_pulses()).at(3), 1750.0, kExactToleranceUs);
+}
+
+// Frames recorded before a link timeout (issue 49: an independent probe
+// played frames 1.5-2 s old into the chip between good ones, and 92 pulses
+// followed them under the 8-bit sequence). MOTORMIX_AVR_REPLAYED_FRAMES
+// recorded frames (10^5 by default; fewer under the sanitizers), from a
+// session that timed out, armed with other widths and with sequence numbers
+// far above the current ones, and recorded configurations, go in between
+// good frames: not one pulse may follow them.
+TEST(PulseFirmwareReplay, FramesFromBeforeALinkTimeoutMoveNoPulse) {
+  const char* env = std::getenv("MOTORMIX_AVR_REPLAYED_FRAMES");
+  const int frames = env ? std::atoi(env) : 100000;
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  // The recording: a second of armed frames, sequences climbing high.
+  std::mt19937 rng(20261205);
+  std::vector<std::vector<std::uint8_t>> recorded;
+  h.seq = 1u << 30;
+  for (int i = 0; i < 400; ++i) {
+    std::vector<double> w(4);
+    for (auto& x : w) x = static_cast<double>(1000 + rng() % 1001);
+    recorded.push_back(h.pulses_frame(w, true));
+    h.board.send(recorded.back());
+    h.board.run_for_us(kPeriodUs);
+  }
+  mm_link_config other = h.config(4, 2500, 1100);
+  h.send_pulses({1500, 1500, 1500, 1500}, false);
+  h.board.run_for_us(3 * kPeriodUs);
+  {
+    mm_link_config copy = other;
+    copy.session = h.session;
+    copy.sequence = h.seq + (1u << 20);
+    std::vector<std::uint8_t> buf(MM_LINK_MAX_FRAME);
+    buf.resize(mm_link_encode_config(&copy, buf.data()));
+    recorded.push_back(buf);  // a configuration, recorded and never sent
+  }
+  // The link times out; the host comes back in the new session.
+  h.board.run_for_us(150000);
+  h.learn_session();
+  const std::vector<double> widths = {1200, 1400, 1600, 1800};
+  h.send_pulses(widths);
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.take_pulses();
+  int changed = 0, pulses = 0;
+  for (int k = 0; k < frames; ++k) {
+    h.board.send(recorded[rng() % recorded.size()]);
+    if (k % 4 == 3) h.send_pulses(widths);
+    while (h.board.sending()) h.board.run_for_us(200);
+    for (const Pulse& p : h.board.take_pulses()) {
+      ++pulses;
+      if (std::abs(p.width_us - widths[static_cast<std::size_t>(p.channel)]) > kPulseToleranceUs) {
+        ++changed;
+        if (changed < 10)
+          std::printf("after replayed frame %d: channel %d pulse %.3f us\n", k, p.channel,
+                      p.width_us);
+      }
+    }
+  }
+  h.board.run_for_us(60000);
+  const mm_link_report r = h.last_report();
+  std::printf(
+      "%d replayed frames from before a link timeout: %d pulses measured, %d changed; "
+      "%u refused, %u link timeouts\n",
+      frames, pulses, changed, r.rejected, r.link_timeouts);
+  EXPECT_EQ(changed, 0);
+  EXPECT_GT(pulses, frames / 4);
+  // Every replayed frame refused and counted (the report's counter is 16
+  // bits wide: it wraps).
+  EXPECT_EQ(r.rejected, static_cast<std::uint16_t>(frames));
+  EXPECT_EQ(r.link_timeouts, 1u);
 }
 
 TEST(PulseFirmware, OldFramesAndConfigurationsWhileArmedAreRefusedAndCounted) {
@@ -295,9 +395,13 @@ TEST(PulseFirmware, HardwareWatchdogResetsAStuckChipToNoPulses) {
     EXPECT_TRUE(ms < 80.0 && !e.high) << "edge " << ms << " ms after the chip got stuck";
   }
   for (int ch = 0; ch < 4; ++ch) EXPECT_FALSE(h.board.pin_high(ch));
-  // It came back as from power-up: no pulse until configured; the reset counted.
+  // It came back as from power-up: no pulse until configured, in a new
+  // session (nothing sent before the reset is taken); the reset counted.
+  const std::uint32_t before_reset = h.session;
   h.board.run_for_us(30000);
   EXPECT_TRUE(h.board.take_edges().empty());
+  h.learn_session();
+  EXPECT_GT(h.session, before_reset);
   h.send_config(h.config());
   h.board.run_for_us(60000);
   EXPECT_FALSE(h.board.take_pulses().empty());

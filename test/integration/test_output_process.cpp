@@ -294,6 +294,7 @@ TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
 struct Pty {
   int master = -1;
   std::string slave;
+  std::uint32_t session = 0x10001;
   Pty() {
     // Close-on-exec: a copy in the output process would keep the line up.
     master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
@@ -309,14 +310,25 @@ struct Pty {
     if (master >= 0) ::close(master);
     master = -1;
   }
-  // The frame types read within `bound_ms`, up to and including `until`.
+  // The frame types read within `bound_ms`, up to and including `until`,
+  // with a report naming this chip's session every 50 ms, as the firmware
+  // sends (the host sends nothing before it has one).
   std::vector<int> frames_until(int until, double bound_ms) {
     std::vector<int> types;
     mm_link_parser parser;
     mm_link_parser_init(&parser);
     const auto start = std::chrono::steady_clock::now();
+    auto next_report = start;
     while (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                .count() < bound_ms) {
+      if (std::chrono::steady_clock::now() >= next_report) {
+        mm_link_report r{};
+        r.session = session;
+        r.version = MM_LINK_VERSION;
+        std::uint8_t out[MM_LINK_MAX_FRAME];
+        [[maybe_unused]] const ssize_t w = ::write(master, out, mm_link_encode_report(&r, 0, out));
+        next_report += 50ms;
+      }
       std::uint8_t buf[256];
       const ssize_t n = ::read(master, buf, sizeof buf);
       for (ssize_t i = 0; i < n; ++i) {

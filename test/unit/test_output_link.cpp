@@ -23,7 +23,8 @@ constexpr int kCorruptedFrames = 100000;
 
 mm_link_pulses some_pulses(std::uint8_t seq, std::uint8_t count) {
   mm_link_pulses p{};
-  p.sequence = seq;
+  p.session = 0x12345678U + seq;
+  p.sequence = 0x80000000U + seq;
   p.armed = 1;
   p.count = count;
   for (std::uint8_t i = 0; i < count && i < MM_LINK_MAX_CHANNELS; ++i) {
@@ -42,6 +43,7 @@ bool feed_pulses(mm_link_parser& parser, std::uint8_t byte, mm_link_pulses& got)
 
 mm_link_config four_channel_config() {
   mm_link_config c{};
+  c.session = 0xABCD0001U;
   c.sequence = 3;
   c.period_us = 2500;
   c.link_timeout_ms = 100;
@@ -53,7 +55,9 @@ mm_link_config four_channel_config() {
 }
 
 bool same(const mm_link_pulses& a, const mm_link_pulses& b) {
-  if (a.sequence != b.sequence || a.armed != b.armed || a.count != b.count) return false;
+  if (a.session != b.session || a.sequence != b.sequence || a.armed != b.armed ||
+      a.count != b.count)
+    return false;
   for (std::uint8_t i = 0; i < a.count; ++i) {
     if (a.pulse_hus[i] != b.pulse_hus[i]) return false;
   }
@@ -72,14 +76,15 @@ TEST(OutputLink, PulsesAndReportsRoundTrip) {
   for (std::uint8_t count = 1; count <= MM_LINK_MAX_CHANNELS; ++count) {
     const mm_link_pulses sent = some_pulses(count, count);
     const std::size_t n = mm_link_encode_pulses(&sent, buf);
-    ASSERT_EQ(n, 7u + 4u + 2u * count);
+    ASSERT_EQ(n, 7u + MM_LINK_PULSES_BODY(count));
     mm_link_pulses got{};
     bool completed = false;
     for (std::size_t i = 0; i < n; ++i) completed = feed_pulses(parser, buf[i], got);
     EXPECT_TRUE(completed);
     EXPECT_TRUE(same(sent, got));
   }
-  mm_link_report r{123456, 7, 8, 9, 1, 17, 200, MM_LINK_FLAG_CONFIGURED};
+  mm_link_report r{123456,         7, 8, 9, 1, 17, 0xF0000200U, MM_LINK_FLAG_CONFIGURED, 0x30002U,
+                   MM_LINK_VERSION};
   std::size_t n = mm_link_encode_report(&r, 5, buf);
   mm_link_frame got{};
   std::uint8_t type = 0;
@@ -87,13 +92,17 @@ TEST(OutputLink, PulsesAndReportsRoundTrip) {
   EXPECT_EQ(type, MM_LINK_REPORT);
   EXPECT_EQ(got.u.report.frames, 123456U);
   EXPECT_EQ(got.u.report.rejected, 17);
-  EXPECT_EQ(got.u.report.last_sequence, 200);
+  EXPECT_EQ(got.u.report.last_sequence, 0xF0000200U);
   EXPECT_EQ(got.u.report.flags, MM_LINK_FLAG_CONFIGURED);
+  EXPECT_EQ(got.u.report.session, 0x30002U);
+  EXPECT_EQ(got.u.report.version, MM_LINK_VERSION);
   const mm_link_config c = four_channel_config();
   n = mm_link_encode_config(&c, buf);
   ASSERT_EQ(n, 7u + MM_LINK_CONFIG_BODY(4));
   for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], &got);
   EXPECT_EQ(type, MM_LINK_CONFIG);
+  EXPECT_EQ(got.u.config.session, 0xABCD0001U);
+  EXPECT_EQ(got.u.config.sequence, 3U);
   EXPECT_EQ(got.u.config.period_us, 2500);
   EXPECT_EQ(got.u.config.max_us, 2000);
   EXPECT_EQ(got.u.config.disarmed_us[3], 1000);
@@ -113,10 +122,10 @@ TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {
     return c;
   };
   const mm_link_config bad[] = {
-      with([](mm_link_config& c) { c.period_us = 1999; }),      // faster than 500 Hz
-      with([](mm_link_config& c) { c.period_us = 25001; }),     // slower than 40 Hz
-      with([](mm_link_config& c) { c.max_us = 2480; }),         // no low time before the next period
-      with([](mm_link_config& c) { c.min_us = 2100; }),         // min above max
+      with([](mm_link_config& c) { c.period_us = 1999; }),   // faster than 500 Hz
+      with([](mm_link_config& c) { c.period_us = 25001; }),  // slower than 40 Hz
+      with([](mm_link_config& c) { c.max_us = 2480; }),      // no low time before the next period
+      with([](mm_link_config& c) { c.min_us = 2100; }),      // min above max
       with([](mm_link_config& c) { c.disarmed_us[2] = 400; }),  // below any servo pulse
       with([](mm_link_config& c) { c.link_timeout_ms = 5; }),
       with([](mm_link_config& c) { c.link_timeout_ms = 1001; }),
@@ -128,8 +137,8 @@ TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {
   }
   // An invalid one built by hand (right CRC) is counted as malformed.
   const std::size_t n = mm_link_encode_config(&good, buf);
-  buf[3 + 2] = 0x10;  // the period becomes 0x0110 = 272 us, then the CRC is made right
-  buf[3 + 3] = 0x01;
+  buf[3 + 9] = 0x10;  // the period becomes 0x0110 = 272 us, then the CRC is made right
+  buf[3 + 10] = 0x01;
   const std::uint32_t crc = mm_link_crc32(0, buf + 2, n - 6);
   for (int i = 0; i < 4; ++i) buf[n - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
   mm_link_parser parser;

@@ -232,10 +232,13 @@ struct PtyPair {
     }
     return out;
   }
-  void report(std::uint8_t flags) {
+  void report(std::uint8_t flags, std::uint32_t session = 0x10001, std::uint32_t last = 0) {
     mm_link_report r{};
     r.frames = 7;
     r.flags = flags;
+    r.session = session;
+    r.last_sequence = last;
+    r.version = MM_LINK_VERSION;
     std::uint8_t buf[MM_LINK_MAX_FRAME];
     const std::size_t n = mm_link_encode_report(&r, 1, buf);
     ASSERT_EQ(::write(master, buf, n), static_cast<ssize_t>(n));
@@ -259,24 +262,6 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   s.disarmed_us = {1000, 1000, 1000, 1000};
   output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
   const double pulses[4] = {1234.3, 1500, 1750.74, 1999.9};
-  ASSERT_TRUE(driver.write(pulses, 4, true));
-  std::vector<mm_link_frame> got = pty.frames(2);
-  ASSERT_EQ(got.size(), 2u);
-  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
-  EXPECT_EQ(got[0].u.config.period_us, 2500);
-  EXPECT_EQ(got[0].u.config.count, 4);
-  EXPECT_EQ(got[1].type, MM_LINK_PULSES);
-  EXPECT_EQ(got[1].u.pulses.armed, 1);
-  EXPECT_EQ(got[1].u.pulses.pulse_hus[0], 2469);  // 1234.5 us: the nearest half microsecond
-  EXPECT_EQ(got[1].u.pulses.pulse_hus[2], 3501);
-  EXPECT_EQ(got[1].u.pulses.pulse_hus[3], 4000);
-  // The first service sends the periodic configuration (once a second).
-  ASSERT_TRUE(driver.service(0.0));
-  got = pty.frames(1);
-  ASSERT_EQ(got.size(), 1u);
-  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
-  // A report from a chip that lost its configuration (a watchdog reset):
-  // the configuration goes again at once, within the second.
   const auto serve_until_report = [&](std::uint64_t reports, double now) {
     for (int i = 0; i < 1000 && driver.reports() < reports; ++i) {
       ASSERT_TRUE(driver.service(now));
@@ -284,17 +269,60 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
     }
     ASSERT_EQ(driver.reports(), reports);
   };
-  pty.report(0);
-  serve_until_report(1, 0.1);
-  EXPECT_EQ(driver.report().frames, 7u);
-  got = pty.frames(1);
-  ASSERT_EQ(got.size(), 1u);
+  // Before the firmware's first report nothing goes: it has not named its
+  // session, and a frame for no session would be refused.
+  ASSERT_TRUE(driver.write(pulses, 4, true));
+  ASSERT_TRUE(driver.service(0.0));
+  EXPECT_TRUE(pty.frames(1, 50).empty());
+  EXPECT_NE(driver.describe().find("1 held"), std::string::npos) << driver.describe();
+  // An unconfigured chip's report names its session: the configuration
+  // goes at once, for that session, then the pulses.
+  pty.report(0, 0x20001, 0);
+  serve_until_report(1, 0.0);
+  EXPECT_EQ(driver.session(), 0x20001u);
+  ASSERT_TRUE(driver.write(pulses, 4, true));
+  std::vector<mm_link_frame> got = pty.frames(2);
+  ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+  EXPECT_EQ(got[0].u.config.session, 0x20001u);
+  EXPECT_EQ(got[0].u.config.sequence, 1u);
+  EXPECT_EQ(got[0].u.config.period_us, 2500);
+  EXPECT_EQ(got[0].u.config.count, 4);
+  EXPECT_EQ(got[1].type, MM_LINK_PULSES);
+  EXPECT_EQ(got[1].u.pulses.session, 0x20001u);
+  EXPECT_EQ(got[1].u.pulses.sequence, 2u);
+  EXPECT_EQ(got[1].u.pulses.armed, 1);
+  EXPECT_EQ(got[1].u.pulses.pulse_hus[0], 2469);  // 1234.5 us: the nearest half microsecond
+  EXPECT_EQ(got[1].u.pulses.pulse_hus[2], 3501);
+  EXPECT_EQ(got[1].u.pulses.pulse_hus[3], 4000);
   // A configured chip's report: nothing more within the second.
-  pty.report(MM_LINK_FLAG_CONFIGURED);
+  pty.report(MM_LINK_FLAG_CONFIGURED, 0x20001, 2);
   serve_until_report(2, 0.2);
   EXPECT_TRUE(pty.frames(1, 50).empty());
   EXPECT_NE(driver.describe().find("7 frames taken"), std::string::npos) << driver.describe();
+  // The chip's link timed out: a new session, frames go on in it from the
+  // last sequence the chip took.
+  pty.report(MM_LINK_FLAG_CONFIGURED | MM_LINK_FLAG_TIMED_OUT, 0x20002, 0);
+  serve_until_report(3, 0.3);
+  ASSERT_TRUE(driver.write(pulses, 4, false));
+  got = pty.frames(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].u.pulses.session, 0x20002u);
+  EXPECT_EQ(got[0].u.pulses.sequence, 1u);
+  EXPECT_EQ(driver.sessions(), 2u);
+  // A report from a chip that lost its configuration (a watchdog reset):
+  // the configuration goes again at once, within the second.
+  pty.report(0, 0x30001, 0);
+  serve_until_report(4, 0.4);
+  got = pty.frames(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+  EXPECT_EQ(got[0].u.config.session, 0x30001u);
+  // The periodic configuration, once a second.
+  ASSERT_TRUE(driver.service(1.5));
+  got = pty.frames(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
 }
 
 TEST(SerialPulses, ANonSerialDeviceIsRefusedByName) {

@@ -1,9 +1,10 @@
 #pragma once
-// The pulse firmware (firmware/pulses) behind a serial port: a CONFIG frame
-// at start, again whenever a report says the chip has none (it was reset)
-// and once a second; one PULSES frame per write; the firmware's reports
-// read back. A write that finds the device gone makes service() return
-// false: the caller reopens it (a new driver).
+// The pulse firmware (firmware/pulses) behind a serial port: nothing until
+// the firmware's first report names its session (src/link), then a CONFIG
+// frame, again whenever a report says the chip has none (it was reset) and
+// once a second; one PULSES frame per write, for the session the last
+// report named; the firmware's reports read back. A write that finds the device gone makes
+// service() return false: the caller reopens it (a new driver).
 
 #include "output/pulse_driver.hpp"
 
@@ -39,6 +40,9 @@ class SerialPulseDriver : public PulseDriver {
   const mm_link_report& report() const { return report_; }
   std::uint64_t frames_sent() const { return frames_sent_; }
   std::uint64_t write_failures() const { return write_failures_; }
+  std::uint32_t session() const { return session_; }
+  // Sessions the firmware named (its start, then one per link timeout).
+  std::uint64_t sessions() const { return sessions_; }
 
  private:
   bool send(const std::uint8_t* bytes, std::size_t n);
@@ -49,7 +53,9 @@ class SerialPulseDriver : public PulseDriver {
   mm_link_parser parser_{};
   mm_link_report report_{};
   std::uint64_t reports_ = 0;
-  std::uint8_t sequence_ = 1;
+  std::uint32_t session_ = 0;   // the firmware's, from its reports; 0: none heard yet
+  std::uint32_t sequence_ = 0;  // the last one sent in it
+  std::uint64_t sessions_ = 0, held_ = 0;
   double next_config_s_ = 0.0;
   bool resend_config_ = true;
   std::uint64_t frames_sent_ = 0, write_failures_ = 0;
