@@ -217,15 +217,16 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
   const uint16_t lo = (uint16_t)(g_config.min_us * MM_TICKS_PER_US);
   const uint16_t hi = (uint16_t)(g_config.max_us * MM_TICKS_PER_US);
   for (uint8_t k = 0; k < p->count; ++k) {
-    uint16_t t = p->armed ? p->pulse_hus[k] : (uint16_t)(g_config.disarmed_us[k] * MM_TICKS_PER_US);
-    if (p->armed && t < lo) t = lo;
-    if (p->armed && t > hi) t = hi;
+    const uint8_t armed = (uint8_t)((p->armed >> k) & 1u);
+    uint16_t t = armed ? p->pulse_hus[k] : (uint16_t)(g_config.disarmed_us[k] * MM_TICKS_PER_US);
+    if (armed && t < lo) t = lo;
+    if (armed && t > hi) t = hi;
     ticks[k] = t;
   }
   g_writing = 1;
   const uint8_t w = (uint8_t)(1u - g_current);
   mm_schedule_build(ticks, p->count, &g_frame[w]);
-  g_frame_armed[w] = p->armed;
+  g_frame_armed[w] = p->armed != 0u; /* any channel: no configuration meanwhile */
   g_ready = w;
   g_writing = 0;
   g_report.last_sequence = p->sequence;

@@ -102,6 +102,8 @@ const char* pins_name(int8_t p) {
       return "disarmed";
     case output_status_t::PINS_STALE:
       return "disarmed (motor_pwm_t STALE)";
+    case output_status_t::PINS_MOTOR_TEST:
+      return "MOTOR TEST (one pin, the others disarmed)";
     default:
       return "?";
   }

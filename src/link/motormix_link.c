@@ -88,7 +88,8 @@ size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out) {
   b[0] = MM_LINK_PULSES;
   put32(b + 1, p->session);
   put32(b + 5, p->sequence);
-  b[9] = p->armed ? 1u : 0u;
+  if ((p->armed >> p->count) != 0u) return 0; /* a channel beyond the count */
+  b[9] = p->armed;
   b[10] = p->count;
   for (uint8_t i = 0; i < p->count; ++i) put16(b + 11 + 2 * i, p->pulse_hus[i]);
   return frame(out, (uint8_t)MM_LINK_PULSES_BODY(p->count));
@@ -130,7 +131,7 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
   if (type == MM_LINK_PULSES) {
     const uint8_t count = b[10];
     if (count < 1u || count > MM_LINK_MAX_CHANNELS || p->length != MM_LINK_PULSES_BODY(count) ||
-        b[9] > 1u) {
+        (count < 8u && (b[9] >> count) != 0u)) {
       ++p->malformed;
       return 0;
     }

@@ -26,11 +26,13 @@
  *     armed pulse (us), channel count, then one disarmed pulse (us) per
  *     channel. The firmware makes no pulse at all until it has one; it takes
  *     a new one only while its outputs are disarmed.
- *   MM_LINK_PULSES: armed (0/1), count (must equal the configured count),
- *     then count pulse widths in half microseconds (the firmware's timer
- *     resolution: a width of 1234.3 us goes as 2469 and comes out as
- *     1234.5). Not armed: every channel gets its disarmed pulse, whatever
- *     the widths say.
+ *   MM_LINK_PULSES: armed channels (a bit per channel, none beyond the
+ *     count), count (must equal the configured count), then count pulse
+ *     widths in half microseconds (the firmware's timer resolution: a width
+ *     of 1234.3 us goes as 2469 and comes out as 1234.5). A channel whose
+ *     bit is clear gets its disarmed pulse, whatever its width says; an
+ *     armed one its width, clamped into [min, max]. One bit alone is a
+ *     motor test through `motormix output`.
  * MCU -> host
  *   MM_LINK_REPORT (after type: a report counter u8): frames accepted, CRC
  *     errors, malformed frames (u32 each), link timeouts, watchdog resets,
@@ -97,7 +99,7 @@ typedef struct {
 typedef struct {
   uint32_t session;
   uint32_t sequence;
-  uint8_t armed;
+  uint8_t armed; /* bit i: channel i armed */
   uint8_t count;
   uint16_t pulse_hus[MM_LINK_MAX_CHANNELS]; /* half microseconds: 3000 is 1500 us */
 } mm_link_pulses;

@@ -25,6 +25,8 @@ void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t
   msg.setpoint_utime = r.setpoint_utime;
   msg.pid_utime = r.pid_utime;
   msg.failed_motors = static_cast<int32_t>(r.mix.armed ? r.mix.failed : r.failed);
+  msg.bringup_motors =
+      !r.mix.armed && r.motor_test >= 0 ? static_cast<int32_t>(1U << r.motor_test) : 0;
 }
 
 static_assert(mixer_status_t::DETECTOR_TELEMETRY == static_cast<int>(DetectorSources::kTelemetry) &&

@@ -5,12 +5,13 @@
 
 namespace motormix::output {
 
-OutputGate::OutputGate(std::vector<PulseRange> ranges, double timeout_s)
-    : ranges_(std::move(ranges)), timeout_s_(timeout_s) {
+OutputGate::OutputGate(std::vector<PulseRange> ranges, double timeout_s, BringupLimits bringup)
+    : ranges_(std::move(ranges)), timeout_s_(timeout_s), limits_(bringup) {
   if (ranges_.size() > static_cast<std::size_t>(kMaxOutputs)) ranges_.resize(kMaxOutputs);
 }
 
-bool OutputGate::accept(const float* pwm, int count, bool armed, double now_s) {
+bool OutputGate::accept(const float* pwm, int count, bool armed, std::uint32_t bringup,
+                        double now_s) {
   if (count != outputs()) {
     ++counters_.wrong_size;
     return false;
@@ -20,6 +21,14 @@ bool OutputGate::accept(const float* pwm, int count, bool armed, double now_s) {
       ++counters_.not_finite;
       return false;
     }
+  }
+  if (armed) bringup = 0;  // armed values are armed values
+  // One motor of this vehicle, and only with tests enabled here.
+  const bool one_motor =
+      bringup != 0 && (bringup & (bringup - 1U)) == 0 && (count >= 32 || (bringup >> count) == 0);
+  if (bringup != 0 && (!limits_.enabled || !one_motor)) {
+    ++counters_.bringup_refused;
+    return false;
   }
   // Clamping makes sense for a value a little outside the range (another
   // range on the mixer's side, rounding); one further out than the range is
@@ -41,8 +50,27 @@ bool OutputGate::accept(const float* pwm, int count, bool armed, double now_s) {
       ++counters_.clamped;
       v = std::clamp(v, r.low, r.high);
     }
+    if (((bringup >> i) & 1U) != 0) {
+      // From the range's stopped end (the one nearer the disarmed pulse),
+      // at most max_share of the range.
+      const bool low_stops = std::abs(r.disarmed - r.low) <= std::abs(r.disarmed - r.high);
+      const double reach = limits_.max_share * (r.high - r.low);
+      const double lo = low_stops ? r.low : r.high - reach;
+      const double hi = low_stops ? r.low + reach : r.high;
+      if (v < lo || v > hi) {
+        ++counters_.bringup_clamped;
+        v = std::clamp(v, lo, hi);
+      }
+    }
     last_[static_cast<std::size_t>(i)] = v;
   }
+  if (bringup == 0) {
+    bringup_expired_ = false;
+  } else if (bringup != bringup_) {
+    bringup_since_s_ = now_s;  // a test of another motor starts its own time
+    bringup_expired_ = false;
+  }
+  bringup_ = bringup;
   armed_ = armed;
   have_ = true;
   received_s_ = now_s;
@@ -59,12 +87,21 @@ GateState OutputGate::decide(double now_s, double* out) {
     if (!stale_) ++counters_.stale_events;
     stale_ = true;
     state = GateState::kStale;
+  } else if (!armed_ && bringup_ != 0) {
+    if (!bringup_expired_ &&
+        now_s - bringup_since_s_ > limits_.max_seconds + BringupLimits::kGraceS) {
+      bringup_expired_ = true;
+      ++counters_.bringup_refused;
+    }
+    state = bringup_expired_ ? GateState::kDisarmed : GateState::kMotorTest;
   } else if (!armed_) {
     state = GateState::kDisarmed;
   }
   for (int i = 0; i < outputs(); ++i) {
     const auto k = static_cast<std::size_t>(i);
-    out[i] = state == GateState::kArmed ? last_[k] : ranges_[k].disarmed;
+    const bool live = state == GateState::kArmed ||
+                      (state == GateState::kMotorTest && ((bringup_ >> i) & 1U) != 0);
+    out[i] = live ? last_[k] : ranges_[k].disarmed;
   }
   return state;
 }

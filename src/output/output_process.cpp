@@ -101,7 +101,9 @@ class OutputNode {
         publisher_(lcm, policy_),
         driver_(&driver),
         log_(log),
-        gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s),
+        gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s,
+              BringupLimits{config.motor_test.enabled, config.motor_test.max_throttle,
+                            config.motor_test.max_seconds}),
         values_(static_cast<std::size_t>(config.motors())) {}
 
   void subscribe() {
@@ -115,8 +117,11 @@ class OutputNode {
     if (message || state != state_ || now - last_write_s_ >= kKeepAliveS) {
       // No device (lost, being reopened): nothing to write, the chip has
       // disarmed on its own.
-      written_armed_ = driver_ != nullptr && state == GateState::kArmed;
-      if (driver_ != nullptr && !driver_->write(values_.data(), gate_.outputs(), written_armed_))
+      const std::uint32_t mask = state == GateState::kArmed       ? kAllArmed
+                                 : state == GateState::kMotorTest ? gate_.bringup()
+                                                                  : 0U;
+      written_armed_ = driver_ != nullptr ? mask : 0U;
+      if (driver_ != nullptr && !driver_->write(values_.data(), gate_.outputs(), mask))
         ++write_failures_;
       last_write_s_ = now;
     }
@@ -130,7 +135,7 @@ class OutputNode {
   void set_driver(PulseDriver* driver) {
     if (driver != nullptr && driver_ == nullptr) ++reopened_;
     driver_ = driver;
-    if (driver_ == nullptr) written_armed_ = false;
+    if (driver_ == nullptr) written_armed_ = 0;
   }
 
   // Writes the newest message taken since the last call (on_motor_pwm),
@@ -144,8 +149,8 @@ class OutputNode {
   void write_disarmed() {
     for (int i = 0; i < gate_.outputs(); ++i)
       values_[static_cast<std::size_t>(i)] = gate_.range(i).disarmed;
-    if (driver_ != nullptr) driver_->write(values_.data(), gate_.outputs(), false);
-    written_armed_ = false;
+    if (driver_ != nullptr) driver_->write(values_.data(), gate_.outputs(), 0U);
+    written_armed_ = 0;
   }
 
   void status_line() {
@@ -153,7 +158,8 @@ class OutputNode {
     log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
          << " taken, " << bus::describe(refusals_) << "; " << c.wrong_size << " wrong size, "
          << c.out_of_range << " out of range, " << c.not_finite << " not finite, " << c.clamped
-         << " values clamped, " << c.stale_events << " times stale; ";
+         << " values clamped, " << c.stale_events << " times stale, " << c.bringup_refused
+         << " motor tests refused; ";
     if (policy_.signs()) {
       const signing::PolicyCounts& sc = policy_.counts();
       log_ << "signatures: " << sc.signed_accepted << " verified, " << sc.unsigned_accepted
@@ -180,8 +186,12 @@ class OutputNode {
         break;
       case GateState::kArmed:
         // Armed by the gate, but the last write was disarmed (on the way out).
-        msg.pins = written_armed_ ? motormix::output_status_t::PINS_ARMED
-                                  : motormix::output_status_t::PINS_DISARMED;
+        msg.pins = written_armed_ != 0 ? motormix::output_status_t::PINS_ARMED
+                                       : motormix::output_status_t::PINS_DISARMED;
+        break;
+      case GateState::kMotorTest:
+        msg.pins = written_armed_ != 0 ? motormix::output_status_t::PINS_MOTOR_TEST
+                                       : motormix::output_status_t::PINS_DISARMED;
         break;
       case GateState::kDisarmed:
         msg.pins = motormix::output_status_t::PINS_DISARMED;
@@ -202,6 +212,7 @@ class OutputNode {
     msg.refused_out_of_range = count(c.out_of_range);
     msg.clamped = count(c.clamped);
     msg.stale_events = count(c.stale_events);
+    msg.refused_bringup = count(c.bringup_refused);
     msg.write_failures = count(write_failures_);
     msg.telemetry_frames = count(telemetry_frames_);
     msg.device_open = driver_ != nullptr;
@@ -246,7 +257,8 @@ class OutputNode {
     // after a stall, the messages that queued meanwhile are old, and writing
     // each would put a backlog of frames on the serial line ahead of the
     // newest (4 ms for six at 250000 baud).
-    if (gate_.accept(pwm_msg_.pwm.data(), pwm_msg_.num_motors, pwm_msg_.armed, monotonic_s()))
+    if (gate_.accept(pwm_msg_.pwm.data(), pwm_msg_.num_motors, pwm_msg_.armed,
+                     static_cast<std::uint32_t>(pwm_msg_.bringup_motors), monotonic_s()))
       taken_ = true;
   }
 
@@ -265,8 +277,8 @@ class OutputNode {
   bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;
   std::uint64_t telemetry_frames_ = 0;
-  bool written_armed_ = false;  // what the last write put on the pins
-  std::uint64_t reopened_ = 0;  // lost devices opened again
+  std::uint32_t written_armed_ = 0;  // the channels the last write armed
+  std::uint64_t reopened_ = 0;       // lost devices opened again
 };
 
 }  // namespace

@@ -59,7 +59,7 @@ void SerialPulseDriver::send_config() {
   resend_config_ = false;
 }
 
-bool SerialPulseDriver::write(const double* pulse_us, int count, bool armed) {
+bool SerialPulseDriver::write(const double* pulse_us, int count, std::uint32_t armed) {
   if (count != config_.count) return false;
   if (session_ == 0) {
     // Nothing can be taken before the firmware's first report: it is
@@ -70,7 +70,7 @@ bool SerialPulseDriver::write(const double* pulse_us, int count, bool armed) {
   mm_link_pulses p{};
   p.session = session_;
   p.sequence = ++sequence_;
-  p.armed = armed ? 1 : 0;
+  p.armed = static_cast<std::uint8_t>(armed & ((1U << count) - 1U));
   p.count = static_cast<std::uint8_t>(count);
   for (int i = 0; i < count; ++i) p.pulse_hus[i] = us(2.0 * pulse_us[i]);
   std::uint8_t buf[MM_LINK_MAX_FRAME];

@@ -78,7 +78,7 @@ SysfsPwmDriver::~SysfsPwmDriver() {
   for (int fd : duty_fds_) ::close(fd);
 }
 
-bool SysfsPwmDriver::write(const double* pulse_us, int count, bool /*armed*/) {
+bool SysfsPwmDriver::write(const double* pulse_us, int count, std::uint32_t /*armed*/) {
   if (count != static_cast<int>(duty_fds_.size())) return false;
   bool ok = true;
   char text[32];

@@ -32,6 +32,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -488,6 +489,124 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
   EXPECT_GE(matched, armed_periods * kMatchedShare);
   EXPECT_LE(gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
   EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
+}
+
+// Bring-up through the output (issue 49): the mixer's motor test reaches
+// one pin, the others stay disarmed; a test beyond the guards is refused
+// and moves nothing; the ESC calibration's maximum and minimum reach every
+// pin, then disarmed.
+// Periods a second of bring-up must show at least (400 at 400 Hz).
+constexpr int kBringupPeriodsMin = 240;
+
+TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutput) {
+  avr::RealtimeBridge bridge(MOTORMIX_FIRMWARE_ELF);
+  const std::string config = "/tmp/motormix-e2e-bringup-" + std::to_string(::getpid()) + ".yaml";
+  constexpr double kStoppedUs = 950.0;  // disarmed, apart from the armed minimum (1000)
+  std::ofstream(config) << "name: e2e-bringup\n"
+                           "geometry: {preset: quad_x}\n"
+                           "output: {min: 1000, max: 2000, disarmed: 950}\n"
+                           "motor_test: {max_throttle: 0.15, max_seconds: 3}\n"
+                           "hardware:\n"
+                           "  driver: serial\n"
+                           "  pulse_rate_hz: 400\n"
+                           "  serial: {device: "
+                        << bridge.device() << "}\n";
+  ChildProcess output({motormix_binary(), "output", "--config", config},
+                      "/tmp/motormix-e2e-bringup-output.log");
+  auto mixer = std::make_unique<ChildProcess>(
+      std::vector<std::string>{motormix_binary(), "run", "--config", config},
+      "/tmp/motormix-e2e-bringup-run.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  bridge.take_pulses();
+  const auto near = [](double a, double b) { return std::abs(a - b) <= kPulseToleranceUs; };
+  // Widths seen per channel in a stretch of periods: how many periods had
+  // channel `ch` at `width`, and how many had any other channel off kStoppedUs.
+  struct Seen {
+    int at = 0, others_moved = 0, periods = 0;
+  };
+  const auto seen = [&](const std::vector<Period>& periods, int ch, double width) {
+    Seen s;
+    for (const Period& p : periods) {
+      ++s.periods;
+      for (const auto& [c, w] : p.width) {
+        if (c == ch && near(w, width)) ++s.at;
+        if (c != ch && !near(w, kStoppedUs)) ++s.others_moved;
+      }
+    }
+    return s;
+  };
+
+  // Motor 2 at 10 %: 1100 us on its pin for about a second.
+  ChildProcess test({motormix_binary(), "motor-test", "--config", config, "--motor", "2",
+                     "--throttle", "0.1", "--seconds", "1"},
+                    "/tmp/motormix-e2e-bringup-test.log");
+  EXPECT_EQ(test.wait_for(std::chrono::seconds(8)), 0);  // once the mixer has started it
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const Seen spun = seen(periods_of(bridge.take_pulses()), 1, 1100.0);
+  std::printf(
+      "motor test through the output: %d of %d periods with motor 2 at 1100 us, "
+      "%d with another channel off its disarmed pulse\n",
+      spun.at, spun.periods, spun.others_moved);
+  // 1 s at 400 Hz; measured 280-320 periods (the request's way through the
+  // bus and the mixer, the chip's pace against the wall clock).
+  EXPECT_GE(spun.at, kBringupPeriodsMin);
+  EXPECT_EQ(spun.others_moved, 0);
+
+  // Beyond the guard (motor_test.max_throttle 0.15): refused, nothing moves.
+  ChildProcess refused({motormix_binary(), "motor-test", "--config", config, "--motor", "3",
+                        "--throttle", "0.5", "--seconds", "1"},
+                       "/tmp/motormix-e2e-bringup-refused.log");
+  const std::optional<int> refused_exit = refused.wait_for(std::chrono::seconds(8));
+  ASSERT_TRUE(refused_exit.has_value());
+  EXPECT_NE(*refused_exit, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const Seen still = seen(periods_of(bridge.take_pulses()), 2, kStoppedUs);
+  EXPECT_EQ(still.others_moved, 0);
+  EXPECT_EQ(still.at, still.periods) << "motor 3 moved on a refused test";
+
+  // The ESC calibration, with no mixer on the bus: maximum on every pin,
+  // Enter, minimum, disarmed.
+  mixer->signal(SIGTERM);
+  EXPECT_EQ(mixer->wait_for(std::chrono::seconds(3)), 0);
+  mixer.reset();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // the mixer's last words are old
+  bridge.take_pulses();
+  ChildProcess calibrate(
+      {"/bin/sh", "-c",
+       "(sleep 2.5; echo) | '" + std::string(motormix_binary()) + "' esc-calibrate --config '" +
+           config + "' --props-off --min-seconds 1"},
+      "/tmp/motormix-e2e-bringup-calibrate.log");
+  EXPECT_EQ(calibrate.wait_for(std::chrono::seconds(15)), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  int at_max = 0, at_min = 0, after = 0, stopped_after = 0;
+  bool min_seen = false;
+  for (const Period& p : periods_of(bridge.take_pulses())) {
+    const bool all_max = std::all_of(p.width.begin(), p.width.end(),
+                                     [&](const auto& w) { return near(w.second, 2000.0); });
+    const bool all_min = std::all_of(p.width.begin(), p.width.end(),
+                                     [&](const auto& w) { return near(w.second, 1000.0); });
+    const bool all_stopped = std::all_of(p.width.begin(), p.width.end(),
+                                         [&](const auto& w) { return near(w.second, kStoppedUs); });
+    at_max += all_max && !min_seen ? 1 : 0;
+    if (all_min) {
+      min_seen = true;
+      ++at_min;
+    } else if (min_seen) {
+      ++after;
+      stopped_after += all_stopped ? 1 : 0;
+    }
+  }
+  std::printf(
+      "ESC calibration through the output: %d periods at the maximum, %d at the minimum, "
+      "%d after (%d disarmed)\n",
+      at_max, at_min, after, stopped_after);
+  EXPECT_GE(at_max, kBringupPeriodsMin);  // about 1.5 s at the maximum (measured 597)
+  EXPECT_GE(at_min, kBringupPeriodsMin);  // --min-seconds 1 (measured 299-300)
+  EXPECT_GT(after, 0);
+  EXPECT_EQ(stopped_after, after);
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(std::chrono::seconds(3)), 0);
+  std::remove(config.c_str());
 }
 
 }  // namespace

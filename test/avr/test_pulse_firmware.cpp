@@ -79,7 +79,7 @@ class Host {
     mm_link_pulses p{};
     p.session = session;
     p.sequence = seq++;
-    p.armed = armed ? 1 : 0;
+    p.armed = armed ? static_cast<std::uint8_t>((1u << widths.size()) - 1u) : 0;
     p.count = static_cast<std::uint8_t>(widths.size());
     for (std::size_t i = 0; i < widths.size(); ++i)
       p.pulse_hus[i] = static_cast<std::uint16_t>(std::lround(2.0 * widths[i]));
@@ -195,6 +195,35 @@ TEST(PulseFirmware, ArmedPulsesAreTheWidthsAskedForWithinOneMicrosecond) {
   EXPECT_EQ(r.frames, sets.size());
   EXPECT_EQ(r.crc_errors + r.malformed + r.rejected, 0u);
   EXPECT_TRUE(r.flags & MM_LINK_FLAG_ARMED);
+}
+
+// One channel armed (a motor test through motormix output): its width,
+// clamped into [min, max]; every other channel its disarmed pulse, not the
+// armed minimum.
+TEST(PulseFirmware, OneArmedChannelAloneIsAMotorTest) {
+  Host h;
+  mm_link_config c = h.config(4, 2500, 950);
+  h.send_config(c);
+  h.board.run_for_us(10000);
+  const std::vector<double> widths = {1700, 1120, 1800, 1900};
+  for (int i = 0; i < 6; ++i) {
+    std::vector<std::uint8_t> f = h.pulses_frame(widths, true);
+    // The armed byte (after sync, length, type, session, sequence): channel 1 alone.
+    f[3 + 9] = 0x2;
+    const std::uint32_t crc = mm_link_crc32(0, f.data() + 2, f.size() - 6);
+    for (int b = 0; b < 4; ++b) f[f.size() - 4 + b] = static_cast<std::uint8_t>(crc >> (8 * b));
+    h.board.send(f);
+    h.board.run_for_us(kPeriodUs);
+  }
+  h.board.take_pulses();
+  h.board.run_for_us(2 * kPeriodUs);
+  const std::map<int, double> w = Host::last_widths(h.board.take_pulses());
+  EXPECT_NEAR(w.at(0), 950.0, kExactToleranceUs);
+  EXPECT_NEAR(w.at(1), 1120.0, kExactToleranceUs);
+  EXPECT_NEAR(w.at(2), 950.0, kExactToleranceUs);
+  EXPECT_NEAR(w.at(3), 950.0, kExactToleranceUs);
+  h.board.run_for_us(60000);
+  EXPECT_TRUE(h.last_report().flags & MM_LINK_FLAG_ARMED);  // a configuration would be refused
 }
 
 TEST(PulseFirmware, EightChannelsAtFiftyHertz) {

@@ -99,17 +99,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     now += 0.0025;
     if (take(msg, len, pwm, counts)) {
       consistent(pwm);
-      gate.accept(pwm.pwm.data(), pwm.num_motors, pwm.armed, now);
+      gate.accept(pwm.pwm.data(), pwm.num_motors, pwm.armed,
+                  static_cast<std::uint32_t>(pwm.bringup_motors), now);
     }
     double out[4];
     const output::GateState state = gate.decide(now, out);
     for (int i = 0; i < gate.outputs(); ++i) {
       const output::PulseRange& r = gate.range(i);
       if (!std::isfinite(out[i])) violation("pin value not finite");
+      const bool tested = state == output::GateState::kMotorTest && ((gate.bringup() >> i) & 1U);
+      // A motor test: within the default max_throttle (0.15) of the range
+      // from its stopped end.
+      const double reach = output::BringupLimits{}.max_share * (r.high - r.low) + 1e-9;
       if (state == output::GateState::kArmed ? (out[i] < r.low || out[i] > r.high)
+          : tested                           ? (out[i] < r.low || out[i] > r.low + reach)
                                              : out[i] != r.disarmed)
         violation("pin value outside its range, or not disarmed");
     }
+    if (state == output::GateState::kMotorTest &&
+        (gate.bringup() == 0 || (gate.bringup() & (gate.bringup() - 1U)) != 0))
+      violation("a motor test on no motor or on several");
 #elif defined(MOTORMIX_FUZZ_MONITOR)
     if (channel == 0 && take(msg, len, status, counts) && bringup::monitor_shows(status))
       snap.status = status;

@@ -39,7 +39,7 @@ TEST(BusReceive, MeasuredSizesAreTheLcmFilesArithmetic) {
   // Written out from the .lcm files, independently of the encoder:
   // fingerprint 8, then each field's bytes.
   const auto& pwm = bus::detail::MeasuredSize<motor_pwm_t>::get();
-  EXPECT_EQ(pwm.fixed, 8 + 8 + 4 + 1 + 8 + 8 + 4);
+  EXPECT_EQ(pwm.fixed, 8 + 8 + 4 + 1 + 8 + 8 + 4 + 4);
   EXPECT_EQ(pwm.per_element, 4 + 4 + 1);
   const auto& esc = bus::detail::MeasuredSize<esc_telemetry_t>::get();
   EXPECT_EQ(esc.fixed, 8 + 8 + 4);

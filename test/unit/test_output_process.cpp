@@ -45,7 +45,7 @@ TEST(OutputGate, DisarmedAtStartOnArmedFalseAndWhenStale) {
   EXPECT_EQ(out[2], 1050);
   EXPECT_EQ(out[3], 900);
   const float armed[4] = {1500, 1600, 1700, 1800};
-  ASSERT_TRUE(gate.accept(armed, 4, true, 1.0));
+  ASSERT_TRUE(gate.accept(armed, 4, true, 0, 1.0));
   EXPECT_EQ(gate.decide(1.0, out), output::GateState::kArmed);
   EXPECT_EQ(out[1], 1600);
   EXPECT_EQ(gate.decide(1.0 + kGateTimeoutS * 0.99, out), output::GateState::kArmed);
@@ -53,16 +53,76 @@ TEST(OutputGate, DisarmedAtStartOnArmedFalseAndWhenStale) {
   EXPECT_EQ(out[0], 1000);
   EXPECT_EQ(gate.decide(2.0, out), output::GateState::kStale);
   EXPECT_EQ(gate.counters().stale_events, 1u);  // counted once per loss
-  ASSERT_TRUE(gate.accept(armed, 4, false, 3.0));
+  ASSERT_TRUE(gate.accept(armed, 4, false, 0, 3.0));
   EXPECT_EQ(gate.decide(3.0, out), output::GateState::kDisarmed);
   EXPECT_EQ(out[1], 1000);
+}
+
+// The mixer's motor test through the output: one motor's value reaches its
+// pin within this process's own limits, the others stay disarmed; refused
+// without its guards.
+TEST(OutputGate, AMotorTestReachesOnePinWithinTheOutputsOwnLimits) {
+  output::BringupLimits limits;
+  limits.max_share = 0.15;
+  limits.max_seconds = 2.0;
+  output::OutputGate gate(
+      {{1000, 2000, 1000}, {1000, 2000, 1000}, {1100, 1900, 1050}, {1000, 2000, 900}},
+      kGateTimeoutS, limits);
+  double out[4];
+  // Motor 2 at 10 %: 1100 us; the others' values are ignored (disarmed).
+  const float test[4] = {1000, 1100, 1500, 1900};
+  ASSERT_TRUE(gate.accept(test, 4, false, 1U << 1, 0.0));
+  EXPECT_EQ(gate.decide(0.0, out), output::GateState::kMotorTest);
+  EXPECT_EQ(gate.bringup(), 1U << 1);
+  EXPECT_EQ(out[0], 1000);
+  EXPECT_EQ(out[1], 1100);
+  EXPECT_EQ(out[2], 1050);
+  EXPECT_EQ(out[3], 900);
+  // Above max_throttle of the range: clamped to it (1150 us), counted.
+  const float high[4] = {1000, 1900, 1050, 900};
+  ASSERT_TRUE(gate.accept(high, 4, false, 1U << 1, 0.01));
+  gate.decide(0.01, out);
+  EXPECT_EQ(out[1], 1150);
+  EXPECT_EQ(gate.counters().bringup_clamped, 1u);
+  // Two motors at once, or a motor the vehicle does not have: refused.
+  EXPECT_FALSE(gate.accept(test, 4, false, 0b11U, 0.02));
+  EXPECT_FALSE(gate.accept(test, 4, false, 1U << 4, 0.02));
+  EXPECT_EQ(gate.counters().bringup_refused, 2u);
+  // Stale: disarmed, as any message.
+  EXPECT_EQ(gate.decide(0.01 + kGateTimeoutS * 1.01, out), output::GateState::kStale);
+  EXPECT_EQ(out[1], 1000);
+  // Longer than max_seconds (and its grace) while the messages keep coming:
+  // disarmed until a message without the test.
+  double t = 1.0;
+  for (; t < 1.0 + limits.max_seconds + output::BringupLimits::kGraceS + 0.1; t += 0.01) {
+    ASSERT_TRUE(gate.accept(test, 4, false, 1U << 1, t));
+    gate.decide(t, out);
+  }
+  EXPECT_EQ(gate.decide(t, out), output::GateState::kDisarmed);
+  EXPECT_EQ(out[1], 1000);
+  const float disarmed[4] = {1000, 1000, 1050, 900};
+  ASSERT_TRUE(gate.accept(disarmed, 4, false, 0, t + 0.01));
+  ASSERT_TRUE(gate.accept(test, 4, false, 1U << 1, t + 0.02));
+  EXPECT_EQ(gate.decide(t + 0.02, out), output::GateState::kMotorTest);
+  // Armed messages are armed values: the mask means nothing then.
+  const float armed[4] = {1500, 1600, 1700, 1800};
+  ASSERT_TRUE(gate.accept(armed, 4, true, 1U << 1, t + 0.03));
+  EXPECT_EQ(gate.decide(t + 0.03, out), output::GateState::kArmed);
+  EXPECT_EQ(out[1], 1600);
+  // Motor tests disabled in the output's configuration: refused.
+  output::BringupLimits off;
+  off.enabled = false;
+  output::OutputGate closed({{1000, 2000, 1000}}, kGateTimeoutS, off);
+  const float one[1] = {1100};
+  EXPECT_FALSE(closed.accept(one, 1, false, 1U, 0.0));
+  EXPECT_EQ(closed.decide(0.0, out), output::GateState::kStarting);
 }
 
 TEST(OutputGate, ClampsArmedValuesAndRefusesWrongSizesAndNonFiniteValues) {
   output::OutputGate gate = quad_gate();
   double out[4];
   const float wide[4] = {900, 2500, 1000, 1500};
-  ASSERT_TRUE(gate.accept(wide, 4, true, 0.0));
+  ASSERT_TRUE(gate.accept(wide, 4, true, 0, 0.0));
   gate.decide(0.0, out);
   EXPECT_EQ(out[0], 1000);
   EXPECT_EQ(out[1], 2000);
@@ -70,14 +130,14 @@ TEST(OutputGate, ClampsArmedValuesAndRefusesWrongSizesAndNonFiniteValues) {
   EXPECT_EQ(gate.counters().clamped, 3u);
   const float nan[4] = {1500, std::numeric_limits<float>::quiet_NaN(), 1500, 1500};
   const float inf[4] = {1500, 1500, std::numeric_limits<float>::infinity(), 1500};
-  EXPECT_FALSE(gate.accept(nan, 4, true, 0.01));
-  EXPECT_FALSE(gate.accept(inf, 4, true, 0.01));
-  EXPECT_FALSE(gate.accept(wide, 3, true, 0.01));
+  EXPECT_FALSE(gate.accept(nan, 4, true, 0, 0.01));
+  EXPECT_FALSE(gate.accept(inf, 4, true, 0, 0.01));
+  EXPECT_FALSE(gate.accept(wide, 3, true, 0, 0.01));
   // Further out than the range is wide: refused, not clamped to full thrust.
   const float huge[4] = {1500, 1e30f, 1500, 1500};
   const float below[4] = {1500, 1500, 1500, -1e30f};
-  EXPECT_FALSE(gate.accept(huge, 4, true, 0.01));
-  EXPECT_FALSE(gate.accept(below, 4, true, 0.01));
+  EXPECT_FALSE(gate.accept(huge, 4, true, 0, 0.01));
+  EXPECT_FALSE(gate.accept(below, 4, true, 0, 0.01));
   EXPECT_EQ(gate.counters().out_of_range, 2u);
   EXPECT_EQ(gate.counters().not_finite, 2u);
   EXPECT_EQ(gate.counters().wrong_size, 1u);
@@ -172,14 +232,14 @@ TEST(SysfsPwm, ExportsThenSetsPeriodDutyAndEnableInTheKernelsOrder) {
   EXPECT_EQ(writes, expected);
   writes.clear();
   const double pulses[2] = {1234.567, 1999.9996};
-  ASSERT_TRUE(driver.write(pulses, 2, true));
+  ASSERT_TRUE(driver.write(pulses, 2, output::kAllArmed));
   EXPECT_EQ(tree.read(2, "duty_cycle"), "1234567");
   EXPECT_EQ(tree.read(5, "duty_cycle"), "2000000");
   ASSERT_EQ(writes.size(), 2u);  // duty_cycle only, once set up
   const double disarmed[2] = {1000.0, 1100.0};
-  ASSERT_TRUE(driver.write(disarmed, 2, false));
+  ASSERT_TRUE(driver.write(disarmed, 2, 0));
   EXPECT_EQ(tree.read(2, "duty_cycle"), "1000000");  // a shorter value leaves no tail
-  EXPECT_FALSE(driver.write(disarmed, 1, false));    // wrong count
+  EXPECT_FALSE(driver.write(disarmed, 1, 0));        // wrong count
 }
 
 TEST(SysfsPwm, AMissingChipOrAChannelThatNeverAppearsIsAnErrorNamingThePath) {
@@ -271,7 +331,7 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   };
   // Before the firmware's first report nothing goes: it has not named its
   // session, and a frame for no session would be refused.
-  ASSERT_TRUE(driver.write(pulses, 4, true));
+  ASSERT_TRUE(driver.write(pulses, 4, output::kAllArmed));
   ASSERT_TRUE(driver.service(0.0));
   EXPECT_TRUE(pty.frames(1, 50).empty());
   EXPECT_NE(driver.describe().find("1 held"), std::string::npos) << driver.describe();
@@ -280,7 +340,7 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   pty.report(0, 0x20001, 0);
   serve_until_report(1, 0.0);
   EXPECT_EQ(driver.session(), 0x20001u);
-  ASSERT_TRUE(driver.write(pulses, 4, true));
+  ASSERT_TRUE(driver.write(pulses, 4, output::kAllArmed));
   std::vector<mm_link_frame> got = pty.frames(2);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
@@ -291,7 +351,12 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   EXPECT_EQ(got[1].type, MM_LINK_PULSES);
   EXPECT_EQ(got[1].u.pulses.session, 0x20001u);
   EXPECT_EQ(got[1].u.pulses.sequence, 2u);
-  EXPECT_EQ(got[1].u.pulses.armed, 1);
+  EXPECT_EQ(got[1].u.pulses.armed, 0xF);  // every channel
+  // A motor test: the one channel armed, bits beyond the count dropped.
+  ASSERT_TRUE(driver.write(pulses, 4, 0xF4U));
+  const std::vector<mm_link_frame> one = pty.frames(1);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one[0].u.pulses.armed, 0x4);
   EXPECT_EQ(got[1].u.pulses.pulse_hus[0], 2469);  // 1234.5 us: the nearest half microsecond
   EXPECT_EQ(got[1].u.pulses.pulse_hus[2], 3501);
   EXPECT_EQ(got[1].u.pulses.pulse_hus[3], 4000);
@@ -304,7 +369,7 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   // last sequence the chip took.
   pty.report(MM_LINK_FLAG_CONFIGURED | MM_LINK_FLAG_TIMED_OUT, 0x20002, 0);
   serve_until_report(3, 0.3);
-  ASSERT_TRUE(driver.write(pulses, 4, false));
+  ASSERT_TRUE(driver.write(pulses, 4, 0));
   got = pty.frames(1);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].u.pulses.session, 0x20002u);

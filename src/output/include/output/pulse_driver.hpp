@@ -17,11 +17,16 @@ struct FirmwareReport {
   std::uint8_t flags = 0;  // output_status_t FIRMWARE_* bits
 };
 
+// Every channel armed (write's mask).
+inline constexpr std::uint32_t kAllArmed = 0xFFFFFFFFU;
+
 class PulseDriver {
  public:
   virtual ~PulseDriver() = default;
   // False when the hardware refused the values (counted by the caller).
-  virtual bool write(const double* pulse_us, int count, bool armed) = 0;
+  // armed: bit i set when pulse i is an armed value (the firmware clamps it
+  // into the armed range), clear when it is the channel's disarmed pulse.
+  virtual bool write(const double* pulse_us, int count, std::uint32_t armed) = 0;
   // Work between writes (reading the firmware's reports); false on a lost
   // device.
   virtual bool service(double now_s) {

@@ -30,7 +30,7 @@ class SerialPulseDriver : public PulseDriver {
   SerialPulseDriver(int fd, const SerialPulseSettings& settings);
   ~SerialPulseDriver() override;
 
-  bool write(const double* pulse_us, int count, bool armed) override;
+  bool write(const double* pulse_us, int count, std::uint32_t armed) override;
   bool service(double now_s) override;
   std::string describe() const override;
   std::optional<FirmwareReport> firmware_report() const override;

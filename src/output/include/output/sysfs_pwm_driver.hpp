@@ -33,7 +33,7 @@ class SysfsPwmDriver : public PulseDriver {
   SysfsPwmDriver(const SysfsPwmDriver&) = delete;
   SysfsPwmDriver& operator=(const SysfsPwmDriver&) = delete;
 
-  bool write(const double* pulse_us, int count, bool armed) override;
+  bool write(const double* pulse_us, int count, std::uint32_t armed) override;
   std::string describe() const override;
 
  private:
