@@ -101,6 +101,23 @@ class Host {
     }
     return report;
   }
+  // Runs until everything sent is in, then takes the pulses since: how many
+  // of them are off `widths` by more than the bound (each printed), and
+  // adds their number to `pulses`. `what` and `k` name the frame just sent.
+  int drain_and_count_changed(const std::vector<double>& widths, int& pulses, const char* what,
+                              int k) {
+    while (board.sending()) board.run_for_us(200);
+    int changed = 0;
+    for (const Pulse& p : board.take_pulses()) {
+      ++pulses;
+      if (std::abs(p.width_us - widths[static_cast<std::size_t>(p.channel)]) > kPulseToleranceUs) {
+        ++changed;
+        std::printf("after %s frame %d: channel %d pulse %.3f us\n", what, k, p.channel,
+                    p.width_us);
+      }
+    }
+    return changed;
+  }
   // The widths of each channel's last complete pulse.
   static std::map<int, double> last_widths(const std::vector<Pulse>& pulses) {
     std::map<int, double> w;
@@ -339,16 +356,7 @@ TEST(PulseFirmwareReplay, FramesFromBeforeALinkTimeoutMoveNoPulse) {
   for (int k = 0; k < frames; ++k) {
     h.board.send(recorded[rng() % recorded.size()]);
     if (k % 4 == 3) h.send_pulses(widths);
-    while (h.board.sending()) h.board.run_for_us(200);
-    for (const Pulse& p : h.board.take_pulses()) {
-      ++pulses;
-      if (std::abs(p.width_us - widths[static_cast<std::size_t>(p.channel)]) > kPulseToleranceUs) {
-        ++changed;
-        if (changed < 10)
-          std::printf("after replayed frame %d: channel %d pulse %.3f us\n", k, p.channel,
-                      p.width_us);
-      }
-    }
+    changed += h.drain_and_count_changed(widths, pulses, "replayed", k);
   }
   h.board.run_for_us(60000);
   const mm_link_report r = h.last_report();
@@ -495,15 +503,7 @@ TEST(PulseFirmwareCorruption, CorruptedFramesNeverChangeAPulseAndAreCounted) {
       old = h.pulses_frame(widths, true);
       h.board.send(old);
     }
-    while (h.board.sending()) h.board.run_for_us(200);
-    for (const Pulse& p : h.board.take_pulses()) {
-      ++pulses;
-      if (std::abs(p.width_us - widths[p.channel]) > kPulseToleranceUs) {
-        ++changed;
-        std::printf("after corrupted frame %d: channel %d pulse %.3f us\n", k, p.channel,
-                    p.width_us);
-      }
-    }
+    changed += h.drain_and_count_changed(widths, pulses, "corrupted", k);
   }
   h.board.run_for_us(60000);
   const mm_link_report r = h.last_report();
