@@ -5,6 +5,11 @@
 
 namespace motormix::output {
 
+namespace {
+// A disarmed pulse this close to an end of the range stops the motor there.
+constexpr double kEndUs = 1.0;
+}  // namespace
+
 OutputGate::OutputGate(std::vector<PulseRange> ranges, double timeout_s, BringupLimits bringup)
     : ranges_(std::move(ranges)), timeout_s_(timeout_s), limits_(bringup) {
   if (ranges_.size() > static_cast<std::size_t>(kMaxOutputs)) ranges_.resize(kMaxOutputs);
@@ -51,12 +56,16 @@ bool OutputGate::accept(const float* pwm, int count, bool armed, std::uint32_t b
       v = std::clamp(v, r.low, r.high);
     }
     if (((bringup >> i) & 1U) != 0) {
-      // From the range's stopped end (the one nearer the disarmed pulse),
-      // at most max_share of the range.
+      // At most max_share of the way from where the motor stops: the end of
+      // the range nearer the disarmed pulse, or, for a reversible drive
+      // whose disarmed pulse is inside the range (centered), that pulse,
+      // either way by max_share of a half range.
+      const double span = r.high - r.low;
+      const bool centered = r.disarmed > r.low + kEndUs && r.disarmed < r.high - kEndUs;
       const bool low_stops = std::abs(r.disarmed - r.low) <= std::abs(r.disarmed - r.high);
-      const double reach = limits_.max_share * (r.high - r.low);
-      const double lo = low_stops ? r.low : r.high - reach;
-      const double hi = low_stops ? r.low + reach : r.high;
+      const double reach = limits_.max_share * (centered ? span / 2.0 : span);
+      const double lo = centered ? r.disarmed - reach : low_stops ? r.low : r.high - reach;
+      const double hi = centered ? r.disarmed + reach : low_stops ? r.low + reach : r.high;
       if (v < lo || v > hi) {
         ++counters_.bringup_clamped;
         v = std::clamp(v, lo, hi);

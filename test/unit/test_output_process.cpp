@@ -109,6 +109,19 @@ TEST(OutputGate, AMotorTestReachesOnePinWithinTheOutputsOwnLimits) {
   ASSERT_TRUE(gate.accept(armed, 4, true, 1U << 1, t + 0.03));
   EXPECT_EQ(gate.decide(t + 0.03, out), output::GateState::kArmed);
   EXPECT_EQ(out[1], 1600);
+  // A reversible drive stopped at the middle of its range: max_share of a
+  // half range either way (1425..1575 us), never an end.
+  output::OutputGate centered({{1000, 2000, 1500}}, kGateTimeoutS, limits);
+  const float forward[1] = {1550}, far_forward[1] = {1900}, far_back[1] = {1000};
+  ASSERT_TRUE(centered.accept(forward, 1, false, 1U, 0.0));
+  centered.decide(0.0, out);
+  EXPECT_EQ(out[0], 1550);
+  ASSERT_TRUE(centered.accept(far_forward, 1, false, 1U, 0.01));
+  centered.decide(0.01, out);
+  EXPECT_EQ(out[0], 1575);
+  ASSERT_TRUE(centered.accept(far_back, 1, false, 1U, 0.02));
+  centered.decide(0.02, out);
+  EXPECT_EQ(out[0], 1425);
   // Motor tests disabled in the output's configuration: refused.
   output::BringupLimits off;
   off.enabled = false;

@@ -14,7 +14,8 @@
 // that motor's pin within this process's own limits, the others stay
 // disarmed: only with motor_test.enabled in its configuration, one motor
 // at a time, the value clamped to motor_test.max_throttle of the range
-// from its stopped end, and for motor_test.max_seconds (plus a grace for
+// from its stopped end (of half the range either way around a disarmed
+// pulse inside it: a reversible drive), and for motor_test.max_seconds (plus a grace for
 // the mixer's own end) at most: then disarmed until a message without it.
 // The staleness timeout and the failsafe chain stay as they are.
 
