@@ -27,7 +27,7 @@ void ReferenceComparer::on_output(const motor_pwm_t& out, std::uint8_t limited, 
 
 void ReferenceComparer::on_reference(const void* data, int size, double t_s) {
   ++result_.references;
-  motor_pwm_t ref;
+  motor_pwm_t ref{};
   if (ref.decode(data, 0, size) != size || ref.num_motors != motors_ ||
       ref.command.size() != static_cast<std::size_t>(motors_)) {
     ++result_.unpaired;

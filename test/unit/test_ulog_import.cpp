@@ -82,13 +82,13 @@ TEST(UlogImport, TheSharedFlightBecomesMotormixsInputsAndPx4sOutputs) {
     previous = ev->timestamp;
     const int size = static_cast<int>(ev->data.size());
     if (ev->channel == "SETPOINT") {
-      setpoint_t sp;
+      setpoint_t sp{};
       ASSERT_EQ(sp.decode(ev->data.data(), 0, size), size);
       EXPECT_EQ(sp.utime, ev->timestamp);
       armed += sp.armed ? 1 : 0;
       max_throttle = std::max(max_throttle, static_cast<double>(sp.throttle));
     } else if (ev->channel == "ESC_TELEMETRY") {
-      esc_telemetry_t m;
+      esc_telemetry_t m{};
       ASSERT_EQ(m.decode(ev->data.data(), 0, size), size);
       // The SITL reports six ESCs, two of them on outputs that are not
       // motors (functions 45, 46): only the four motors are kept.
@@ -169,7 +169,7 @@ TEST(UlogImport, TheDetectorOverTheFlightDeclaresNothingAndFindsAStoppedMotor) {
     lcmlog::LogReader r(out);
     while (const lcmlog::LogEventView* ev = r.next()) {
       if (ev->channel != "MIXER_STATUS") continue;
-      mixer_status_t st;
+      mixer_status_t st{};
       const int size = static_cast<int>(ev->data.size());
       ASSERT_EQ(st.decode(ev->data.data(), 0, size), size);
       sources |= static_cast<std::uint8_t>(st.detector_sources);
@@ -189,7 +189,7 @@ TEST(UlogImport, TheDetectorOverTheFlightDeclaresNothingAndFindsAStoppedMotor) {
     std::int64_t first = -1;
     while (const lcmlog::LogEventView* ev = r.next()) {
       if (first < 0) first = ev->timestamp;
-      esc_telemetry_t m;
+      esc_telemetry_t m{};
       const int size = static_cast<int>(ev->data.size());
       if (ev->channel == "ESC_TELEMETRY" && ev->timestamp - first > 20'000'000 &&
           m.decode(ev->data.data(), 0, size) == size) {
@@ -207,7 +207,7 @@ TEST(UlogImport, TheDetectorOverTheFlightDeclaresNothingAndFindsAStoppedMotor) {
   {
     lcmlog::LogReader r(out);
     while (const lcmlog::LogEventView* ev = r.next()) {
-      motor_pwm_t p;
+      motor_pwm_t p{};
       const int size = static_cast<int>(ev->data.size());
       if (ev->channel == "MOTOR_PWM" && p.decode(ev->data.data(), 0, size) == size)
         motor3 = motor3 || p.failed_motors == (1 << 2);
