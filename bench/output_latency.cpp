@@ -53,7 +53,7 @@ struct Relay {
       return;
     mm_link_pulses p{};
     p.sequence = seq++;
-    p.armed = m.armed ? static_cast<std::uint8_t>((1u << m.num_motors) - 1u) : 0;
+    p.armed = static_cast<std::uint8_t>(m.armed ? (1u << m.num_motors) - 1u : 0u);
     p.count = static_cast<std::uint8_t>(m.num_motors);
     for (int i = 0; i < m.num_motors; ++i)
       p.pulse_hus[i] =

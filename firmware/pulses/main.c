@@ -217,7 +217,7 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
   const uint16_t lo = (uint16_t)(g_config.min_us * MM_TICKS_PER_US);
   const uint16_t hi = (uint16_t)(g_config.max_us * MM_TICKS_PER_US);
   for (uint8_t k = 0; k < p->count; ++k) {
-    const uint8_t armed = (uint8_t)((p->armed >> k) & 1u);
+    const uint8_t armed = (uint8_t)(((unsigned)p->armed >> k) & 1u);
     uint16_t t = armed ? p->pulse_hus[k] : (uint16_t)(g_config.disarmed_us[k] * MM_TICKS_PER_US);
     if (armed && t < lo) t = lo;
     if (armed && t > hi) t = hi;

@@ -493,8 +493,8 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
 
 // Bring-up through the output (issue 49): the mixer's motor test reaches
 // one pin, the others stay disarmed; a test beyond the guards is refused
-// and moves nothing; the ESC calibration's maximum and minimum reach every
-// pin, then disarmed.
+// and moves nothing, and so is a calibration while a mixer runs; the ESC
+// calibration's maximum and minimum reach every pin, then disarmed.
 // Periods a second of bring-up must show at least (400 at 400 Hz).
 constexpr int kBringupPeriodsMin = 240;
 
@@ -563,6 +563,20 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
   const Seen still = seen(periods_of(bridge.take_pulses()), 2, kStoppedUs);
   EXPECT_EQ(still.others_moved, 0);
   EXPECT_EQ(still.at, still.periods) << "motor 3 moved on a refused test";
+
+  // The ESC calibration while a mixer runs: refused as it listens, nothing
+  // moves.
+  ChildProcess busy({"/bin/sh", "-c",
+                     "(sleep 5; echo) | '" + std::string(motormix_binary()) +
+                         "' esc-calibrate --config '" + config + "' --props-off --min-seconds 1"},
+                    "/tmp/motormix-e2e-bringup-busy.log");
+  const std::optional<int> busy_exit = busy.wait_for(std::chrono::seconds(8));
+  ASSERT_TRUE(busy_exit.has_value());
+  EXPECT_NE(*busy_exit, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const Seen quiet = seen(periods_of(bridge.take_pulses()), 0, kStoppedUs);
+  EXPECT_EQ(quiet.others_moved, 0);
+  EXPECT_EQ(quiet.at, quiet.periods) << "a pin moved on a refused calibration";
 
   // The ESC calibration, with no mixer on the bus: maximum on every pin,
   // Enter, minimum, disarmed.

@@ -79,7 +79,7 @@ class Host {
     mm_link_pulses p{};
     p.session = session;
     p.sequence = seq++;
-    p.armed = armed ? static_cast<std::uint8_t>((1u << widths.size()) - 1u) : 0;
+    p.armed = static_cast<std::uint8_t>(armed ? (1u << widths.size()) - 1u : 0u);
     p.count = static_cast<std::uint8_t>(widths.size());
     for (std::size_t i = 0; i < widths.size(); ++i)
       p.pulse_hus[i] = static_cast<std::uint16_t>(std::lround(2.0 * widths[i]));
