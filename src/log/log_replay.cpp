@@ -271,8 +271,9 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       }
     } else {
       ++summary.other_events;
+      // Without its signature trailer when --verify checked one.
       if (reference && ev->channel == options.reference_channel) {
-        reference->on_reference(ev->data.data(), static_cast<int>(ev->data.size()),
+        reference->on_reference(ev->data.data(), static_cast<int>(verdict.payload_size),
                                 static_cast<double>(ev->timestamp - first_time) / 1e6);
       }
     }

@@ -1,5 +1,7 @@
 #include "log/reference_comparison.hpp"
 
+#include "bus/receive.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -20,16 +22,20 @@ ReferenceComparer::ReferenceComparer(std::string channel, int motors)
 }
 
 void ReferenceComparer::on_output(const motor_pwm_t& out, std::uint8_t limited, bool spooling_up) {
-  recent_.push_back(
-      {out.setpoint_utime, out.pid_utime, out.armed != 0, limited, spooling_up, out.command});
+  Output o{out.setpoint_utime, out.pid_utime, out.armed != 0, limited, spooling_up, {}};
+  std::copy_n(out.command.begin(), std::min<std::size_t>(out.command.size(), o.command.size()),
+              o.command.begin());
+  recent_.push_back(o);
   if (recent_.size() > kRecentOutputs) recent_.pop_front();
 }
 
 void ReferenceComparer::on_reference(const void* data, int size, double t_s) {
   ++result_.references;
+  // Through the bus library's door: wire shape and lengths checked first.
   motor_pwm_t ref{};
-  if (ref.decode(data, 0, size) != size || ref.num_motors != motors_ ||
-      ref.command.size() != static_cast<std::size_t>(motors_)) {
+  if (size < 0 ||
+      bus::decode_exact(data, static_cast<std::size_t>(size), ref) != bus::Refusal::kNone ||
+      ref.num_motors != motors_) {
     ++result_.unpaired;
     return;
   }

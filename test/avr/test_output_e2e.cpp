@@ -495,6 +495,13 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
 // one pin, the others stay disarmed; a test beyond the guards is refused
 // and moves nothing, and so is a calibration while a mixer runs; the ESC
 // calibration's maximum and minimum reach every pin, then disarmed.
+// `motormix esc-calibrate` with its Enter typed after `enter_after_s`.
+std::vector<std::string> esc_calibrate(const std::string& config, const char* enter_after_s) {
+  return {"/bin/sh", "-c",
+          std::string("(sleep ") + enter_after_s + "; echo) | '" + motormix_binary() +
+              "' esc-calibrate --config '" + config + "' --props-off --min-seconds 1"};
+}
+
 // Periods a second of bring-up must show at least (400 at 400 Hz).
 constexpr int kBringupPeriodsMin = 240;
 
@@ -566,10 +573,7 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
 
   // The ESC calibration while a mixer runs: refused as it listens, nothing
   // moves.
-  ChildProcess busy({"/bin/sh", "-c",
-                     "(sleep 5; echo) | '" + std::string(motormix_binary()) +
-                         "' esc-calibrate --config '" + config + "' --props-off --min-seconds 1"},
-                    "/tmp/motormix-e2e-bringup-busy.log");
+  ChildProcess busy(esc_calibrate(config, "5"), "/tmp/motormix-e2e-bringup-busy.log");
   const std::optional<int> busy_exit = busy.wait_for(std::chrono::seconds(8));
   ASSERT_TRUE(busy_exit.has_value());
   EXPECT_NE(*busy_exit, 0);
@@ -585,11 +589,7 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
   mixer.reset();
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // the mixer's last words are old
   bridge.take_pulses();
-  ChildProcess calibrate(
-      {"/bin/sh", "-c",
-       "(sleep 2.5; echo) | '" + std::string(motormix_binary()) + "' esc-calibrate --config '" +
-           config + "' --props-off --min-seconds 1"},
-      "/tmp/motormix-e2e-bringup-calibrate.log");
+  ChildProcess calibrate(esc_calibrate(config, "2.5"), "/tmp/motormix-e2e-bringup-calibrate.log");
   EXPECT_EQ(calibrate.wait_for(std::chrono::seconds(15)), 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   int at_max = 0, at_min = 0, after = 0, stopped_after = 0;

@@ -3,6 +3,9 @@
 // commands: how far motormix's differ, per motor, and where.
 
 #include <motormix/motor_pwm_t.hpp>
+#include <motormix/motor_vector.hpp>
+
+#include <array>
 
 #include <cstdint>
 #include <deque>
@@ -60,7 +63,7 @@ class ReferenceComparer {
     bool armed;
     std::uint8_t limited;
     bool spooling_up;
-    std::vector<float> command;
+    std::array<float, kMaxMotors> command;  // no allocation per output
   };
   // motormix's recent outputs (a reference follows its inputs closely).
   static constexpr std::size_t kRecentOutputs = 512;
