@@ -194,6 +194,22 @@ TEST_F(SpinningDescentTest, TurnsTheSpinAxisBackUp) {
   EXPECT_GT((c.thrust_n - eq.thrust_n).norm(), 0.1);
 }
 
+TEST_F(SpinningDescentTest, BrakesTheDriftOnlyOnceTheSpinIsReached) {
+  // Drifting at 5 m/s: braking tilts the axis by max_tilt (8 degrees, the
+  // brake asked is larger than the cap). Not before the spin is up.
+  constexpr double kBrakeTiltToleranceDeg = 0.5;
+  const double max_tilt = config_.motor_loss->settings.max_tilt_deg;
+  descent_.start(1, 0, equilibrium_fractions(1));
+  DescentInput in = at_equilibrium(1);
+  in.velocity.x() = 5.0;
+  DescentInput still = in;
+  still.rates = Eigen::Vector3d::Zero();  // just taken over: no spin yet
+  EXPECT_NEAR(descent_.update(still, 2500).axis_error_deg, 0.0, 1e-6);
+  EXPECT_NEAR(descent_.update(in, 5000).axis_error_deg, max_tilt, kBrakeTiltToleranceDeg);
+  // Once reached, a spin lost for a moment (a gust) keeps braking.
+  EXPECT_NEAR(descent_.update(still, 7500).axis_error_deg, max_tilt, kBrakeTiltToleranceDeg);
+}
+
 TEST_F(SpinningDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
   descent_.start(2, 0, equilibrium_fractions(2));
   const DescentInput good = at_equilibrium(2);

@@ -385,8 +385,14 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   cmd_.measured_rate_rad_s = w.norm();
 
   // Where the spin axis should point: up, tilted against the horizontal
-  // velocity (at most max_tilt).
-  const Eigen::Vector3d desired = detail::wanted_up_body(s_, in, rot);
+  // velocity (at most max_tilt) once the spin is reached. Before that the
+  // vehicle has no gyroscopic stiffness and one of its tilting torques
+  // only one sign (the dead motor's side cannot push up): every bit of
+  // authority goes to holding the axis up, and the drift waits.
+  if (cmd_.measured_rate_rad_s >= kSpinReachedShare * eq.rates.norm()) spin_reached_ = true;
+  SpinningDescentSettings braking = s_;
+  if (!spin_reached_) braking.max_tilt_deg = 0.0;
+  const Eigen::Vector3d desired = detail::wanted_up_body(braking, in, rot);
   const Eigen::Vector3d& axis = eq.up;
   cmd_.axis_error_deg = std::acos(std::clamp(axis.dot(desired), -1.0, 1.0)) * kDegPerRad;
 
@@ -416,7 +422,6 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   // Landing: no vertical motion for landed_after_s while the velocity loop
   // asks for well under the weight (in the air that much less thrust would
   // have the vehicle moving down within a fraction of that time).
-  if (cmd_.measured_rate_rad_s >= kSpinReachedShare * eq.rates.norm()) spin_reached_ = true;
   if (std::isfinite(in.velocity.z())) {
     const bool moving_down = in.velocity.z() > kDescendingFraction * s_.descent_rate_mps;
     descending_s_ = moving_down ? descending_s_ + dt : 0.0;
