@@ -50,11 +50,18 @@ static uint16_t g_period_ticks;
 static uint16_t g_rise_at; /* tick of the rise just written */
 static volatile uint8_t g_periods;
 static mm_schedule g_disarmed;
-/* Schedules from PULSES frames, double-buffered: the main loop writes the
- * one the interrupt is not using, with g_writing set, then names it ready. */
-static mm_schedule g_frame[2];
-static uint8_t g_frame_armed[2];
-static volatile uint8_t g_writing, g_ready, g_current;
+/* Schedules from PULSES frames, triple-buffered: each period starts on the
+ * newest complete one (g_ready); the main loop writes into the one that is
+ * neither that nor the one the interrupt is using, then names it ready (one
+ * byte: atomic). A frame taken while a period starts is in the next one.
+ * (With two buffers and a "writing" flag, the interrupt kept the old
+ * schedule whenever a period started during a write, and the next frame
+ * went into the same buffer again: host frames in step with the period
+ * held the pins on one frame for tens of milliseconds.) */
+#define FRAME_BUFFERS 3u
+static mm_schedule g_frame[FRAME_BUFFERS];
+static uint8_t g_frame_armed[FRAME_BUFFERS];
+static volatile uint8_t g_ready, g_current;
 static volatile uint8_t g_link_ok; /* 0: disarmed pulses, whatever the frames said */
 static volatile uint8_t g_out_armed;
 
@@ -111,7 +118,7 @@ static void next_session(void) {
 void mm_isr_period_start(void) {
   g_rise_at = (uint16_t)(g_rise_at + g_period_ticks);
   ++g_periods;
-  if (!g_writing) g_current = g_ready;
+  g_current = g_ready;
   const uint8_t armed_frame = g_link_ok && g_frame_armed[g_current];
   const mm_schedule* s = g_link_ok ? &g_frame[g_current] : &g_disarmed;
   g_out_armed = armed_frame;
@@ -171,9 +178,10 @@ static void apply_config(const mm_link_config* c) {
   uint16_t ticks[MM_LINK_MAX_CHANNELS];
   for (uint8_t k = 0; k < c->count; ++k) ticks[k] = (uint16_t)(c->disarmed_us[k] * MM_TICKS_PER_US);
   mm_schedule_build(ticks, c->count, &g_disarmed);
-  g_frame[0] = g_disarmed;
-  g_frame[1] = g_disarmed;
-  g_frame_armed[0] = g_frame_armed[1] = 0;
+  for (uint8_t k = 0; k < FRAME_BUFFERS; ++k) {
+    g_frame[k] = g_disarmed;
+    g_frame_armed[k] = 0;
+  }
   g_ready = g_current = 0;
   g_link_ok = 0;
   g_out_armed = 0;
@@ -223,12 +231,15 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
     if (armed && t > hi) t = hi;
     ticks[k] = t;
   }
-  g_writing = 1;
-  const uint8_t w = (uint8_t)(1u - g_current);
+  /* Only this loop moves g_ready; the interrupt moves g_current to it at
+   * most, so a buffer that is neither stays free until named ready. */
+  const uint8_t ready = g_ready;
+  const uint8_t in_use = g_current;
+  uint8_t w = 0;
+  while (w == ready || w == in_use) ++w;
   mm_schedule_build(ticks, p->count, &g_frame[w]);
   g_frame_armed[w] = p->armed != 0u; /* any channel: no configuration meanwhile */
   g_ready = w;
-  g_writing = 0;
   g_report.last_sequence = p->sequence;
   ++g_report.frames;
   g_deadline = now + ((uint32_t)g_timeout_ticks_high << 8);

@@ -214,6 +214,83 @@ TEST(PulseFirmware, ArmedPulsesAreTheWidthsAskedForWithinOneMicrosecond) {
   EXPECT_TRUE(r.flags & MM_LINK_FLAG_ARMED);
 }
 
+// Frames at the pulse rate, each completing at the same point of the period
+// (the host's 400 Hz against the chip's: their phase drifts slowly, so a
+// frame that lands where the pulse interrupt starts a period keeps landing
+// there for tens of milliseconds). Every frame must be in the pulses of the
+// first period that starts after it was taken, at every phase. Measured
+// before the fix: frames completing in the last 0.3 ms before a rise were
+// held back as long as the phase held (the interrupt kept the old schedule
+// while the main loop was writing the next one, and the main loop wrote the
+// next frame into the same buffer again).
+TEST(PulseFirmware, FramesInStepWithThePeriodAreTakenAtTheNextRise) {
+  // From a frame's last byte to its schedule being ready: the parse of the
+  // queued bytes and the schedule's build (measured: 0.275-0.3 ms).
+  constexpr double kTakeBoundUs = 400.0;
+  constexpr std::uint64_t kCyclesPerUs = 16;
+  constexpr std::uint64_t kByteCycles = 640;  // 10 bits at 250000 baud
+  constexpr int kFramesPerPhase = 6;
+  constexpr int kPhases = 100;
+  const auto period = static_cast<std::uint64_t>(kPeriodUs) * kCyclesPerUs;
+  Host h;
+  h.send_config(h.config());
+  h.send_pulses({1500, 1500, 1500, 1500});
+  h.board.run_for_us(20000);
+  // A rise of channel 0: the periods are where this one says.
+  std::uint64_t rise = 0;
+  for (const PinEdge& e : h.board.take_edges())
+    if (e.channel == 0 && e.high) rise = e.cycle;
+  ASSERT_GT(rise, 0u);
+  h.board.take_pulses();
+  struct Sent {
+    std::uint64_t done;  // the cycle its last byte is in
+    double width;
+  };
+  std::vector<Sent> sent;
+  int value = 0;
+  for (int phase = 0; phase < kPhases; ++phase) {
+    const std::uint64_t offset = period * static_cast<std::uint64_t>(phase) / kPhases;
+    for (int k = 0; k < kFramesPerPhase; ++k) {
+      const double w = 1100.0 + (value++ % 800);
+      const std::vector<std::uint8_t> frame = h.pulses_frame({w, w, w, w}, true);
+      // The next period boundary plus the phase, far enough ahead for the
+      // frame's bytes.
+      std::uint64_t done = rise + offset;
+      while (done < h.board.cycle() + frame.size() * kByteCycles + period) done += period;
+      h.board.run_until(done - frame.size() * kByteCycles);
+      h.board.send(frame);
+      sent.push_back({done, w});
+    }
+  }
+  h.board.run_for_us(3 * kPeriodUs);
+  const std::vector<Pulse> pulses = h.board.take_pulses();
+  // Each period of channel 0 after the first frame: its pulse is a frame
+  // that had come in before the rise, and none older than the newest frame
+  // taken by then (in by kTakeBound before the rise).
+  int late = 0, periods = 0;
+  const auto bound = static_cast<std::uint64_t>(kTakeBoundUs) * kCyclesPerUs;
+  for (const Pulse& p : pulses) {
+    if (p.channel != 0 || p.rise_cycle < sent.front().done + bound) continue;
+    ++periods;
+    std::size_t must = 0, may = 0;  // one past the last frame taken / in
+    while (must < sent.size() && sent[must].done + bound <= p.rise_cycle) ++must;
+    while (may < sent.size() && sent[may].done <= p.rise_cycle) ++may;
+    bool ok = false;
+    for (std::size_t i = must - 1; i < may; ++i)
+      ok |= std::abs(p.width_us - sent[i].width) <= kPulseToleranceUs;
+    if (!ok && ++late <= 5)
+      std::printf("period %.1f us after frame %zu came in: %.1f us, that frame asked %.1f\n",
+                  static_cast<double>(p.rise_cycle - sent[must - 1].done) / kCyclesPerUs, must - 1,
+                  p.width_us, sent[must - 1].width);
+  }
+  std::printf("%zu frames at %d phases of the period, %d periods: %d held an older frame\n",
+              sent.size(), kPhases, periods, late);
+  EXPECT_EQ(late, 0);
+  h.board.run_for_us(60000);
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.crc_errors + r.malformed + r.rejected, 0u);
+}
+
 // One channel armed (a motor test through motormix output): its width,
 // clamped into [min, max]; every other channel its disarmed pulse, not the
 // armed minimum.
