@@ -20,6 +20,7 @@ if(NOT MOTORMIX_BUILD_FIRMWARE STREQUAL "OFF")
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/main.c
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_schedule.c
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_isr.S
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot.S
       ${CMAKE_CURRENT_SOURCE_DIR}/src/link/motormix_link.c)
     set(fw_headers
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_schedule.h

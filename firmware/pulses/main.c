@@ -65,6 +65,20 @@ static volatile uint8_t g_ready, g_current;
 static volatile uint8_t g_link_ok; /* 0: disarmed pulses, whatever the frames said */
 static volatile uint8_t g_out_armed;
 
+/* ---- DShot (CONFIG's protocol), frames sent by the main loop ---- */
+void mm_dshot_send600(const uint8_t* ports, uint8_t high, uint8_t low);
+void mm_dshot_send300(const uint8_t* ports, uint8_t high, uint8_t low);
+void mm_dshot_send150(const uint8_t* ports, uint8_t high, uint8_t low);
+#define DSHOT_MIN_THROTTLE 48u
+#define DSHOT_THROTTLE_STEPS 1999u /* 48..2047 */
+static uint8_t g_dshot; /* 0: servo pulses; else MM_LINK_PROTOCOL_DSHOT* */
+static uint16_t g_dshot_throttle[MM_LINK_MAX_DSHOT_CHANNELS];
+static uint8_t g_dshot_armed; /* channels armed by the last PULSES frame */
+static uint8_t g_dshot_ports[16], g_dshot_high, g_dshot_low;
+static uint8_t g_dshot_dirty; /* the frame's port values are to be made again */
+static uint8_t g_cmd, g_cmd_channels, g_cmd_left;
+static uint32_t g_next_frame;
+
 /* ---- main loop state ---- */
 static mm_link_config g_config;
 static uint8_t g_configured;
@@ -175,6 +189,19 @@ static void apply_config(const mm_link_config* c) {
    * is called lost one period before the timeout. */
   const uint32_t timeout_ticks = (uint32_t)c->link_timeout_ms * 1000UL * MM_TICKS_PER_US;
   g_timeout_ticks_high = (uint16_t)((timeout_ticks - g_period_ticks) >> 8);
+  g_dshot = c->protocol;
+  if (g_dshot) {
+    /* Frames of motor stop from the next one on; no pulse interrupt. */
+    g_dshot_armed = 0;
+    g_cmd_left = 0;
+    g_link_ok = 0;
+    g_out_armed = 0;
+    for (uint8_t k = 0; k < FRAME_BUFFERS; ++k) g_frame_armed[k] = 0;
+    g_dshot_dirty = 1;
+    g_next_frame = now_ticks();
+    g_configured = 1;
+    return;
+  }
   uint16_t ticks[MM_LINK_MAX_CHANNELS];
   for (uint8_t k = 0; k < c->count; ++k) ticks[k] = (uint16_t)(c->disarmed_us[k] * MM_TICKS_PER_US);
   mm_schedule_build(ticks, c->count, &g_disarmed);
@@ -215,6 +242,67 @@ static uint8_t current(uint32_t session, uint32_t sequence) {
   return 1;
 }
 
+/* A DShot frame's 16 bits: throttle (11), telemetry request, checksum. */
+static uint16_t dshot_packet(uint16_t value, uint8_t telemetry) {
+  const uint16_t v = (uint16_t)((value << 1) | telemetry);
+  return (uint16_t)((v << 4) | ((v ^ (v >> 4) ^ (v >> 8)) & 0x0Fu));
+}
+
+/* The port values of the next frame: the throttle of each armed channel
+ * while the link holds, a special command on its channels while one is
+ * being sent, motor stop (0) otherwise. */
+static void dshot_prepare(void) {
+  uint16_t packet[MM_LINK_MAX_DSHOT_CHANNELS];
+  uint8_t bit[MM_LINK_MAX_DSHOT_CHANNELS];
+  uint8_t all = 0;
+  const uint8_t armed = g_link_ok ? g_dshot_armed : 0u;
+  for (uint8_t k = 0; k < g_config.count; ++k) {
+    uint8_t d, b;
+    mm_channel_bits(k, &d, &b);
+    bit[k] = d;
+    all = (uint8_t)(all | d);
+    if ((armed >> k) & 1u) {
+      packet[k] = dshot_packet(g_dshot_throttle[k], 0);
+    } else if (g_cmd_left && ((g_cmd_channels >> k) & 1u)) {
+      packet[k] = dshot_packet(g_cmd, 1); /* ESCs take commands with the bit set */
+    } else {
+      packet[k] = dshot_packet(0, 0);
+    }
+  }
+  const uint8_t base = (uint8_t)(PORTD & ~all);
+  for (uint8_t i = 0; i < 16u; ++i) {
+    const uint16_t mask = (uint16_t)(0x8000u >> i);
+    uint8_t port = base;
+    for (uint8_t k = 0; k < g_config.count; ++k)
+      if (packet[k] & mask) port = (uint8_t)(port | bit[k]);
+    g_dshot_ports[i] = port;
+  }
+  g_dshot_high = (uint8_t)(base | all);
+  g_dshot_low = base;
+  g_out_armed = armed != 0u;
+  g_dshot_dirty = 0;
+}
+
+static void dshot_send(void) {
+  if (g_dshot == MM_LINK_PROTOCOL_DSHOT600) {
+    mm_dshot_send600(g_dshot_ports, g_dshot_high, g_dshot_low);
+  } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT300) {
+    mm_dshot_send300(g_dshot_ports, g_dshot_high, g_dshot_low);
+  } else {
+    mm_dshot_send150(g_dshot_ports, g_dshot_high, g_dshot_low);
+  }
+  ++g_periods; /* the watchdog's sign of life, as a pulse period is */
+  if (g_cmd_left && --g_cmd_left == 0u) g_dshot_dirty = 1;
+}
+
+/* A PULSES frame's bookkeeping once taken. */
+static void taken(uint32_t sequence, uint32_t now) {
+  g_report.last_sequence = sequence;
+  ++g_report.frames;
+  g_deadline = now + ((uint32_t)g_timeout_ticks_high << 8);
+  g_link_ok = 1;
+}
+
 static void take_pulses(const mm_link_pulses* p, uint32_t now) {
   if (!current(p->session, p->sequence)) return;
   if (!g_configured || p->count != g_config.count) {
@@ -224,6 +312,23 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
   uint16_t ticks[MM_LINK_MAX_CHANNELS];
   const uint16_t lo = (uint16_t)(g_config.min_us * MM_TICKS_PER_US);
   const uint16_t hi = (uint16_t)(g_config.max_us * MM_TICKS_PER_US);
+  if (g_dshot) {
+    /* [min, max] onto 48..2047, rounded; the width's half microseconds
+     * are finer than a throttle step at any range above 500 us. */
+    const uint32_t span = (uint32_t)(hi - lo);
+    for (uint8_t k = 0; k < p->count; ++k) {
+      uint16_t t = p->pulse_hus[k];
+      if (t < lo) t = lo;
+      if (t > hi) t = hi;
+      g_dshot_throttle[k] =
+          (uint16_t)(DSHOT_MIN_THROTTLE + ((uint32_t)(t - lo) * DSHOT_THROTTLE_STEPS + span / 2u) / span);
+    }
+    g_dshot_armed = p->armed;
+    if (p->armed) g_cmd_left = 0; /* arming ends a special command */
+    g_dshot_dirty = 1;
+    taken(p->sequence, now);
+    return;
+  }
   for (uint8_t k = 0; k < p->count; ++k) {
     const uint8_t armed = (uint8_t)(((unsigned)p->armed >> k) & 1u);
     uint16_t t = armed ? p->pulse_hus[k] : (uint16_t)(g_config.disarmed_us[k] * MM_TICKS_PER_US);
@@ -240,22 +345,37 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
   mm_schedule_build(ticks, p->count, &g_frame[w]);
   g_frame_armed[w] = p->armed != 0u; /* any channel: no configuration meanwhile */
   g_ready = w;
-  g_report.last_sequence = p->sequence;
-  ++g_report.frames;
-  g_deadline = now + ((uint32_t)g_timeout_ticks_high << 8);
-  g_link_ok = 1;
+  taken(p->sequence, now);
+}
+
+/* A DShot special command: only while every output is disarmed. */
+static void take_command(const mm_link_command* c) {
+  if (!current(c->session, c->sequence)) return;
+  g_report.last_sequence = c->sequence;
+  if (!g_configured || !g_dshot || g_out_armed || (g_link_ok && g_dshot_armed) ||
+      (c->channels >> g_config.count) != 0u) {
+    ++g_report.rejected;
+    return;
+  }
+  g_cmd = c->command;
+  g_cmd_channels = c->channels;
+  g_cmd_left = c->repeat;
+  g_dshot_dirty = 1;
 }
 
 static void take_frame(uint8_t type, const mm_link_frame* f, uint32_t now) {
   if (type == MM_LINK_PULSES) {
     take_pulses(&f->u.pulses, now);
+  } else if (type == MM_LINK_COMMAND) {
+    take_command(&f->u.command);
   } else if (type == MM_LINK_CONFIG) {
     if (!current(f->u.config.session, f->u.config.sequence)) return;
     g_report.last_sequence = f->u.config.sequence;
     if (g_configured && same_config(&f->u.config, &g_config)) return;
     /* Never while the motors may be turning: armed pulses now, or an armed
      * frame taken that the next period will start. */
-    if (g_configured && (g_out_armed || (g_link_ok && g_frame_armed[g_ready]))) {
+    if (g_configured &&
+        (g_out_armed || (g_link_ok && (g_frame_armed[g_ready] || (g_dshot && g_dshot_armed))))) {
       ++g_report.rejected;
       return;
     }
@@ -310,6 +430,14 @@ int main(void) {
       const uint8_t byte = UDR0;
       if (status & (_BV(FE0) | _BV(DOR0))) ++g_parser.malformed; /* a broken or lost byte */
       mm_link_push(&g_parser, byte);
+    } else if (g_dshot && g_configured && !g_dshot_dirty && (int32_t)(now - g_next_frame) >= 0) {
+      /* A DShot frame, right after a look at the UART: its 27-107 us with
+       * interrupts off fit in the three bytes the UART holds (120 us). */
+      g_next_frame += g_period_ticks;
+      if ((int32_t)(now - g_next_frame) >= 0) g_next_frame = now + g_period_ticks; /* fell behind */
+      dshot_send();
+    } else if (g_dshot && g_dshot_dirty) {
+      dshot_prepare();
     } else if (mm_link_pending(&g_parser)) {
       mm_link_frame frame;
       const uint8_t type = mm_link_poll(&g_parser, &frame);
@@ -317,6 +445,7 @@ int main(void) {
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;
+      g_dshot_dirty = 1; /* DShot: motor stop from the next frame */
       /* Whatever was sent before this is never taken: a new session, told
        * to the host at once. */
       next_session();

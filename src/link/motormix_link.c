@@ -56,15 +56,28 @@ static int pulse_in_range(uint16_t us, uint16_t period_us) {
 
 int mm_link_config_valid(const mm_link_config* c) {
   if (c->count < 1u || c->count > MM_LINK_MAX_CHANNELS) return 0;
-  if (c->period_us < MM_LINK_MIN_PERIOD_US || c->period_us > MM_LINK_MAX_PERIOD_US) return 0;
+  if (c->protocol > MM_LINK_PROTOCOL_DSHOT600) return 0;
+  const int dshot = c->protocol != MM_LINK_PROTOCOL_PWM;
+  if (dshot && c->count > MM_LINK_MAX_DSHOT_CHANNELS) return 0;
+  if (c->period_us < (dshot ? MM_LINK_MIN_DSHOT_PERIOD_US : MM_LINK_MIN_PERIOD_US) ||
+      c->period_us > MM_LINK_MAX_PERIOD_US)
+    return 0;
   if (c->link_timeout_ms < MM_LINK_MIN_TIMEOUT_MS || c->link_timeout_ms > MM_LINK_MAX_TIMEOUT_MS)
     return 0;
-  if (!pulse_in_range(c->min_us, c->period_us) || !pulse_in_range(c->max_us, c->period_us) ||
-      c->min_us > c->max_us)
+  /* DShot: the widths only name the throttle range, no pulse has to fit
+   * in the period. */
+  const uint16_t room = dshot ? MM_LINK_MAX_PERIOD_US : c->period_us;
+  if (!pulse_in_range(c->min_us, room) || !pulse_in_range(c->max_us, room) ||
+      c->min_us > c->max_us || (dshot && c->min_us == c->max_us))
     return 0;
   for (uint8_t i = 0; i < c->count; ++i)
-    if (!pulse_in_range(c->disarmed_us[i], c->period_us)) return 0;
+    if (!pulse_in_range(c->disarmed_us[i], room)) return 0;
   return 1;
+}
+
+static int command_valid(const mm_link_command* c) {
+  return c->command >= 1u && c->command <= MM_LINK_DSHOT_MAX_COMMAND && c->channels != 0u &&
+         c->repeat >= 1u;
 }
 
 size_t mm_link_encode_config(const mm_link_config* c, uint8_t* out) {
@@ -78,8 +91,21 @@ size_t mm_link_encode_config(const mm_link_config* c, uint8_t* out) {
   put16(b + 13, c->min_us);
   put16(b + 15, c->max_us);
   b[17] = c->count;
-  for (uint8_t i = 0; i < c->count; ++i) put16(b + 18 + 2 * i, c->disarmed_us[i]);
+  b[18] = c->protocol;
+  for (uint8_t i = 0; i < c->count; ++i) put16(b + 19 + 2 * i, c->disarmed_us[i]);
   return frame(out, (uint8_t)MM_LINK_CONFIG_BODY(c->count));
+}
+
+size_t mm_link_encode_command(const mm_link_command* c, uint8_t* out) {
+  if (!command_valid(c)) return 0;
+  uint8_t* b = out + 3;
+  b[0] = MM_LINK_COMMAND;
+  put32(b + 1, c->session);
+  put32(b + 5, c->sequence);
+  b[9] = c->command;
+  b[10] = c->channels;
+  b[11] = c->repeat;
+  return frame(out, (uint8_t)MM_LINK_COMMAND_BODY);
 }
 
 size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out) {
@@ -155,8 +181,20 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
     out->min_us = get16(b + 13);
     out->max_us = get16(b + 15);
     out->count = count;
-    for (uint8_t i = 0; i < count; ++i) out->disarmed_us[i] = get16(b + 18 + 2 * i);
+    out->protocol = b[18];
+    for (uint8_t i = 0; i < count; ++i) out->disarmed_us[i] = get16(b + 19 + 2 * i);
     if (!mm_link_config_valid(out)) {
+      ++p->malformed;
+      return 0;
+    }
+  } else if (type == MM_LINK_COMMAND && p->length == MM_LINK_COMMAND_BODY) {
+    mm_link_command* out = &f->u.command;
+    out->session = get32(b + 1);
+    out->sequence = get32(b + 5);
+    out->command = b[9];
+    out->channels = b[10];
+    out->repeat = b[11];
+    if (!command_valid(out)) {
       ++p->malformed;
       return 0;
     }

@@ -9,7 +9,8 @@
  * 10^5 corrupted frames, and a 16-bit check lets one random frame in 65536
  * through. Multi-byte fields are little-endian.
  *
- * Link version 2 (MM_LINK_VERSION, in every REPORT). Sessions: the chip
+ * Link version 3 (MM_LINK_VERSION, in every REPORT; 3 added the protocol
+ * to CONFIG and the COMMAND frame). Sessions: the chip
  * names a session in its reports, a 32-bit number that never repeats (its
  * EEPROM keeps the highest base used across resets) and that it moves on
  * at every link timeout. CONFIG and PULSES carry the session they are for
@@ -23,9 +24,17 @@
  *
  * Host -> MCU (after type: session u32, sequence u32)
  *   MM_LINK_CONFIG: period (us), link timeout (ms), lowest and highest
- *     armed pulse (us), channel count, then one disarmed pulse (us) per
- *     channel. The firmware makes no pulse at all until it has one; it takes
- *     a new one only while its outputs are disarmed.
+ *     armed pulse (us), channel count, protocol (MM_LINK_PROTOCOL_*), then
+ *     one disarmed pulse (us) per channel. The firmware makes no pulse at all
+ *     until it has one; it takes a new one only while its outputs are
+ *     disarmed. With DShot the period is the frame period, an armed width
+ *     maps [min, max] onto throttle 48..2047 and a disarmed channel sends
+ *     0 (motor stop): the disarmed widths are not used.
+ *   MM_LINK_COMMAND (DShot only): a special command (1..47, the ESC's
+ *     numbering), a channel mask and a count of frames to send it in (ESCs
+ *     act on a setting only after 6), with the telemetry bit set as ESCs
+ *     require. Taken only while every output is disarmed; an armed PULSES
+ *     frame ends it.
  *   MM_LINK_PULSES: armed channels (a bit per channel, none beyond the
  *     count), count (must equal the configured count), then count pulse
  *     widths in half microseconds (the firmware's timer resolution: a width
@@ -57,7 +66,17 @@ extern "C" {
 #define MM_LINK_PULSES 0x01u
 #define MM_LINK_REPORT 0x02u
 #define MM_LINK_CONFIG 0x03u
-#define MM_LINK_VERSION 2u
+#define MM_LINK_COMMAND 0x04u
+#define MM_LINK_VERSION 3u
+/* CONFIG's protocol */
+#define MM_LINK_PROTOCOL_PWM 0u
+#define MM_LINK_PROTOCOL_DSHOT150 1u
+#define MM_LINK_PROTOCOL_DSHOT300 2u
+#define MM_LINK_PROTOCOL_DSHOT600 3u
+/* DShot: every channel on one port (D2..D7) in one frame; frames up to 4 kHz */
+#define MM_LINK_MAX_DSHOT_CHANNELS 6u
+#define MM_LINK_MIN_DSHOT_PERIOD_US 250u
+#define MM_LINK_DSHOT_MAX_COMMAND 47u
 
 /* Limits both ends hold a configuration to (servo-style ESC pulses at
  * 40..500 Hz; a pulse ends at least MM_LINK_MIN_LOW_US before the next
@@ -70,7 +89,8 @@ extern "C" {
 #define MM_LINK_MIN_TIMEOUT_MS 10u
 #define MM_LINK_MAX_TIMEOUT_MS 1000u
 
-#define MM_LINK_CONFIG_BODY(count) (18u + 2u * (count))
+#define MM_LINK_CONFIG_BODY(count) (19u + 2u * (count))
+#define MM_LINK_COMMAND_BODY 12u
 #define MM_LINK_PULSES_BODY(count) (11u + 2u * (count))
 #define MM_LINK_REPORT_BODY 30u
 /* Largest length field: a configuration with every channel. */
@@ -93,8 +113,17 @@ typedef struct {
   uint16_t min_us; /* armed pulses are clamped into [min_us, max_us] */
   uint16_t max_us;
   uint8_t count;
+  uint8_t protocol; /* MM_LINK_PROTOCOL_* */
   uint16_t disarmed_us[MM_LINK_MAX_CHANNELS];
 } mm_link_config;
+
+typedef struct {
+  uint32_t session;
+  uint32_t sequence;
+  uint8_t command;  /* 1..MM_LINK_DSHOT_MAX_COMMAND */
+  uint8_t channels; /* bit i: channel i */
+  uint8_t repeat;   /* frames to send it in, 1..255 */
+} mm_link_command;
 
 typedef struct {
   uint32_t session;
@@ -126,6 +155,7 @@ int mm_link_config_valid(const mm_link_config* c);
  * 1..MM_LINK_MAX_CHANNELS, an invalid configuration). */
 size_t mm_link_encode_config(const mm_link_config* c, uint8_t* out);
 size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out);
+size_t mm_link_encode_command(const mm_link_command* c, uint8_t* out);
 size_t mm_link_encode_report(const mm_link_report* r, uint8_t sequence, uint8_t* out);
 
 /* What a completed frame held: its type says which member is valid. */
@@ -135,6 +165,7 @@ typedef struct {
     mm_link_config config;
     mm_link_pulses pulses;
     mm_link_report report;
+    mm_link_command command;
   } u;
 } mm_link_frame;
 

@@ -6,6 +6,7 @@
 // simulated chip's cycle counter.
 
 #include "avr_board.hpp"
+#include "dshot_esc.hpp"
 #include "motormix_link.h"
 
 #include <gtest/gtest.h>
@@ -56,8 +57,10 @@ class Host {
   }
 
   mm_link_config config(std::uint8_t count = 4, std::uint16_t period_us = 2500,
-                        std::uint16_t disarmed = 1000) {
+                        std::uint16_t disarmed = 1000,
+                        std::uint8_t protocol = MM_LINK_PROTOCOL_PWM) {
     mm_link_config c{};
+    c.protocol = protocol;
     c.period_us = period_us;
     c.link_timeout_ms = static_cast<std::uint16_t>(kLinkTimeoutMs);
     c.min_us = 1000;
@@ -89,6 +92,18 @@ class Host {
   }
   void send_pulses(const std::vector<double>& widths, bool armed = true) {
     board.send(pulses_frame(widths, armed));
+  }
+  void send_command(std::uint8_t command, std::uint8_t channels, std::uint8_t repeat) {
+    mm_link_command c{};
+    c.session = session;
+    c.sequence = seq++;
+    c.command = command;
+    c.channels = channels;
+    c.repeat = repeat;
+    std::uint8_t buf[MM_LINK_MAX_FRAME];
+    const std::size_t n = mm_link_encode_command(&c, buf);
+    ASSERT_GT(n, 0u);
+    board.send(buf, n);
   }
   // The last report the firmware sent (it sends one every 50 ms).
   mm_link_report last_report() {
@@ -593,6 +608,257 @@ TEST(PulseFirmwareCorruption, CorruptedFramesNeverChangeAPulseAndAreCounted) {
   EXPECT_EQ(r.link_timeouts, 0u);
   EXPECT_GE(r.crc_errors + r.malformed, static_cast<std::uint32_t>(sent_bad_crc_or_shape * 9 / 10));
   EXPECT_GE(r.rejected, static_cast<std::uint32_t>(replays));
+}
+
+
+// ---- DShot (CONFIG's protocol) against the emulated ESC (dshot_esc.hpp) ----
+
+constexpr double kCyclesPerUsDshot = 16.0;
+// The protocol's bit: 1/rate. The bound for the bit period: +-2 %.
+constexpr double kBitToleranceShare = 0.02;
+// High times as shares of the bit: nominal 0.375 (a 0) and 0.75 (a 1); an
+// ESC decides at half a bit (AM32, Bluejay). Held to within 0.05 of a bit
+// of that threshold at worst, and to 0.075 of nominal.
+constexpr double kZeroHighMin = 0.30, kZeroHighMax = 0.45;
+constexpr double kOneHighMin = 0.675, kOneHighMax = 0.825;
+
+struct DshotSpeed {
+  std::uint8_t protocol;
+  double rate_bits_per_s;
+  const char* name;
+};
+constexpr DshotSpeed kDshotSpeeds[] = {{MM_LINK_PROTOCOL_DSHOT600, 600e3, "DShot600"},
+                                       {MM_LINK_PROTOCOL_DSHOT300, 300e3, "DShot300"},
+                                       {MM_LINK_PROTOCOL_DSHOT150, 150e3, "DShot150"}};
+
+// What the firmware sends for a width with min 1000 and max 2000 us (the
+// link carries it in half microseconds).
+std::uint16_t throttle_for(double width_us) {
+  const double t = std::clamp(static_cast<double>(std::lround(2.0 * width_us)) / 2.0, 1000.0, 2000.0);
+  return static_cast<std::uint16_t>(48 + std::lround((t - 1000.0) / 1000.0 * 1999.0));
+}
+
+// Every channel's emulated ESC fed from the board's edges.
+struct Escs {
+  Escs(int count, double bit_cycles) {
+    for (int ch = 0; ch < count; ++ch) escs.emplace_back(ch, bit_cycles);
+  }
+  void feed(AvrBoard& board) {
+    const std::vector<PinEdge> edges = board.take_edges();
+    for (DshotEsc& e : escs) e.feed(edges);
+  }
+  std::vector<DshotEsc> escs;
+};
+
+// Four channels at 1 kHz, each speed: every frame decodes with a good
+// checksum, bits and high times within the protocol's bounds, the frame
+// rate as configured, and each frame's throttle the width asked for.
+TEST(PulseFirmwareDshot, FourChannelsEveryFrameDecodedWithinTheProtocolsTimes) {
+  constexpr int kChannels = 4;
+  constexpr std::uint16_t kFramePeriodUs = 1000;  // 1 kHz
+  constexpr int kSets = 60;
+  for (const DshotSpeed& speed : kDshotSpeeds) {
+    Host h;
+    const double bit_cycles = kCyclesPerUsDshot * 1e6 / speed.rate_bits_per_s;
+    Escs esc(kChannels, bit_cycles);
+    h.send_config(h.config(kChannels, kFramePeriodUs, 1000, speed.protocol));
+    h.board.run_for_us(5000);
+    esc.feed(h.board);
+    for (DshotEsc& e : esc.escs) {
+      const auto stopped = e.take_frames();
+      ASSERT_FALSE(stopped.empty()) << speed.name << ": motor stop frames after the configuration";
+      for (const DshotFrame& f : stopped) EXPECT_EQ(f.value, 0) << speed.name;
+    }
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> width(1000.0, 2000.0);
+    double bit_lo = 1e9, bit_hi = 0, zero_lo = 1e9, zero_hi = 0, one_lo = 1e9, one_hi = 0;
+    std::size_t frames = 0, bad = 0, wrong = 0;
+    std::uint64_t first = 0, last = 0;
+    for (int k = 0; k < kSets; ++k) {
+      std::vector<double> w(kChannels);
+      for (double& x : w) x = width(rng);
+      if (k == 0) w = {1000.0, 2000.0, 1500.0, 1000.5};
+      h.send_pulses(w);
+      h.board.run_for_us(2000);  // the frame's bytes (0.9 ms) and a frame after
+      esc.feed(h.board);
+      h.board.run_for_us(8000);
+      esc.feed(h.board);
+      for (int ch = 0; ch < kChannels; ++ch) {
+        const auto got = esc.escs[static_cast<std::size_t>(ch)].take_frames();
+        for (std::size_t i = 0; i < got.size(); ++i) {
+          const DshotFrame& f = got[i];
+          ++frames;
+          bad += f.crc_ok ? 0 : 1;
+          bit_lo = std::min(bit_lo, f.bit_min);
+          bit_hi = std::max(bit_hi, f.bit_max);
+          if (f.zero_high_min > 0) {
+            zero_lo = std::min(zero_lo, f.zero_high_min);
+            zero_hi = std::max(zero_hi, f.zero_high_max);
+          }
+          if (f.one_high_min > 0) {
+            one_lo = std::min(one_lo, f.one_high_min);
+            one_hi = std::max(one_hi, f.one_high_max);
+          }
+          if (ch == 0) {
+            if (first == 0) first = f.start_cycle;
+            last = f.start_cycle;
+          }
+        }
+        // The last frames (8 ms after the PULSES frame): the throttle asked.
+        ASSERT_FALSE(got.empty());
+        if (got.back().value != throttle_for(w[static_cast<std::size_t>(ch)]) ||
+            got.back().telemetry) {
+          ++wrong;
+          std::printf("%s channel %d: %d for %.1f us\n", speed.name, ch, got.back().value,
+                      w[static_cast<std::size_t>(ch)]);
+        }
+      }
+    }
+    for (const DshotEsc& e : esc.escs) EXPECT_EQ(e.broken(), 0) << speed.name;
+    const double per_ch = static_cast<double>(frames) / kChannels;
+    const double rate_hz = (per_ch - 1.0) / (static_cast<double>(last - first) / 16e6);
+    std::printf(
+        "%s, 4 channels: %zu frames, %zu bad checksums, %zu wrong throttles; %.1f frames/s per "
+        "channel; bit %.4f-%.4f us (nominal %.4f); high of a 0 %.4f-%.4f us, of a 1 %.4f-%.4f us\n",
+        speed.name, frames, bad, wrong, rate_hz, bit_lo / 16.0, bit_hi / 16.0,
+        1e6 / speed.rate_bits_per_s, zero_lo / 16.0, zero_hi / 16.0, one_lo / 16.0,
+        one_hi / 16.0);
+    EXPECT_EQ(bad, 0u) << speed.name;
+    EXPECT_EQ(wrong, 0u) << speed.name;
+    EXPECT_GE(rate_hz, 1000.0 * (1.0 - 1e-3)) << speed.name;
+    EXPECT_GE(bit_lo, bit_cycles * (1.0 - kBitToleranceShare)) << speed.name;
+    EXPECT_LE(bit_hi, bit_cycles * (1.0 + kBitToleranceShare)) << speed.name;
+    EXPECT_GE(zero_lo, kZeroHighMin * bit_cycles) << speed.name;
+    EXPECT_LE(zero_hi, kZeroHighMax * bit_cycles) << speed.name;
+    EXPECT_GE(one_lo, kOneHighMin * bit_cycles) << speed.name;
+    EXPECT_LE(one_hi, kOneHighMax * bit_cycles) << speed.name;
+    h.board.run_for_us(60000);
+    const mm_link_report r = h.last_report();
+    EXPECT_EQ(r.crc_errors + r.malformed + r.rejected, 0u) << speed.name;
+    EXPECT_EQ(r.version, MM_LINK_VERSION);
+  }
+}
+
+// Disarmed channels and the link failsafe send motor stop (0): a channel
+// the frame leaves disarmed, all of them once the frames stop (within the
+// link timeout). (DShot frames come from the main loop, which feeds the
+// hardware watchdog as a pulse period does: a stuck loop sends no frame and
+// resets the chip to no signal at all.)
+TEST(PulseFirmwareDshot, DisarmedAndTheLinkTimeoutSendMotorStop) {
+  constexpr int kChannels = 4;
+  Host h;
+  Escs esc(kChannels, 16.0 * 1e6 / 600e3);
+  h.send_config(h.config(kChannels, 1000, 1000, MM_LINK_PROTOCOL_DSHOT600));
+  h.board.run_for_us(3000);
+  mm_link_pulses p{};
+  p.session = h.session;
+  p.count = kChannels;
+  p.armed = 0b0101;  // channels 0 and 2 armed
+  for (int ch = 0; ch < kChannels; ++ch) p.pulse_hus[ch] = 3000;  // 1500 us
+  // A few frames 10 ms apart, then silence.
+  std::uint64_t last_frame_done = 0;
+  for (int k = 0; k < 5; ++k) {
+    p.sequence = h.seq++;
+    std::uint8_t buf[MM_LINK_MAX_FRAME];
+    h.board.send(buf, mm_link_encode_pulses(&p, buf));
+    while (h.board.sending()) h.board.run_for_us(50);
+    last_frame_done = h.board.cycle();
+    h.board.run_for_us(10000);
+  }
+  esc.feed(h.board);
+  for (int ch = 0; ch < kChannels; ++ch) {
+    const auto got = esc.escs[static_cast<std::size_t>(ch)].take_frames();
+    ASSERT_FALSE(got.empty());
+    EXPECT_EQ(got.back().value, (ch % 2 == 0) ? throttle_for(1500.0) : 0) << "channel " << ch;
+  }
+  h.board.run_for_us(200000);
+  esc.feed(h.board);
+  double stop_after_ms = 1e9;
+  for (int ch = 0; ch < kChannels; ++ch) {
+    const auto got = esc.escs[static_cast<std::size_t>(ch)].take_frames();
+    ASSERT_FALSE(got.empty());
+    EXPECT_EQ(got.back().value, 0) << "channel " << ch;
+    if (ch == 0) {
+      for (const DshotFrame& f : got) {
+        if (f.value == 0) {
+          stop_after_ms = static_cast<double>(f.start_cycle - last_frame_done) / 16000.0;
+          break;
+        }
+      }
+    }
+  }
+  std::printf("DShot600: motor stop %.2f ms after the last frame (link timeout %.0f ms)\n",
+              stop_after_ms, kLinkTimeoutMs);
+  EXPECT_LE(stop_after_ms, kLinkTimeoutMs);
+  EXPECT_GE(stop_after_ms, kLinkTimeoutMs - 2 * 1.0 - 1.0);  // held until then
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.link_timeouts, 1u);
+}
+
+// Special commands: sent only while every channel is disarmed, on the
+// channels asked, in as many frames as asked, with the telemetry bit; then
+// motor stop again. Refused (counted) while armed; arming ends one.
+TEST(PulseFirmwareDshot, SpecialCommandsOnlyWhileDisarmed) {
+  constexpr int kChannels = 4;
+  constexpr std::uint8_t kSpinReversed = 21;
+  constexpr std::uint8_t kRepeat = 6;  // ESCs act on a setting after 6
+  Host h;
+  Escs esc(kChannels, 16.0 * 1e6 / 600e3);
+  h.send_config(h.config(kChannels, 1000, 1000, MM_LINK_PROTOCOL_DSHOT600));
+  h.board.run_for_us(3000);
+  h.send_pulses({1000, 1000, 1000, 1000}, false);
+  h.board.run_for_us(3000);
+  esc.feed(h.board);
+  for (DshotEsc& e : esc.escs) e.take_frames();
+  h.send_command(kSpinReversed, 0b0110, kRepeat);
+  h.board.run_for_us(20000);
+  esc.feed(h.board);
+  for (int ch = 0; ch < kChannels; ++ch) {
+    int commands = 0;
+    bool after = false, stop_after = true;
+    for (const DshotFrame& f : esc.escs[static_cast<std::size_t>(ch)].take_frames()) {
+      EXPECT_TRUE(f.crc_ok);
+      if (f.value == kSpinReversed) {
+        EXPECT_TRUE(f.telemetry);
+        ++commands;
+        after = true;
+      } else {
+        EXPECT_EQ(f.value, 0);
+        if (after) stop_after &= f.value == 0;
+      }
+    }
+    EXPECT_EQ(commands, (ch == 1 || ch == 2) ? kRepeat : 0) << "channel " << ch;
+    EXPECT_TRUE(stop_after);
+  }
+  EXPECT_EQ(h.last_report().rejected, 0u);
+  // Armed: refused and counted, no command frame.
+  h.send_pulses({1200, 1200, 1200, 1200}, true);
+  h.board.run_for_us(3000);
+  h.send_command(kSpinReversed, 0b0001, kRepeat);
+  h.board.run_for_us(15000);
+  esc.feed(h.board);
+  for (DshotEsc& e : esc.escs)
+    for (const DshotFrame& f : e.take_frames()) EXPECT_NE(f.value, kSpinReversed);
+  h.board.run_for_us(60000);
+  EXPECT_EQ(h.last_report().rejected, 1u);
+  // Disarmed again (after the link timeout above), a long command: the
+  // first armed frame ends it.
+  h.send_pulses({1000, 1000, 1000, 1000}, false);
+  h.board.run_for_us(3000);
+  h.send_command(kSpinReversed, 0b0001, 200);
+  h.board.run_for_us(10000);
+  h.send_pulses({1300, 1300, 1300, 1300}, true);
+  h.board.run_for_us(5000);
+  esc.feed(h.board);
+  h.board.run_for_us(20000);
+  esc.feed(h.board);
+  const auto got = esc.escs[0].take_frames();
+  ASSERT_FALSE(got.empty());
+  EXPECT_EQ(got.back().value, throttle_for(1300.0));
+  int commands = 0;
+  for (const DshotFrame& f : got) commands += f.value == kSpinReversed ? 1 : 0;
+  EXPECT_GT(commands, 0);
+  EXPECT_LT(commands, 30);
 }
 
 }  // namespace

@@ -151,6 +151,66 @@ TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {
   EXPECT_EQ(parser.crc_errors, 0U);
 }
 
+
+// DShot in CONFIG (link version 3) and the COMMAND frame: what goes is what
+// comes back; what the firmware could not do is neither sent nor taken.
+TEST(OutputLink, DshotConfigurationsAndCommandsRoundTripWithinTheirLimits) {
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  mm_link_config dshot = four_channel_config();
+  dshot.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  dshot.period_us = 500;  // 2 kHz frames: too fast for servo pulses, fine for DShot
+  EXPECT_EQ(mm_link_config_valid(&dshot), 1);
+  mm_link_parser parser;
+  mm_link_parser_init(&parser);
+  mm_link_frame got{};
+  std::uint8_t type = 0;
+  const std::size_t n = mm_link_encode_config(&dshot, buf);
+  ASSERT_EQ(n, 7u + MM_LINK_CONFIG_BODY(4));
+  for (std::size_t i = 0; i < n; ++i) type = mm_link_feed(&parser, buf[i], &got);
+  ASSERT_EQ(type, MM_LINK_CONFIG);
+  EXPECT_EQ(got.u.config.protocol, MM_LINK_PROTOCOL_DSHOT600);
+  EXPECT_EQ(got.u.config.period_us, 500);
+  auto with = [&](auto change) {
+    mm_link_config c = dshot;
+    change(c);
+    return c;
+  };
+  const mm_link_config bad[] = {
+      with([](mm_link_config& c) { c.protocol = 4; }),         // no such protocol
+      with([](mm_link_config& c) { c.period_us = 249; }),      // faster than 4 kHz
+      with([](mm_link_config& c) { c.count = 7; }),            // D2..D7 only
+      with([](mm_link_config& c) { c.min_us = c.max_us; }),    // no throttle range
+      with([](mm_link_config& c) { c.protocol = 0; })};        // servo pulses at 2 kHz
+  for (const mm_link_config& c : bad) {
+    EXPECT_EQ(mm_link_config_valid(&c), 0);
+    EXPECT_EQ(mm_link_encode_config(&c, buf), 0U);
+  }
+
+  mm_link_command cmd{};
+  cmd.session = 0xABCD0001U;
+  cmd.sequence = 9;
+  cmd.command = 21;
+  cmd.channels = 0b0110;
+  cmd.repeat = 6;
+  const std::size_t m = mm_link_encode_command(&cmd, buf);
+  ASSERT_EQ(m, 7u + MM_LINK_COMMAND_BODY);
+  for (std::size_t i = 0; i < m; ++i) type = mm_link_feed(&parser, buf[i], &got);
+  ASSERT_EQ(type, MM_LINK_COMMAND);
+  EXPECT_EQ(got.u.command.session, cmd.session);
+  EXPECT_EQ(got.u.command.sequence, cmd.sequence);
+  EXPECT_EQ(got.u.command.command, 21);
+  EXPECT_EQ(got.u.command.channels, 0b0110);
+  EXPECT_EQ(got.u.command.repeat, 6);
+  for (const int c : {0, 48, 255}) {  // throttle values are not commands
+    mm_link_command b = cmd;
+    b.command = static_cast<std::uint8_t>(c);
+    EXPECT_EQ(mm_link_encode_command(&b, buf), 0U) << c;
+  }
+  mm_link_command none = cmd;
+  none.channels = 0;
+  EXPECT_EQ(mm_link_encode_command(&none, buf), 0U);
+  EXPECT_EQ(parser.malformed + parser.crc_errors, 0U);
+}
 TEST(OutputLink, CorruptedFramesNeverChangeAPulseAndAreCounted) {
   std::mt19937 rng(20261204);
   mm_link_parser parser;

@@ -1,0 +1,62 @@
+; DShot frames on port D: every DShot channel (D2..D7) in one frame, by
+; writing the whole port three times per bit: all channels high, then the
+; channels whose bit is 0 low, then all low. Assembly because DShot is
+; timing: each write's cycle is fixed by the instruction count below (the
+; bit period and the two high times), with interrupts off for the frame
+; (27 us at DShot600, 53 at DShot300, 107 at DShot150).
+;
+; At 16 MHz, cycles per bit, high for a 0, high for a 1 (the protocol:
+; 1/rate, 37.5 % and 75 % of it):
+;   DShot600: 27 (1.6875 us, +1.25 %), 10 (0.625 us), 20 (1.25 us)
+;   DShot300: 53 (3.3125 us, -0.6 %), 20 (1.25 us), 40 (2.5 us)
+;   DShot150: 107 (6.6875 us, +0.3 %), 40 (2.5 us), 80 (5.0 us)
+; An ESC decides a bit by its high time against half a bit (AM32, Bluejay):
+; these are 1.5 (0) and 2.4 (1) tenths of a bit from that threshold.
+;
+; void mm_dshot_send600(const uint8_t* ports, uint8_t high, uint8_t low);
+; (and 300, 150): ports: 16 values of PORTD, the frame's first bit first,
+; each with the channels whose bit is 1 high; high: PORTD with every DShot
+; channel high; low: with every one low. avr-gcc's convention: ports in
+; r25:r24, high in r22, low in r20; r18-r27, r30, r31 are the callee's.
+#include <avr/io.h>
+
+; n cycles of nothing (n >= 0): pairs of rjmp .+0 (2 cycles, one word) and
+; a nop for an odd count.
+.macro DELAY n
+  .rept (\n) / 2
+  rjmp .+0
+  .endr
+  .if (\n) % 2
+  nop
+  .endif
+.endm
+
+; One sender: t0h and t1h the cycles from the rise to the falls of a 0 and
+; a 1, bit the cycles per bit. Per bit: out (1), ld (2), DELAY n1, out (1),
+; DELAY n2, out (1), DELAY n3, dec (1), brne (2): the rise of the next bit
+; is `bit` cycles after this one's; the last brne falls through in 1.
+.macro DSHOT_SENDER name, t0h, t1h, bit
+  .global \name
+\name:
+  movw r26, r24          ; X: the port values
+  ldi r18, 16
+  in r21, _SFR_IO_ADDR(SREG)
+  cli
+1:
+  out _SFR_IO_ADDR(PORTD), r22   ; t = 0: every channel high
+  ld r19, X+
+  DELAY (\t0h - 3)
+  out _SFR_IO_ADDR(PORTD), r19   ; t = t0h: the channels sending 0 fall
+  DELAY (\t1h - \t0h - 1)
+  out _SFR_IO_ADDR(PORTD), r20   ; t = t1h: every channel low
+  DELAY (\bit - \t1h - 4)
+  dec r18
+  brne 1b
+  out _SFR_IO_ADDR(SREG), r21
+  ret
+.endm
+
+  .section .text
+  DSHOT_SENDER mm_dshot_send600, 10, 20, 27
+  DSHOT_SENDER mm_dshot_send300, 20, 40, 53
+  DSHOT_SENDER mm_dshot_send150, 40, 80, 107
