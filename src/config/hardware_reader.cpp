@@ -77,8 +77,33 @@ int integer(MapReader& m, const std::string& key, double fallback, double lo, do
 void read_hardware(MapReader section, Config& config) {
   Hardware hw;
   hw.driver = section.choice("driver", HardwareDriver::kNone, kHardwareDriverNames);
-  hw.pulse_rate_hz = section.number("pulse_rate_hz", 400.0, 1e6 / MM_LINK_MAX_PERIOD_US,
-                                    1e6 / MM_LINK_MIN_PERIOD_US);
+  hw.protocol = section.choice("protocol", EscProtocol::kPwm, kEscProtocolNames);
+  const bool dshot = hw.protocol != EscProtocol::kPwm;
+  // DShot frames are short (27-107 us): up to 4 kHz; servo pulses up to 500 Hz.
+  hw.pulse_rate_hz =
+      section.number("pulse_rate_hz", dshot ? 1000.0 : 400.0, 1e6 / MM_LINK_MAX_PERIOD_US,
+                     1e6 / (dshot ? MM_LINK_MIN_DSHOT_PERIOD_US : MM_LINK_MIN_PERIOD_US));
+  if (dshot && hw.driver != HardwareDriver::kSerial) {
+    fail(section.path_of("protocol"),
+         std::string(to_string(hw.protocol)) + " with driver " + to_string(hw.driver),
+         "pwm: only the serial driver (the pulse firmware) speaks DShot");
+  }
+  if (dshot && config.motors() > static_cast<int>(MM_LINK_MAX_DSHOT_CHANNELS)) {
+    fail(section.path_of("protocol"),
+         std::string(to_string(hw.protocol)) + " with " + std::to_string(config.motors()) +
+             " motors",
+         "at most " + std::to_string(MM_LINK_MAX_DSHOT_CHANNELS) +
+             " motors (DShot frames every channel of port D at once: pins D2..D7)");
+  }
+  if (dshot) {
+    for (const OutputChannel& ch : config.outputs) {
+      if (ch.mode != OutputMode::kUnipolar) {
+        fail("output.mode", ch.mode == OutputMode::kCentered ? "centered" : "magnitude_direction",
+             "unipolar with hardware.protocol " + std::string(to_string(hw.protocol)) +
+                 " (3D DShot is not supported)");
+      }
+    }
+  }
   hw.motor_pwm_timeout_s = section.number("motor_pwm_timeout_ms", 50.0, 5.0, 1000.0) / 1e3;
 
   MapReader serial = section.map("serial");
@@ -128,7 +153,9 @@ void read_hardware(MapReader section, Config& config) {
   section.finish();
 
   if (hw.driver != HardwareDriver::kNone) {
-    check_outputs(config, section.path_of(to_string(hw.driver)), 1e6 / hw.pulse_rate_hz);
+    // DShot carries min..max as a throttle: no pulse has to fit in a frame period.
+    check_outputs(config, section.path_of(to_string(hw.driver)),
+                  dshot ? MM_LINK_MAX_PERIOD_US : 1e6 / hw.pulse_rate_hz);
     if (hw.driver == HardwareDriver::kSerial && hw.serial.link_timeout_s < 2.0 / hw.pulse_rate_hz) {
       fail(section.path_of("serial") + ".link_timeout_ms",
            number_text(hw.serial.link_timeout_s * 1e3), "at least two pulse periods");

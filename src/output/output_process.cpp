@@ -79,6 +79,7 @@ std::unique_ptr<PulseDriver> make_driver(const config::Config& config) {
     s.min_us = lo;
     s.max_us = hi;
     s.disarmed_us = disarmed;
+    s.protocol = static_cast<std::uint8_t>(hw.protocol);  // enum order is the link's
     return std::make_unique<SerialPulseDriver>(open_serial_port(hw.serial.device, hw.serial.baud),
                                                s);
   }

@@ -18,6 +18,7 @@ std::uint16_t us(double v) {
 }  // namespace
 
 SerialPulseDriver::SerialPulseDriver(int fd, const SerialPulseSettings& s) : fd_(fd) {
+  config_.protocol = s.protocol;
   config_.period_us = us(s.period_us);
   config_.link_timeout_ms = us(s.link_timeout_ms);
   config_.min_us = us(s.min_us);
@@ -136,6 +137,12 @@ std::string SerialPulseDriver::describe() const {
     s << "; no report from the firmware yet (it reports every 50 ms; a firmware older than "
          "link version "
       << MM_LINK_VERSION << " is not understood: flash firmware/pulses)";
+    return s.str();
+  }
+  if (report_.version != MM_LINK_VERSION) {
+    s << "; the firmware speaks link version " << static_cast<int>(report_.version)
+      << ", this motormix " << MM_LINK_VERSION
+      << ": it refuses the configuration and makes no pulse (flash firmware/pulses)";
     return s.str();
   }
   s << "; firmware: " << report_.frames << " frames taken, " << report_.crc_errors

@@ -610,7 +610,6 @@ TEST(PulseFirmwareCorruption, CorruptedFramesNeverChangeAPulseAndAreCounted) {
   EXPECT_GE(r.rejected, static_cast<std::uint32_t>(replays));
 }
 
-
 // ---- DShot (CONFIG's protocol) against the emulated ESC (dshot_esc.hpp) ----
 
 constexpr double kCyclesPerUsDshot = 16.0;
@@ -634,7 +633,8 @@ constexpr DshotSpeed kDshotSpeeds[] = {{MM_LINK_PROTOCOL_DSHOT600, 600e3, "DShot
 // What the firmware sends for a width with min 1000 and max 2000 us (the
 // link carries it in half microseconds).
 std::uint16_t throttle_for(double width_us) {
-  const double t = std::clamp(static_cast<double>(std::lround(2.0 * width_us)) / 2.0, 1000.0, 2000.0);
+  const double t =
+      std::clamp(static_cast<double>(std::lround(2.0 * width_us)) / 2.0, 1000.0, 2000.0);
   return static_cast<std::uint16_t>(48 + std::lround((t - 1000.0) / 1000.0 * 1999.0));
 }
 
@@ -721,8 +721,7 @@ TEST(PulseFirmwareDshot, FourChannelsEveryFrameDecodedWithinTheProtocolsTimes) {
         "%s, 4 channels: %zu frames, %zu bad checksums, %zu wrong throttles; %.1f frames/s per "
         "channel; bit %.4f-%.4f us (nominal %.4f); high of a 0 %.4f-%.4f us, of a 1 %.4f-%.4f us\n",
         speed.name, frames, bad, wrong, rate_hz, bit_lo / 16.0, bit_hi / 16.0,
-        1e6 / speed.rate_bits_per_s, zero_lo / 16.0, zero_hi / 16.0, one_lo / 16.0,
-        one_hi / 16.0);
+        1e6 / speed.rate_bits_per_s, zero_lo / 16.0, zero_hi / 16.0, one_lo / 16.0, one_hi / 16.0);
     EXPECT_EQ(bad, 0u) << speed.name;
     EXPECT_EQ(wrong, 0u) << speed.name;
     EXPECT_GE(rate_hz, 1000.0 * (1.0 - 1e-3)) << speed.name;
@@ -753,7 +752,7 @@ TEST(PulseFirmwareDshot, DisarmedAndTheLinkTimeoutSendMotorStop) {
   mm_link_pulses p{};
   p.session = h.session;
   p.count = kChannels;
-  p.armed = 0b0101;  // channels 0 and 2 armed
+  p.armed = 0b0101;                                               // channels 0 and 2 armed
   for (int ch = 0; ch < kChannels; ++ch) p.pulse_hus[ch] = 3000;  // 1500 us
   // A few frames 10 ms apart, then silence.
   std::uint64_t last_frame_done = 0;

@@ -151,7 +151,6 @@ TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {
   EXPECT_EQ(parser.crc_errors, 0U);
 }
 
-
 // DShot in CONFIG (link version 3) and the COMMAND frame: what goes is what
 // comes back; what the firmware could not do is neither sent nor taken.
 TEST(OutputLink, DshotConfigurationsAndCommandsRoundTripWithinTheirLimits) {
@@ -176,11 +175,11 @@ TEST(OutputLink, DshotConfigurationsAndCommandsRoundTripWithinTheirLimits) {
     return c;
   };
   const mm_link_config bad[] = {
-      with([](mm_link_config& c) { c.protocol = 4; }),         // no such protocol
-      with([](mm_link_config& c) { c.period_us = 249; }),      // faster than 4 kHz
-      with([](mm_link_config& c) { c.count = 7; }),            // D2..D7 only
-      with([](mm_link_config& c) { c.min_us = c.max_us; }),    // no throttle range
-      with([](mm_link_config& c) { c.protocol = 0; })};        // servo pulses at 2 kHz
+      with([](mm_link_config& c) { c.protocol = 4; }),       // no such protocol
+      with([](mm_link_config& c) { c.period_us = 249; }),    // faster than 4 kHz
+      with([](mm_link_config& c) { c.count = 7; }),          // D2..D7 only
+      with([](mm_link_config& c) { c.min_us = c.max_us; }),  // no throttle range
+      with([](mm_link_config& c) { c.protocol = 0; })};      // servo pulses at 2 kHz
   for (const mm_link_config& c : bad) {
     EXPECT_EQ(mm_link_config_valid(&c), 0);
     EXPECT_EQ(mm_link_encode_config(&c, buf), 0U);

@@ -199,6 +199,42 @@ TEST(OutputHardwareConfig, RefusesWhatNoDriverCanMakeNamingKeyValueAndRange) {
   EXPECT_DOUBLE_EQ(ok.hardware.serial.link_timeout_s, 0.1);
 }
 
+TEST(OutputHardwareConfig, DshotOnlyThroughTheFirmwareOnPortDAndUnipolar) {
+  const std::string serial = "  driver: serial\n  serial: {device: /dev/ttyUSB0}\n";
+  const std::string sysfs = expect_hardware_error("  driver: sysfs\n  protocol: dshot600\n");
+  EXPECT_NE(sysfs.find("hardware.protocol"), std::string::npos) << sysfs;
+  EXPECT_NE(sysfs.find("serial driver"), std::string::npos) << sysfs;
+  EXPECT_NE(expect_hardware_error(serial + "  protocol: dshot1200\n").find("hardware.protocol"),
+            std::string::npos);
+  EXPECT_NE(expect_hardware_error(serial + "  protocol: dshot300\n  pulse_rate_hz: 5000\n")
+                .find("hardware.pulse_rate_hz"),
+            std::string::npos);
+  const std::string centered =
+      expect_hardware_error(serial + "  protocol: dshot600\n", "output: {mode: centered}\n");
+  EXPECT_NE(centered.find("output.mode"), std::string::npos) << centered;
+  std::string octo;
+  try {
+    config::load_config_text(
+        "geometry: {preset: octo_x}\nhardware:\n" + serial + "  protocol: dshot600\n", "test");
+  } catch (const config::ConfigError& e) {
+    octo = e.what();
+  }
+  EXPECT_NE(octo.find("D2..D7"), std::string::npos) << octo;
+  // 2 kHz frames: too fast for servo pulses, the default for nothing, fine for DShot.
+  const config::Config ok =
+      config::load_config_text("geometry: {preset: quad_x}\nhardware:\n" + serial +
+                                   "  protocol: dshot600\n  pulse_rate_hz: 2000\n",
+                               "test");
+  EXPECT_EQ(ok.hardware.protocol, config::EscProtocol::kDshot600);
+  EXPECT_DOUBLE_EQ(ok.hardware.pulse_rate_hz, 2000.0);
+  const config::Config defaults = config::load_config_text(
+      "geometry: {preset: quad_x}\nhardware:\n" + serial + "  protocol: dshot300\n", "test");
+  EXPECT_DOUBLE_EQ(defaults.hardware.pulse_rate_hz, 1000.0);
+  EXPECT_NE(
+      expect_hardware_error(serial + "  pulse_rate_hz: 2000\n").find("hardware.pulse_rate_hz"),
+      std::string::npos);
+}
+
 // A sysfs PWM tree as the kernel shows it: pwmchip0 with export, and the
 // channel directories with their attributes (here: made by the "kernel"
 // when export is written, as udev would).

@@ -15,6 +15,22 @@ enum class HardwareDriver {
   kSysfs,   // Linux hardware PWM (/sys/class/pwm)
 };
 
+// What the pulse firmware puts on the ESC pins (serial driver only).
+enum class EscProtocol {
+  kPwm,       // servo pulses, min..max us at pulse_rate_hz
+  kDshot150,  // DShot frames at pulse_rate_hz: throttle 48..2047 from min..max, 0 disarmed
+  kDshot300,
+  kDshot600,
+};
+
+inline constexpr EnumName<EscProtocol> kEscProtocolNames[] = {
+    {EscProtocol::kPwm, "pwm"},
+    {EscProtocol::kDshot150, "dshot150"},
+    {EscProtocol::kDshot300, "dshot300"},
+    {EscProtocol::kDshot600, "dshot600"},
+};
+inline const char* to_string(EscProtocol value) { return name_in(kEscProtocolNames, value); }
+
 struct SerialPulses {
   std::string device;           // the microcontroller's serial port, e.g. /dev/ttyUSB0
   int baud = 250000;            // the firmware's rate
@@ -36,7 +52,8 @@ struct TelemetryPort {
 
 struct Hardware {
   HardwareDriver driver = HardwareDriver::kNone;
-  double pulse_rate_hz = 400.0;       // pulses per second on every channel
+  EscProtocol protocol = EscProtocol::kPwm;
+  double pulse_rate_hz = 400.0;       // pulses (or DShot frames) per second on every channel
   double motor_pwm_timeout_s = 0.05;  // older motor_pwm_t: disarmed values
   SerialPulses serial;
   SysfsPwm sysfs;

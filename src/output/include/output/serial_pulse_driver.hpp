@@ -21,6 +21,9 @@ struct SerialPulseSettings {
   double min_us = 1000.0;  // the firmware clamps armed pulses into [min_us, max_us] too
   double max_us = 2000.0;
   std::vector<double> disarmed_us;  // one per motor
+  // MM_LINK_PROTOCOL_*: with DShot, period_us is the frame period and
+  // min_us..max_us the throttle range (the firmware maps it onto 48..2047).
+  std::uint8_t protocol = MM_LINK_PROTOCOL_PWM;
 };
 
 class SerialPulseDriver : public PulseDriver {
