@@ -84,4 +84,36 @@ int esc_calibrate(const EscCalibrateCommand& cmd) {
                                                 std::cout, std::cerr));
 }
 
+int esc_command(const EscCommandCommand& cmd) {
+  const auto config = load_vehicle(cmd.common, "esc-command");
+  if (!config) return kExitUsage;
+  const std::optional<bringup::EscCommand> command = bringup::esc_command_named(cmd.command);
+  if (!command) {
+    std::cerr << "motormix esc-command: " << cmd.command << ": expected "
+              << bringup::esc_command_names() << "\n";
+    return kExitUsage;
+  }
+  if (config->hardware.protocol == config::EscProtocol::kPwm) {
+    std::cerr << "motormix esc-command: refused: hardware.protocol is pwm; special commands are "
+                 "DShot's (docs/wiring-it-to-motors.md)\n";
+    return kExitUsage;
+  }
+  std::vector<int> motors;
+  if (cmd.all) {
+    for (int i = 0; i < config->motors(); ++i) motors.push_back(i);
+  }
+  for (const std::string& name : cmd.motors) {
+    const int m = config->motor_index(name);
+    if (m < 0) {
+      std::cerr << "motormix esc-command: --motor " << name << ": expected 1.." << config->motors()
+                << " or a motor name\n";
+      return kExitUsage;
+    }
+    motors.push_back(m);
+  }
+  if (cmd.parse_only) return kExitOk;
+  return exit_code(bringup::run_esc_command(*config, *command, motors, cmd.wait_s, cmd.lcm_url,
+                                            std::cout, std::cerr));
+}
+
 }  // namespace motormix::app

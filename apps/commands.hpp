@@ -174,4 +174,15 @@ struct EscCalibrateCommand {
 };
 int esc_calibrate(const EscCalibrateCommand& cmd);
 
+struct EscCommandCommand {
+  CommonOptions common;
+  std::string lcm_url;
+  std::string command;              // a name or 1..47 (bringup::esc_command_named)
+  std::vector<std::string> motors;  // numbers or names; empty with all
+  bool all = false;
+  double wait_s = 2.0;      // for motormix output's status
+  bool parse_only = false;  // resolve the command and motors, then exit 0 without the bus
+};
+int esc_command(const EscCommandCommand& cmd);
+
 }  // namespace motormix::app

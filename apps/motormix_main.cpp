@@ -276,6 +276,28 @@ int main(int argc, char** argv) {
                    "seconds at the minimum before disarming (default 4)")
       ->check(CLI::Range(0.1, 60.0));
 
+  EscCommandCommand escc_cmd;
+  CLI::App* escc_app = app.add_subcommand(
+      "esc-command",
+      "send a DShot special command (beep, spin direction, 3D, save) to ESCs through a running "
+      "motormix output, only while every output is disarmed");
+  add_vehicle(escc_app, escc_cmd.common);
+  add_lcm_url(escc_app, escc_cmd.lcm_url);
+  escc_app
+      ->add_option("command", escc_cmd.command,
+                   "beep1..beep5, esc-info, spin-direction-1, spin-direction-2, 3d-off, 3d-on, "
+                   "save, spin-normal, spin-reversed, or a number 1..47")
+      ->required();
+  auto* escc_motor =
+      escc_app->add_option("--motor", escc_cmd.motors,
+                           "a motor: number as motormix matrix prints it, or name (repeatable)");
+  auto* escc_all = escc_app->add_flag("--all", escc_cmd.all, "every motor");
+  escc_motor->excludes(escc_all);
+  escc_app
+      ->add_option("--wait", escc_cmd.wait_s,
+                   "seconds to wait for motormix output's status (default 2)")
+      ->check(CLI::Range(0.1, 60.0));
+
   try {
     app.parse(argc, argv);
     for (const auto& [sub, common] : vehicles) {
@@ -285,6 +307,9 @@ int main(int argc, char** argv) {
     }
     if (test_app->parsed() && test_cmd.motor.empty() && !test_cmd.sequence) {
       throw CLI::RequiredError("--motor or --sequence");
+    }
+    if (escc_app->parsed() && escc_cmd.motors.empty() && !escc_cmd.all) {
+      throw CLI::RequiredError("--motor or --all");
     }
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
@@ -301,10 +326,11 @@ int main(int argc, char** argv) {
     // is checked with the command that uses it. The subcommands that name
     // more (a scenario, motors to fail, a motor to test, a battery voltage)
     // resolve it all and stop before doing anything.
-    mix_cmd.parse_only = sim_cmd.parse_only = test_cmd.parse_only = true;
+    mix_cmd.parse_only = sim_cmd.parse_only = test_cmd.parse_only = escc_cmd.parse_only = true;
     if (mix_app->parsed()) return mix(mix_cmd);
     if (sim_app->parsed()) return sim(sim_cmd);
     if (test_app->parsed()) return motor_test(test_cmd);
+    if (escc_app->parsed()) return esc_command(escc_cmd);
     for (const auto& [sub, common] : vehicles) {
       if (sub->parsed() && !load_vehicle(*common, sub->get_name().c_str())) return kExitUsage;
     }
@@ -323,5 +349,6 @@ int main(int argc, char** argv) {
   if (sim_app->parsed()) return sim(sim_cmd);
   if (test_app->parsed()) return motor_test(test_cmd);
   if (esc_app->parsed()) return esc_calibrate(esc_cmd);
+  if (escc_app->parsed()) return esc_command(escc_cmd);
   return kExitUsage;
 }

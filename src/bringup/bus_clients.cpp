@@ -7,9 +7,11 @@
 #include "bus/sealed_publisher.hpp"
 
 #include <motormix/config/security.hpp>
+#include <motormix/esc_command_t.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/motor_test_t.hpp>
+#include <motormix/output_status_t.hpp>
 #include <motormix/signing_policy.hpp>
 
 #include <lcm/lcm-cpp.hpp>
@@ -276,6 +278,116 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       err << "motormix esc-calibrate: " << calibration.reason() << "; outputs disarmed\n";
       return signals.requested() ? ClientOutcome::kInterrupted : ClientOutcome::kAborted;
   }
+}
+
+namespace {
+
+struct NamedCommand {
+  const char* name;
+  int number;
+};
+// The ESCs' numbering (BLHeli_32, AM32, Bluejay).
+constexpr NamedCommand kEscCommands[] = {{"beep1", 1},
+                                         {"beep2", 2},
+                                         {"beep3", 3},
+                                         {"beep4", 4},
+                                         {"beep5", 5},
+                                         {"esc-info", 6},
+                                         {"spin-direction-1", 7},
+                                         {"spin-direction-2", 8},
+                                         {"3d-off", 9},
+                                         {"3d-on", 10},
+                                         {"save", 12},
+                                         {"spin-normal", 20},
+                                         {"spin-reversed", 21}};
+constexpr int kBeepRepeat = 1;
+constexpr int kSettingRepeat = 10;  // ESCs act on a setting after 6 frames of it
+constexpr int kLastBeep = 5;
+
+// The latest output_status_t, through the bus's guard (signed ones only
+// under security: sign or require).
+struct OutputStatusWatch {
+  signing::Policy* policy = nullptr;
+  std::optional<output_status_t> latest;
+  bus::Refusals refused;
+  output_status_t msg{};
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    if (bus::receive(*policy, rbuf, channel, bus::wall_us(), msg, refused) != bus::Refusal::kNone)
+      return;
+    latest = msg;
+  }
+};
+
+}  // namespace
+
+std::optional<EscCommand> esc_command_named(const std::string& name) {
+  int number = 0;
+  for (const NamedCommand& c : kEscCommands)
+    if (name == c.name) number = c.number;
+  if (number == 0) {
+    if (name.empty() || name.size() > 2 ||
+        !std::all_of(name.begin(), name.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
+      return std::nullopt;
+    number = std::stoi(name);
+    if (number < 1 || number > 47) return std::nullopt;
+  }
+  return EscCommand{number, number <= kLastBeep ? kBeepRepeat : kSettingRepeat};
+}
+
+std::string esc_command_names() {
+  std::string s;
+  for (const NamedCommand& c : kEscCommands) s += (s.empty() ? "" : ", ") + std::string(c.name);
+  return s + " or a number 1..47";
+}
+
+ClientOutcome run_esc_command(const config::Config& config, const EscCommand& command,
+                              const std::vector<int>& motors, double wait_s,
+                              const std::string& lcm_url, std::ostream& out, std::ostream& err) {
+  std::optional<signing::Policy> policy = bus::policy_or_error(config, "esc-command", err);
+  if (!policy) return ClientOutcome::kBusError;
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    err << "motormix esc-command: cannot open the LCM bus\n";
+    return ClientOutcome::kBusError;
+  }
+  bus::SealedPublisher publisher(lcm, *policy);
+  OutputStatusWatch watch;
+  watch.policy = &*policy;
+  const RefusalReport report{watch.refused, config.channels.output_status, "esc-command", err};
+  lcm.subscribe(config.channels.output_status, &OutputStatusWatch::on_status, &watch);
+  // The output's counts before: what changes after the command is its answer.
+  const auto start = Clock::now();
+  while (!watch.latest && seconds_since(start) < wait_s) lcm.handleTimeout(20);
+  if (!watch.latest) {
+    err << "motormix esc-command: no motormix output on " << config.channels.output_status
+        << " within " << wait_s << " s\n";
+    return ClientOutcome::kNoAnswer;
+  }
+  const std::int64_t sent_before = watch.latest->esc_commands_sent;
+  const std::int64_t refused_before = watch.latest->esc_commands_refused;
+  esc_command_t msg{};
+  msg.utime = bus::wall_us();
+  msg.command = static_cast<std::int8_t>(command.number);
+  msg.repeat = static_cast<std::int8_t>(command.repeat);
+  for (int m : motors) msg.motors |= static_cast<std::int32_t>(1U << m);
+  publisher.publish(config.channels.esc_command, msg);
+  while (seconds_since(start) < 2 * wait_s) {
+    lcm.handleTimeout(20);
+    if (watch.latest->esc_commands_sent > sent_before) {
+      out << "ESC command " << command.number << " sent to " << motors.size() << " motor"
+          << (motors.size() == 1 ? "" : "s") << " in " << command.repeat << " frame"
+          << (command.repeat == 1 ? "" : "s") << std::endl;
+      return ClientOutcome::kOk;
+    }
+    if (watch.latest->esc_commands_refused > refused_before) {
+      err << "motormix esc-command: refused by motormix output (its log says why: an output "
+             "armed, hardware.protocol not DShot, or no firmware report yet)\n";
+      return ClientOutcome::kRefused;
+    }
+  }
+  err << "motormix esc-command: motormix output did not count the command within " << wait_s
+      << " s\n";
+  return ClientOutcome::kNoAnswer;
 }
 
 }  // namespace motormix::bringup

@@ -130,6 +130,9 @@ std::string output_lines(const MonitorSnapshot& snap, const MonitorOptions& o) {
     << "   clamped " << out.clamped << "   stale " << out.stale_events << "   write failures "
     << out.write_failures;
   if (out.telemetry_frames > 0) s << "   esc_telemetry " << out.telemetry_frames;
+  if (out.esc_commands_sent + out.esc_commands_refused > 0)
+    s << "   ESC commands sent " << out.esc_commands_sent << ", refused "
+      << out.esc_commands_refused;
   if (!out.device_open) s << "   DEVICE LOST (reopening)";
   if (out.device_reopened > 0) s << "   reopened " << out.device_reopened;
   s << "\n";

@@ -14,6 +14,7 @@
 #include "bus/shutdown_signals.hpp"
 
 #include <motormix/config/security.hpp>
+#include <motormix/esc_command_t.hpp>
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/output_status_t.hpp>
@@ -109,6 +110,8 @@ class OutputNode {
 
   void subscribe() {
     lcm_.subscribe(config_.channels.motor_pwm, &OutputNode::on_motor_pwm, this)
+        ->setQueueCapacity(kQueueCapacity);
+    lcm_.subscribe(config_.channels.esc_command, &OutputNode::on_esc_command, this)
         ->setQueueCapacity(kQueueCapacity);
   }
 
@@ -216,6 +219,8 @@ class OutputNode {
     msg.refused_bringup = count(c.bringup_refused);
     msg.write_failures = count(write_failures_);
     msg.telemetry_frames = count(telemetry_frames_);
+    msg.esc_commands_sent = count(commands_sent_);
+    msg.esc_commands_refused = count(commands_refused_);
     msg.device_open = driver_ != nullptr;
     msg.device_reopened = static_cast<std::int32_t>(reopened_);
     if (const std::optional<FirmwareReport> r =
@@ -263,6 +268,45 @@ class OutputNode {
       taken_ = true;
   }
 
+  // A DShot special command: to the firmware only while nothing is armed
+  // (the gate's state and the last write both), whole and in range;
+  // counted and logged either way.
+  void on_esc_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    if (bus::receive(policy_, rbuf, channel, wall_us(), command_msg_, refusals_) !=
+        bus::Refusal::kNone)
+      return;
+    const esc_command_t& m = command_msg_;
+    const std::uint32_t motors = static_cast<std::uint32_t>(m.motors);
+    const bool disarmed = (state_ == GateState::kDisarmed || state_ == GateState::kStale ||
+                           state_ == GateState::kStarting) &&
+                          written_armed_ == 0;
+    const char* why = nullptr;
+    if (config_.hardware.protocol == config::EscProtocol::kPwm) {
+      why = "hardware.protocol is pwm (special commands are DShot's)";
+    } else if (m.command < 1 || m.command > static_cast<int>(MM_LINK_DSHOT_MAX_COMMAND) ||
+               m.repeat < 1 || m.repeat > kMaxCommandRepeat || motors == 0 ||
+               (motors >> gate_.outputs()) != 0) {
+      why = "out of range (command 1..47, repeat 1..100, motors of this configuration)";
+    } else if (!disarmed) {
+      why = "an output is armed";
+    } else if (driver_ == nullptr || !driver_->command(static_cast<std::uint8_t>(m.command), motors,
+                                                       static_cast<std::uint8_t>(m.repeat))) {
+      why = "the firmware cannot take it now (no device, or no report from it yet)";
+    }
+    if (why != nullptr) {
+      ++commands_refused_;
+      log_ << "motormix output: ESC command " << static_cast<int>(m.command) << " refused: " << why
+           << std::endl;
+      return;
+    }
+    ++commands_sent_;
+    log_ << "motormix output: ESC command " << static_cast<int>(m.command) << " sent to motors 0x"
+         << std::hex << motors << std::dec << " in " << static_cast<int>(m.repeat) << " frames"
+         << std::endl;
+  }
+
+  static constexpr int kMaxCommandRepeat = 100;
+
   const config::Config& config_;
   signing::Policy policy_;
   lcm::LCM& lcm_;
@@ -274,6 +318,8 @@ class OutputNode {
   GateState state_ = GateState::kStarting;
   double last_write_s_ = -1e9;
   motormix::motor_pwm_t pwm_msg_{};  // decoded into, its arrays reused
+  motormix::esc_command_t command_msg_{};
+  std::uint64_t commands_sent_ = 0, commands_refused_ = 0;
   bus::Refusals refusals_;
   bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;

@@ -80,6 +80,20 @@ bool SerialPulseDriver::write(const double* pulse_us, int count, std::uint32_t a
   return ok;
 }
 
+bool SerialPulseDriver::command(std::uint8_t command, std::uint32_t channels, std::uint8_t repeat) {
+  if (config_.protocol == MM_LINK_PROTOCOL_PWM || session_ == 0) return false;
+  if (channels == 0 || (channels >> config_.count) != 0) return false;
+  mm_link_command c{};
+  c.session = session_;
+  c.sequence = ++sequence_;
+  c.command = command;
+  c.channels = static_cast<std::uint8_t>(channels);
+  c.repeat = repeat;
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  const std::size_t n = mm_link_encode_command(&c, buf);
+  return n > 0 && send(buf, n);
+}
+
 bool SerialPulseDriver::service(double now_s) {
   if (lost_) return false;
   std::uint8_t buf[256];

@@ -31,6 +31,7 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -295,6 +296,7 @@ struct Pty {
   int master = -1;
   std::string slave;
   std::uint32_t session = 0x10001;
+  mm_link_frame last{};  // the last frame frames_until read
   Pty() {
     // Close-on-exec: a copy in the output process would keep the line up.
     master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
@@ -336,6 +338,7 @@ struct Pty {
         const std::uint8_t type = mm_link_feed(&parser, buf[i], &f);
         if (type == 0) continue;
         types.push_back(type);
+        last = f;
         if (type == until) return types;
       }
       if (n <= 0) std::this_thread::sleep_for(1ms);
@@ -406,6 +409,71 @@ TEST_F(OutputProcess, ALostSerialDeviceIsReopenedAndTheFirmwareConfiguredAgain) 
   const std::string text = log_text();
   EXPECT_NE(text.find("motormix output: lost " + link), std::string::npos) << text;
   EXPECT_NE(text.find("motormix output: reopened " + link), std::string::npos) << text;
+}
+
+// A DShot special command from `motormix esc-command` reaches the firmware
+// through the output as a COMMAND frame while every output is disarmed,
+// and is refused (exit 5, no frame) while the mixer's outputs are armed.
+TEST_F(OutputProcess, EscCommandsReachTheFirmwareOnlyWhileDisarmed) {
+  Pty pty;
+  ASSERT_GE(pty.master, 0);
+  const std::string config = root_ + "/dshot.yaml";
+  std::ofstream(config) << "geometry: {preset: quad_x}\n"
+                           "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                           "hardware:\n"
+                           "  driver: serial\n"
+                           "  protocol: dshot600\n"
+                           "  serial: {device: "
+                        << pty.slave << "}\n";
+  ChildProcess output({motormix_binary(), "output", "--config", config}, root_ + "/dshot.log");
+  std::vector<int> types = pty.frames_until(MM_LINK_CONFIG, 3000);
+  ASSERT_FALSE(types.empty()) << "no CONFIG frame";
+  EXPECT_EQ(pty.last.u.config.protocol, MM_LINK_PROTOCOL_DSHOT600);
+  {
+    ChildProcess cli({motormix_binary(), "esc-command", "--config", config, "spin-reversed",
+                      "--motor", "2", "--motor", "4"},
+                     root_ + "/esc-command.log");
+    types = pty.frames_until(MM_LINK_COMMAND, 4000);
+    ASSERT_FALSE(types.empty());
+    ASSERT_EQ(types.back(), MM_LINK_COMMAND);
+    EXPECT_EQ(pty.last.u.command.command, 21);
+    EXPECT_EQ(pty.last.u.command.channels, 0b1010);
+    EXPECT_EQ(pty.last.u.command.repeat, 10);
+    EXPECT_EQ(pty.last.u.command.session, pty.session);
+    pty.frames_until(-1, 500);  // reports keep coming while the client reads the status
+    EXPECT_EQ(cli.wait_for(3s), 0);
+  }
+  // Armed: refused, nothing on the line but pulses.
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  std::atomic<bool> stop{false};
+  std::thread mixer([&] {
+    motormix::motor_pwm_t m{};
+    m.num_motors = 4;
+    m.pwm.assign(4, 1200.0f);
+    m.command.assign(4, 0.2f);
+    m.direction.assign(4, 0);
+    m.armed = true;
+    for (int k = 0; k < 1000 && !stop; ++k) {
+      m.utime = k;
+      lcm.publish("MOTOR_PWM", &m);
+      std::this_thread::sleep_for(5ms);
+    }
+  });
+  pty.frames_until(-1, 300);
+  ChildProcess refused({motormix_binary(), "esc-command", "--config", config, "save", "--all"},
+                       root_ + "/esc-command-refused.log");
+  types = pty.frames_until(MM_LINK_COMMAND, 2500);
+  stop = true;
+  mixer.join();
+  EXPECT_TRUE(std::find(types.begin(), types.end(), MM_LINK_COMMAND) == types.end());
+  EXPECT_EQ(refused.wait_for(3s), 5);
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(3s), 0);
+  std::ifstream in(root_ + "/dshot.log");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("ESC command 21 sent"), std::string::npos) << text;
+  EXPECT_NE(text.find("ESC command 12 refused: an output is armed"), std::string::npos) << text;
 }
 
 TEST_F(OutputProcess, UnderRequireOnlySignedMotorPwmMovesThePins) {

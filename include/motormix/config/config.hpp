@@ -43,6 +43,7 @@ struct Channels {
   std::string esc_telemetry = "ESC_TELEMETRY";
   std::string attitude = "ATTITUDE";
   std::string output_status = "OUTPUT_STATUS";  // motormix output's own state
+  std::string esc_command = "ESC_COMMAND";      // DShot special commands for motormix output
 };
 
 // `motormix motor-test`: a disarmed mixer spins one motor alone on request.

@@ -12,6 +12,7 @@
 #include <motormix/config/config.hpp>
 
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,5 +42,24 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
                                   const std::string& lcm_url, int input_fd,
                                   bus::ShutdownSignals& signals, std::ostream& out,
                                   std::ostream& err);
+
+// A DShot special command by name ("beep1".."beep5", "esc-info",
+// "spin-direction-1", "spin-direction-2", "3d-off", "3d-on", "save",
+// "spin-normal", "spin-reversed") or number (1..47): its number and the
+// frames it goes in (10 for a setting, as ESCs act on one after 6; 1 for a
+// beep); nullopt for anything else.
+struct EscCommand {
+  int number = 0;
+  int repeat = 1;
+};
+std::optional<EscCommand> esc_command_named(const std::string& name);
+// The names, for the help text.
+std::string esc_command_names();
+
+// Publishes one esc_command_t for `motors` (0-based) and waits up to
+// `wait_s` for `motormix output`'s status to count it sent or refused.
+ClientOutcome run_esc_command(const config::Config& config, const EscCommand& command,
+                              const std::vector<int>& motors, double wait_s,
+                              const std::string& lcm_url, std::ostream& out, std::ostream& err);
 
 }  // namespace motormix::bringup

@@ -33,6 +33,16 @@ class PulseDriver {
     (void)now_s;
     return true;
   }
+  // A DShot special command (1..47) on the channels of `channels` (bit i:
+  // channel i), in `repeat` frames; the caller sends it only while every
+  // output is disarmed. False when the hardware cannot (not DShot, not
+  // written).
+  virtual bool command(std::uint8_t command, std::uint32_t channels, std::uint8_t repeat) {
+    (void)command;
+    (void)channels;
+    (void)repeat;
+    return false;
+  }
   // The hardware's latest report, when it sends one.
   virtual std::optional<FirmwareReport> firmware_report() const { return std::nullopt; }
   // One line on the hardware's own state, for the log.

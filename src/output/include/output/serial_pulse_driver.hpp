@@ -34,6 +34,7 @@ class SerialPulseDriver : public PulseDriver {
   ~SerialPulseDriver() override;
 
   bool write(const double* pulse_us, int count, std::uint32_t armed) override;
+  bool command(std::uint8_t command, std::uint32_t channels, std::uint8_t repeat) override;
   bool service(double now_s) override;
   std::string describe() const override;
   std::optional<FirmwareReport> firmware_report() const override;
