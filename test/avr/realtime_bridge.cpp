@@ -48,6 +48,13 @@ std::vector<TimedPulse> RealtimeBridge::take_pulses() {
   return out;
 }
 
+std::vector<RealtimeBridge::TimedEdge> RealtimeBridge::take_edges() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<TimedEdge> out;
+  out.swap(edges_);
+  return out;
+}
+
 void RealtimeBridge::run() {
   std::int64_t wall0 = steady_us();
   const double sim0 = board_.now_us();
@@ -64,6 +71,15 @@ void RealtimeBridge::run() {
       // The host reads its end; bytes it leaves unread are dropped, as a
       // USB serial adapter's buffer would.
       [[maybe_unused]] const ssize_t w = ::write(master_, out.data(), out.size());
+    }
+    const std::vector<PinEdge> edges = board_.take_edges();
+    if (!edges.empty()) {
+      const std::int64_t wall_now = steady_us();
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (const PinEdge& e : edges) {
+        const double since_us = board_.now_us() - static_cast<double>(e.cycle) / 16.0;
+        edges_.push_back({e, wall_now - static_cast<std::int64_t>(since_us)});
+      }
     }
     const std::vector<Pulse> pulses = board_.take_pulses();
     if (!pulses.empty()) {

@@ -32,6 +32,14 @@ class RealtimeBridge {
 
   const std::string& device() const { return slave_path_; }
   std::vector<TimedPulse> take_pulses();
+  // Every pin edge since the last call (DShot: 32 a frame a channel), with
+  // the wall time it had (as a pulse's rise: now less the simulated time
+  // since it).
+  struct TimedEdge {
+    PinEdge edge;
+    std::int64_t wall_us;
+  };
+  std::vector<TimedEdge> take_edges();
   // How far the simulation fell behind the wall clock at worst, us.
   double max_lag_us() const { return max_lag_us_.load(); }
   void reset_max_lag() { max_lag_us_ = 0.0; }
@@ -46,6 +54,7 @@ class RealtimeBridge {
   std::string slave_path_;
   std::mutex mutex_;
   std::vector<TimedPulse> pulses_;
+  std::vector<TimedEdge> edges_;
   std::atomic<bool> stop_{false};
   std::atomic<double> max_lag_us_{0.0};
   std::atomic<std::uint64_t> bytes_in_{0};

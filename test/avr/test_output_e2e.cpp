@@ -15,6 +15,7 @@
 // reports how far the simulation ever fell behind, and the test asks that
 // to stay small so the numbers mean what they say.
 
+#include "dshot_esc.hpp"
 #include "integration/process.hpp"
 #include "realtime_bridge.hpp"
 #include "test_paths.hpp"
@@ -380,6 +381,168 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
   EXPECT_LE(output_gone_ms, kOutputDeathBoundMs + bridge.max_lag_us() / 1000.0);
   EXPECT_GT(output_gone_ms, 0.0);
   EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
+  bridge.stop();
+  std::remove(config.c_str());
+}
+
+// DShot600 at 1 kHz through motormix output: what emulated ESCs decode
+// from the pins is the throttle of a motor_pwm_t published just before,
+// every frame with a good checksum; motor stop once the messages stop
+// (the output's staleness) and once the output is SIGKILLed (the chip's
+// link timeout).
+TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
+  constexpr int kMotors = 4;
+  constexpr double kBitCycles = 16.0 * 1e6 / 600e3;
+  constexpr double kFrameMs = 1.0;  // 1 kHz
+  avr::RealtimeBridge bridge(MOTORMIX_FIRMWARE_ELF);
+  const std::string config = "/tmp/motormix-e2e-dshot-" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(config) << "name: e2e-dshot\n"
+                           "geometry: {preset: quad_x}\n"
+                           "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                           "hardware:\n"
+                           "  driver: serial\n"
+                           "  protocol: dshot600\n"
+                           "  pulse_rate_hz: 1000\n"
+                           "  serial: {device: "
+                        << bridge.device() << "}\n";
+  auto output = std::make_unique<ChildProcess>(
+      std::vector<std::string>{motormix_binary(), "output", "--config", config},
+      "/tmp/motormix-e2e-dshot-output.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));  // configured: motor stop
+  bridge.take_edges();
+  bridge.reset_max_lag();
+  // What the firmware makes of a width: half microseconds, [1000, 2000]
+  // onto 48..2047.
+  auto throttle = [](float pwm) {
+    const long hus = std::clamp(std::lround(2.0 * static_cast<double>(pwm)), 2000L, 4000L);
+    return static_cast<int>(48 + ((hus - 2000) * 1999 + 1000) / 2000);
+  };
+  std::map<int, std::int64_t> published_us;
+  std::map<int, std::vector<int>> expected;
+  const int kMessages = 1200;
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < kMessages; ++k) {
+    motormix::motor_pwm_t m{};
+    m.num_motors = kMotors;
+    m.pwm = {1100.25f + static_cast<float>(k % 800), 1300.0f + 0.37f * static_cast<float>(k % 1000),
+             1500.5f + static_cast<float>((k * 7) % 300) * 0.73f,
+             1450.0f + 0.11f * static_cast<float>(k % 2000)};
+    m.command.assign(kMotors, 0.5f);
+    m.direction.assign(kMotors, 0);
+    m.armed = true;
+    std::this_thread::sleep_until(start + std::chrono::microseconds(2500 * k));
+    published_us[k] = steady_us();
+    for (float v : m.pwm) expected[k].push_back(throttle(v));
+    lcm.publish("MOTOR_PWM", &m);
+  }
+  const std::int64_t last_publish = steady_us();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the "mixer" is gone
+
+  // Every channel's frames, with the wall time of their first rise.
+  auto decode = [&](const std::vector<avr::RealtimeBridge::TimedEdge>& edges) {
+    std::vector<avr::PinEdge> plain;
+    std::map<std::uint64_t, std::int64_t> wall_of;
+    for (const auto& e : edges) {
+      plain.push_back(e.edge);
+      wall_of[e.edge.cycle] = e.wall_us;
+    }
+    std::vector<std::vector<std::pair<std::int64_t, avr::DshotFrame>>> out(kMotors);
+    for (int ch = 0; ch < kMotors; ++ch) {
+      avr::DshotEsc esc(ch, kBitCycles);
+      esc.feed(plain);
+      for (const avr::DshotFrame& f : esc.take_frames())
+        out[static_cast<std::size_t>(ch)].push_back({wall_of.at(f.start_cycle), f});
+      // The slice of edges may start inside a frame: that one, no other.
+      EXPECT_LE(esc.broken(), 1) << "channel " << ch;
+    }
+    return out;
+  };
+  const auto frames = decode(bridge.take_edges());
+  const std::int64_t late = kReceiveSlackUs + static_cast<std::int64_t>(bridge.max_lag_us());
+  int armed_frames = 0, matched = 0, bad = 0;
+  std::vector<double> latency_ms;
+  for (std::size_t i = 0; i < frames[0].size(); ++i) {
+    const auto& [at, f0] = frames[0][i];
+    for (int ch = 0; ch < kMotors; ++ch) {
+      const auto& fc = frames[static_cast<std::size_t>(ch)];
+      bad += fc.size() > i && !fc[i].second.crc_ok ? 1 : 0;
+    }
+    if (at > last_publish || f0.value == 0) continue;
+    ++armed_frames;
+    // The newest message published before the frame whose throttles it carries.
+    int best = -1;
+    for (const auto& [k, t] : published_us) {
+      if (t >= at + late || t < at - 10000) continue;
+      bool all = true;
+      for (int ch = 0; ch < kMotors && all; ++ch) {
+        const auto& fc = frames[static_cast<std::size_t>(ch)];
+        all = fc.size() > i && fc[i].second.value == expected[k][static_cast<std::size_t>(ch)];
+      }
+      if (all) best = k;
+    }
+    if (best >= 0) {
+      ++matched;
+      latency_ms.push_back(static_cast<double>(at - published_us[best]) / 1000.0);
+    }
+  }
+  // Motor stop after the last message: within the output's staleness
+  // (50 ms) and a frame, and no throttle after the first stop.
+  double stop_ms = NAN;
+  bool throttle_after_stop = false;
+  for (const auto& [at, f] : frames[0]) {
+    if (at <= last_publish) continue;
+    if (std::isnan(stop_ms)) {
+      if (f.value == 0) stop_ms = static_cast<double>(at - last_publish) / 1000.0;
+    } else if (f.value != 0) {
+      throttle_after_stop = true;
+    }
+  }
+  std::printf(
+      "DShot600 through motormix output: %d armed frames, %d carry a motor_pwm_t of the 10 ms "
+      "before, %d bad checksums; bus to frame p50 %.2f ms, p99 %.2f ms; motor stop %.1f ms after "
+      "the last motor_pwm_t; chip late by %.2f ms at worst\n",
+      armed_frames, matched, bad, percentile(latency_ms, 0.5), percentile(latency_ms, 0.99),
+      stop_ms, bridge.max_lag_us() / 1000.0);
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(armed_frames, static_cast<int>(kMessages * 2.5 / kFrameMs * 0.9));
+  EXPECT_GE(matched, armed_frames * kMatchedShare);
+  EXPECT_LE(percentile(latency_ms, 0.5), kFrameMs + 1.0 + 1.0);
+  EXPECT_LE(stop_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_FALSE(throttle_after_stop);
+
+  // Armed again, then the output SIGKILLed: the chip stops the motors.
+  for (int k = 0; k < 200; ++k) {
+    motormix::motor_pwm_t m{};
+    m.num_motors = kMotors;
+    m.pwm.assign(kMotors, 1600.0f);
+    m.command.assign(kMotors, 0.6f);
+    m.direction.assign(kMotors, 0);
+    m.armed = true;
+    lcm.publish("MOTOR_PWM", &m);
+    std::this_thread::sleep_for(std::chrono::microseconds(2500));
+    if (k == 150) output->signal(SIGKILL);
+  }
+  const std::int64_t killed = steady_us() - 49 * 2500;
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const auto after = decode(bridge.take_edges());
+  double killed_stop_ms = NAN;
+  bool armed_before_kill = false;
+  for (const auto& [at, f] : after[0]) {
+    if (at <= killed) {
+      armed_before_kill |= f.value == throttle(1600.0f);
+      continue;
+    }
+    if (f.value == 0) {
+      killed_stop_ms = static_cast<double>(at - killed) / 1000.0;
+      break;
+    }
+  }
+  std::printf("motor stop %.1f ms after SIGKILL of motormix output\n", killed_stop_ms);
+  EXPECT_TRUE(armed_before_kill);
+  EXPECT_LE(killed_stop_ms, kOutputDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_GT(killed_stop_ms, 0.0);
   bridge.stop();
   std::remove(config.c_str());
 }
