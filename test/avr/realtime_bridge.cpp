@@ -73,26 +73,20 @@ void RealtimeBridge::run() {
       [[maybe_unused]] const ssize_t w = ::write(master_, out.data(), out.size());
     }
     const std::vector<PinEdge> edges = board_.take_edges();
-    if (!edges.empty()) {
-      const std::int64_t wall_now = steady_us();
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (const PinEdge& e : edges) {
-        const double since_us = board_.now_us() - static_cast<double>(e.cycle) / 16.0;
-        edges_.push_back({e, wall_now - static_cast<std::int64_t>(since_us)});
-      }
-    }
     const std::vector<Pulse> pulses = board_.take_pulses();
-    if (!pulses.empty()) {
-      // When the edge happened as seen from outside: now, less the
-      // simulated time since it (a simulation running late shows as
-      // latency, never hides it).
+    if (!edges.empty() || !pulses.empty()) {
+      // When an edge happened as seen from outside: now, less the simulated
+      // time since it (a simulation running late shows as latency, never
+      // hides it).
       const std::int64_t wall_now = steady_us();
+      const double sim_now = board_.now_us();
+      const auto wall_of = [&](std::uint64_t cycle) {
+        return wall_now - static_cast<std::int64_t>(sim_now - static_cast<double>(cycle) / 16.0);
+      };
       std::lock_guard<std::mutex> lock(mutex_);
-      for (const Pulse& p : pulses) {
-        const double since_us = board_.now_us() - static_cast<double>(p.rise_cycle) / 16.0;
-        pulses_.push_back(
-            {p.channel, wall_now - static_cast<std::int64_t>(since_us), p.width_us, p.rise_cycle});
-      }
+      for (const PinEdge& e : edges) edges_.push_back({e, wall_of(e.cycle)});
+      for (const Pulse& p : pulses)
+        pulses_.push_back({p.channel, wall_of(p.rise_cycle), p.width_us, p.rise_cycle});
     }
     const double sim_elapsed = board_.now_us() - sim0;
     const double wall_elapsed = static_cast<double>(steady_us() - wall0);
