@@ -15,7 +15,14 @@
  * - if the main loop or the pulse interrupt stops, the hardware watchdog
  *   resets the chip within 60 ms: no pulse at all, as at power-up.
  * The serial port is polled, not interrupt-driven, so nothing but the pulse
- * interrupt can delay an edge. */
+ * interrupt can delay an edge.
+ *
+ * With DShot (CONFIG's protocol: 150, 300 or 600) the same states hold with
+ * DShot frames on D2..D7 instead of pulses: no signal before a
+ * configuration, motor stop (0) for a disarmed channel and after the link
+ * timeout. The main loop sends the frames (dshot.S, interrupts off for a
+ * frame) at the configured rate, and the special commands of a COMMAND
+ * frame while every channel is disarmed; no pulse interrupt runs. */
 #include <avr/eeprom.h>
 #include <avr/interrupt.h>
 #include <avr/io.h>
