@@ -272,9 +272,14 @@ class OutputNode {
   // (the gate's state and the last write both), whole and in range;
   // counted and logged either way.
   void on_esc_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (bus::receive(policy_, rbuf, channel, wall_us(), command_msg_, refusals_) !=
-        bus::Refusal::kNone)
+    // Its own refusal counts: refused_malformed and refused_signature are
+    // motor_pwm_t's; a command that is not whole, or not signed under
+    // require, is a refused command.
+    if (bus::receive(policy_, rbuf, channel, wall_us(), command_msg_, command_refusals_) !=
+        bus::Refusal::kNone) {
+      ++commands_refused_;
       return;
+    }
     const esc_command_t& m = command_msg_;
     const std::uint32_t motors = static_cast<std::uint32_t>(m.motors);
     const bool disarmed = (state_ == GateState::kDisarmed || state_ == GateState::kStale ||
@@ -293,17 +298,28 @@ class OutputNode {
                                                        static_cast<std::uint8_t>(m.repeat))) {
       why = "the firmware cannot take it now (no device, or no report from it yet)";
     }
-    if (why != nullptr) {
-      ++commands_refused_;
-      log_ << "motormix output: ESC command " << static_cast<int>(m.command) << " refused: " << why
-           << std::endl;
+    ++(why != nullptr ? commands_refused_ : commands_sent_);
+    // A line per command, at most four a second: a flood of commands on the
+    // bus must not flood the log (the counts carry every one).
+    const double now = monotonic_s();
+    if (now - last_command_log_s_ < kCommandLogIntervalS) {
+      ++commands_unlogged_;
       return;
     }
-    ++commands_sent_;
-    log_ << "motormix output: ESC command " << static_cast<int>(m.command) << " sent to motors 0x"
-         << std::hex << motors << std::dec << " in " << static_cast<int>(m.repeat) << " frames"
-         << std::endl;
+    last_command_log_s_ = now;
+    log_ << "motormix output: ESC command " << static_cast<int>(m.command);
+    if (why != nullptr) {
+      log_ << " refused: " << why;
+    } else {
+      log_ << " sent to motors 0x" << std::hex << motors << std::dec << " in "
+           << static_cast<int>(m.repeat) << " frames";
+    }
+    if (commands_unlogged_ > 0) log_ << " (" << commands_unlogged_ << " more since the last line)";
+    commands_unlogged_ = 0;
+    log_ << std::endl;
   }
+
+  static constexpr double kCommandLogIntervalS = 0.25;
 
   static constexpr int kMaxCommandRepeat = 100;
 
@@ -319,7 +335,9 @@ class OutputNode {
   double last_write_s_ = -1e9;
   motormix::motor_pwm_t pwm_msg_{};  // decoded into, its arrays reused
   motormix::esc_command_t command_msg_{};
-  std::uint64_t commands_sent_ = 0, commands_refused_ = 0;
+  bus::Refusals command_refusals_;
+  std::uint64_t commands_sent_ = 0, commands_refused_ = 0, commands_unlogged_ = 0;
+  double last_command_log_s_ = -1e9;
   bus::Refusals refusals_;
   bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;

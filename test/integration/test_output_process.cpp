@@ -20,6 +20,7 @@
 #include "output/kiss_telemetry.hpp"
 #include "test_paths.hpp"
 
+#include <motormix/esc_command_t.hpp>
 #include <motormix/esc_telemetry_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/output_status_t.hpp>
@@ -468,12 +469,51 @@ TEST_F(OutputProcess, EscCommandsReachTheFirmwareOnlyWhileDisarmed) {
   mixer.join();
   EXPECT_TRUE(std::find(types.begin(), types.end(), MM_LINK_COMMAND) == types.end());
   EXPECT_EQ(refused.wait_for(3s), 5);
+  // A flood of commands out of range (and bytes that are none): each one
+  // refused and counted, the log a few lines.
+  constexpr int kFlood = 300;
+  struct Last {
+    std::optional<motormix::output_status_t> status;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
+      status = *m;
+    }
+  } last;
+  lcm.subscribe("OUTPUT_STATUS", &Last::on, &last);
+  for (int k = 0; k < kFlood; ++k) {
+    motormix::esc_command_t c{};
+    c.command = static_cast<std::int8_t>(k % 2 == 0 ? 0 : 48);
+    c.motors = 1;
+    c.repeat = 1;
+    lcm.publish("ESC_COMMAND", &c);
+    const std::uint8_t junk[5] = {1, 2, 3, 4, 5};
+    lcm.publish("ESC_COMMAND", junk, sizeof junk);
+  }
+  // Until the count holds still (a burst this size loses some datagrams
+  // to the socket buffers before the output reads them: never counted).
+  std::int64_t seen = -1;
+  for (int i = 0; i < 20; ++i) {
+    pty.frames_until(-1, 200);
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    if (last.status && last.status->esc_commands_refused == seen) break;
+    if (last.status) seen = last.status->esc_commands_refused;
+  }
+  ASSERT_TRUE(last.status.has_value());
+  EXPECT_GE(last.status->esc_commands_refused, 1 + kFlood / 2);
+  EXPECT_LE(last.status->esc_commands_refused, 2 * kFlood + 1);
+  EXPECT_EQ(last.status->esc_commands_sent, 1);
+  EXPECT_EQ(last.status->refused_malformed, 0);  // motor_pwm_t's count
   output.signal(SIGTERM);
   EXPECT_EQ(output.wait_for(3s), 0);
   std::ifstream in(root_ + "/dshot.log");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("ESC command 21 sent"), std::string::npos) << text;
   EXPECT_NE(text.find("ESC command 12 refused: an output is armed"), std::string::npos) << text;
+  int lines = 0;
+  for (std::size_t at = text.find("ESC command"); at != std::string::npos;
+       at = text.find("ESC command", at + 1))
+    ++lines;
+  EXPECT_LE(lines, 10) << text;
 }
 
 TEST_F(OutputProcess, UnderRequireOnlySignedMotorPwmMovesThePins) {
