@@ -14,7 +14,8 @@
 //   configured. Solved once, at start-up, for each motor that could fail.
 // - The controller (SpinningDescent::update), every cycle:
 //   * reduced attitude: the direction the spin axis should point (straight
-//     up, tilted at most max_tilt to brake the horizontal velocity) is
+//     up; once the spin is reached, tilted at most max_tilt to brake the
+//     horizontal velocity) is
 //     brought onto the equilibrium axis by asking for body rates across it;
 //     the rate about the axis is left alone (yaw is given up);
 //   * the torque across the axis comes from nonlinear dynamic inversion:
