@@ -1,5 +1,6 @@
 #include "output/output_process.hpp"
 
+#include "output/esc_command_check.hpp"
 #include "output/kiss_telemetry.hpp"
 #include "output/output_gate.hpp"
 #include "output/serial_port.hpp"
@@ -285,43 +286,17 @@ class OutputNode {
     const bool disarmed = (state_ == GateState::kDisarmed || state_ == GateState::kStale ||
                            state_ == GateState::kStarting) &&
                           written_armed_ == 0;
-    const char* why = nullptr;
-    if (config_.hardware.protocol == config::EscProtocol::kPwm) {
-      why = "hardware.protocol is pwm (special commands are DShot's)";
-    } else if (m.command < 1 || m.command > static_cast<int>(MM_LINK_DSHOT_MAX_COMMAND) ||
-               m.repeat < 1 || m.repeat > kMaxCommandRepeat || motors == 0 ||
-               (motors >> gate_.outputs()) != 0) {
-      why = "out of range (command 1..47, repeat 1..100, motors of this configuration)";
-    } else if (!disarmed) {
-      why = "an output is armed";
-    } else if (driver_ == nullptr || !driver_->command(static_cast<std::uint8_t>(m.command), motors,
-                                                       static_cast<std::uint8_t>(m.repeat))) {
+    const EscCommandRequest request{m.command, m.repeat, motors};
+    const char* why =
+        esc_command_refusal(config_.hardware.protocol, request, gate_.outputs(), disarmed);
+    if (why == nullptr &&
+        (driver_ == nullptr || !driver_->command(static_cast<std::uint8_t>(m.command), motors,
+                                                 static_cast<std::uint8_t>(m.repeat)))) {
       why = "the firmware cannot take it now (no device, or no report from it yet)";
     }
     ++(why != nullptr ? commands_refused_ : commands_sent_);
-    // A line per command, at most four a second: a flood of commands on the
-    // bus must not flood the log (the counts carry every one).
-    const double now = monotonic_s();
-    if (now - last_command_log_s_ < kCommandLogIntervalS) {
-      ++commands_unlogged_;
-      return;
-    }
-    last_command_log_s_ = now;
-    log_ << "motormix output: ESC command " << static_cast<int>(m.command);
-    if (why != nullptr) {
-      log_ << " refused: " << why;
-    } else {
-      log_ << " sent to motors 0x" << std::hex << motors << std::dec << " in "
-           << static_cast<int>(m.repeat) << " frames";
-    }
-    if (commands_unlogged_ > 0) log_ << " (" << commands_unlogged_ << " more since the last line)";
-    commands_unlogged_ = 0;
-    log_ << std::endl;
+    command_log_.line(log_, monotonic_s(), request, why);
   }
-
-  static constexpr double kCommandLogIntervalS = 0.25;
-
-  static constexpr int kMaxCommandRepeat = 100;
 
   const config::Config& config_;
   signing::Policy policy_;
@@ -336,8 +311,8 @@ class OutputNode {
   motormix::motor_pwm_t pwm_msg_{};  // decoded into, its arrays reused
   motormix::esc_command_t command_msg_{};
   bus::Refusals command_refusals_;
-  std::uint64_t commands_sent_ = 0, commands_refused_ = 0, commands_unlogged_ = 0;
-  double last_command_log_s_ = -1e9;
+  std::uint64_t commands_sent_ = 0, commands_refused_ = 0;
+  EscCommandLog command_log_;
   bus::Refusals refusals_;
   bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;
