@@ -291,6 +291,14 @@ TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
   EXPECT_EQ(output.wait_for(3s), 0);
 }
 
+// The newest output_status_t a test's LCM handler was given.
+struct LastOutputStatus {
+  std::optional<motormix::output_status_t> status;
+  void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
+    status = *m;
+  }
+};
+
 // A pseudo-terminal whose slave side the output opens by a path that the
 // test points at it (a symlink, as udev names a USB adapter).
 struct Pty {
@@ -392,13 +400,8 @@ TEST_F(OutputProcess, ALostSerialDeviceIsReopenedAndTheFirmwareConfiguredAgain) 
   // Its status says so.
   lcm::LCM lcm;
   ASSERT_TRUE(lcm.good());
-  struct Last {
-    std::optional<motormix::output_status_t> status;
-    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
-      status = *m;
-    }
-  } last;
-  lcm.subscribe("OUTPUT_STATUS", &Last::on, &last);
+  LastOutputStatus last;
+  lcm.subscribe("OUTPUT_STATUS", &LastOutputStatus::on, &last);
   for (int i = 0; i < 100 && !(last.status && last.status->device_reopened == 1); ++i)
     lcm.handleTimeout(20);
   ASSERT_TRUE(last.status.has_value()) << "no output_status_t";
@@ -472,13 +475,8 @@ TEST_F(OutputProcess, EscCommandsReachTheFirmwareOnlyWhileDisarmed) {
   // A flood of commands out of range (and bytes that are none): each one
   // refused and counted, the log a few lines.
   constexpr int kFlood = 300;
-  struct Last {
-    std::optional<motormix::output_status_t> status;
-    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::output_status_t* m) {
-      status = *m;
-    }
-  } last;
-  lcm.subscribe("OUTPUT_STATUS", &Last::on, &last);
+  LastOutputStatus last;
+  lcm.subscribe("OUTPUT_STATUS", &LastOutputStatus::on, &last);
   for (int k = 0; k < kFlood; ++k) {
     motormix::esc_command_t c{};
     c.command = static_cast<std::int8_t>(k % 2 == 0 ? 0 : 48);
