@@ -60,3 +60,63 @@
   DSHOT_SENDER mm_dshot_send600, 10, 20, 27
   DSHOT_SENDER mm_dshot_send300, 20, 40, 53
   DSHOT_SENDER mm_dshot_send150, 40, 80, 107
+
+; Port D sampled for bidirectional DShot replies (dshot_reply.c), n
+; samples into buffer, interrupts off, as for a frame.
+;
+; uint8_t mm_dshot_sample600(uint8_t* buffer, uint8_t n);
+; buffer in r25:r24, n in r22: one sample every 7 cycles, in (1), st (2),
+; DELAY 1, dec (1), brne (2). The window is short enough (72 us) for the
+; UART's two bytes.
+  .global mm_dshot_sample600
+mm_dshot_sample600:
+  movw r26, r24
+  in r21, _SFR_IO_ADDR(SREG)
+  cli
+1:
+  in r18, _SFR_IO_ADDR(PIND)
+  st X+, r18
+  DELAY 1
+  dec r22
+  brne 1b
+  out _SFR_IO_ADDR(SREG), r21
+  ret
+
+; uint8_t mm_dshot_sample300(uint8_t* buffer, uint8_t n, uint8_t* uart);
+; buffer in r25:r24, n in r22, uart in r21:r20; returns in r24 the bytes
+; the UART received meanwhile, stored at uart. One sample every 14 cycles,
+; the UART read in the same 14 cycles whether a byte came or not, so its
+; window (100 us, longer than the UART's two bytes) costs no sample:
+;   byte:    in 1, st 2, lds 2, sbrs 2 (skips), lds 2, st 2, dec 1, brne 2
+;   no byte: in 1, st 2, lds 2, sbrs 1, rjmp 2, DELAY 3, dec 1, brne 2
+; Its error flags are not looked at: the link's CRC-32 finds a bad byte.
+  .global mm_dshot_sample300
+mm_dshot_sample300:
+  push r28
+  push r29
+  movw r26, r24
+  movw r28, r20
+  in r23, _SFR_IO_ADDR(SREG)
+  cli
+1:
+  in r18, _SFR_IO_ADDR(PIND)
+  st X+, r18
+  lds r19, UCSR0A
+  sbrs r19, RXC0
+  rjmp 2f
+  lds r19, UDR0
+  st Y+, r19
+  dec r22
+  brne 1b
+  rjmp 3f
+2:
+  DELAY 3
+  dec r22
+  brne 1b
+3:
+  out _SFR_IO_ADDR(SREG), r23
+  mov r24, r28
+  sub r24, r20
+  pop r29
+  pop r28
+  ret

@@ -15,14 +15,19 @@
  * - if the main loop or the pulse interrupt stops, the hardware watchdog
  *   resets the chip within 60 ms: no pulse at all, as at power-up.
  * The serial port is polled, not interrupt-driven, so nothing but the pulse
- * interrupt can delay an edge.
+ * interrupt can delay an edge (with bidirectional DShot, where no pulse
+ * interrupt runs, its receive interrupt fills a ring instead: decoding the
+ * replies takes longer than the UART's two bytes last).
  *
  * With DShot (CONFIG's protocol: 150, 300 or 600) the same states hold with
  * DShot frames on D2..D7 instead of pulses: no signal before a
  * configuration, motor stop (0) for a disarmed channel and after the link
  * timeout. The main loop sends the frames (dshot.S, interrupts off for a
  * frame) at the configured rate, and the special commands of a COMMAND
- * frame while every channel is disarmed; no pulse interrupt runs. */
+ * frame while every channel is disarmed; no pulse interrupt runs.
+ * Bidirectional DShot (CONFIG's protocol bit) inverts the frames (idle
+ * high) and reads every ESC's eRPM reply after each one (dshot_reply.c),
+ * sent to the host in TELEMETRY frames. */
 #include <avr/eeprom.h>
 #include <avr/interrupt.h>
 #include <avr/io.h>
@@ -30,6 +35,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "dshot_reply.h"
 #include "motormix_link.h"
 #include "pulse_schedule.h"
 #include "pulse_timing.h"
@@ -78,13 +84,22 @@ void mm_dshot_send300(const uint8_t* ports, uint8_t high, uint8_t low);
 void mm_dshot_send150(const uint8_t* ports, uint8_t high, uint8_t low);
 #define DSHOT_MIN_THROTTLE 48u
 #define DSHOT_THROTTLE_STEPS 1999u /* 48..2047 */
-static uint8_t g_dshot; /* 0: servo pulses; else MM_LINK_PROTOCOL_DSHOT* */
+static uint8_t g_dshot;            /* 0: servo pulses; else MM_LINK_PROTOCOL_DSHOT* */
+static uint8_t g_bidir;            /* bidirectional: inverted frames, eRPM replies */
 static uint16_t g_dshot_throttle[MM_LINK_MAX_DSHOT_CHANNELS];
 static uint8_t g_dshot_armed; /* channels armed by the last PULSES frame */
 static uint8_t g_dshot_ports[16], g_dshot_high, g_dshot_low;
 static uint8_t g_dshot_dirty; /* the frame's port values are to be made again */
 static uint8_t g_cmd, g_cmd_channels, g_cmd_left;
 static uint32_t g_next_frame;
+static uint8_t g_dshot_pins; /* port D bits of the DShot channels */
+/* Replies: the channel to decode next (g_config.count: none), the readings
+ * waiting to go to the host, the frame counter. */
+static uint8_t g_decode_next;
+static mm_link_telemetry g_tlm;
+static uint16_t g_reading[MM_LINK_MAX_BIDIR_CHANNELS]; /* the frame being decoded */
+static uint16_t g_frame_count;
+static uint8_t g_tlm_send_at, g_tlm_seq;
 
 /* ---- main loop state ---- */
 static mm_link_config g_config;
@@ -97,7 +112,8 @@ static uint32_t g_now_high, g_deadline, g_next_report;
 static uint16_t g_last_tcnt;
 static uint16_t g_timeout_ticks_high; /* link timeout - one period, in ticks >> 8 */
 static uint8_t g_tx[MM_LINK_MAX_FRAME];
-static uint8_t g_tx_len, g_tx_at, g_report_seq;
+static uint8_t g_tx_len, g_report_seq;
+static volatile uint8_t g_tx_at;
 
 /* Reset cause, saved before anything else runs (the watchdog stays on
  * after a watchdog reset and must be stopped at once). */
@@ -188,15 +204,21 @@ static void stop_pulses(void) {
   pins_low();
 }
 
+static void read_uart(void);
+
 static void apply_config(const mm_link_config* c) {
   stop_pulses();
+  /* Polled unless bidirectional (a frame being sent is finished by the loop). */
+  UCSR0B = (uint8_t)(UCSR0B & ~(_BV(RXCIE0) | _BV(UDRIE0)));
+  read_uart();
   g_config = *c;
   g_period_ticks = (uint16_t)(c->period_us * MM_TICKS_PER_US);
   /* Disarmed pulses start within the timeout of the last frame: the link
    * is called lost one period before the timeout. */
   const uint32_t timeout_ticks = (uint32_t)c->link_timeout_ms * 1000UL * MM_TICKS_PER_US;
   g_timeout_ticks_high = (uint16_t)((timeout_ticks - g_period_ticks) >> 8);
-  g_dshot = c->protocol;
+  g_dshot = (uint8_t)(c->protocol & MM_LINK_PROTOCOL_SPEED_MASK);
+  g_bidir = (c->protocol & MM_LINK_PROTOCOL_BIDIRECTIONAL) != 0u;
   if (g_dshot) {
     /* Frames of motor stop from the next one on; no pulse interrupt. */
     g_dshot_armed = 0;
@@ -205,6 +227,26 @@ static void apply_config(const mm_link_config* c) {
     g_out_armed = 0;
     for (uint8_t k = 0; k < FRAME_BUFFERS; ++k) g_frame_armed[k] = 0;
     g_dshot_dirty = 1;
+    g_dshot_pins = 0;
+    for (uint8_t k = 0; k < c->count; ++k) {
+      uint8_t d, b;
+      mm_channel_bits(k, &d, &b);
+      g_dshot_pins = (uint8_t)(g_dshot_pins | d);
+    }
+    /* Bidirectional: the lines idle high, which tells the ESCs to answer;
+     * the UART read by its interrupt while the replies are decoded. */
+    if (g_bidir) {
+      PORTD = (uint8_t)(PORTD | g_dshot_pins);
+      UCSR0B = (uint8_t)(UCSR0B | _BV(RXCIE0));
+    }
+    g_decode_next = c->count;
+    g_tlm.readings = 0;
+    g_tlm.count = c->count;
+    /* Replies go in batches of about 3 ms of frames: at 1 kHz a TELEMETRY
+     * frame of three readings (37 bytes) every 3 ms fills half the wire and
+     * costs the chip less than smaller ones; two more fit while a report
+     * (1.6 ms) holds the wire. */
+    g_tlm_send_at = (uint8_t)(c->period_us >= 3000u ? 1u : c->period_us >= 1500u ? 2u : 3u);
     g_next_frame = now_ticks();
     g_configured = 1;
     return;
@@ -249,10 +291,13 @@ static uint8_t current(uint32_t session, uint32_t sequence) {
   return 1;
 }
 
-/* A DShot frame's 16 bits: throttle (11), telemetry request, checksum. */
+/* A DShot frame's 16 bits: throttle (11), telemetry request, checksum
+ * (inverted for bidirectional DShot, which is how an ESC tells the two). */
 static uint16_t dshot_packet(uint16_t value, uint8_t telemetry) {
   const uint16_t v = (uint16_t)((value << 1) | telemetry);
-  return (uint16_t)((v << 4) | ((v ^ (v >> 4) ^ (v >> 8)) & 0x0Fu));
+  uint16_t sum = (uint16_t)(v ^ (v >> 4) ^ (v >> 8));
+  if (g_bidir) sum = (uint16_t)~sum;
+  return (uint16_t)((v << 4) | (sum & 0x0Fu));
 }
 
 /* The port values of the next frame: the throttle of each armed channel
@@ -277,17 +322,82 @@ static void dshot_prepare(void) {
     }
   }
   const uint8_t base = (uint8_t)(PORTD & ~all);
-  for (uint8_t i = 0; i < 16u; ++i) {
-    const uint16_t mask = (uint16_t)(0x8000u >> i);
-    uint8_t port = base;
+  uint16_t mask = 0x8000u;
+  for (uint8_t i = 0; i < 16u; ++i, mask >>= 1) {
+    uint8_t ones = 0;
     for (uint8_t k = 0; k < g_config.count; ++k)
-      if (packet[k] & mask) port = (uint8_t)(port | bit[k]);
-    g_dshot_ports[i] = port;
+      if (packet[k] & mask) ones = (uint8_t)(ones | bit[k]);
+    /* Inverted (bidirectional): a bit is low for its high time. */
+    g_dshot_ports[i] = (uint8_t)(base | (g_bidir ? (uint8_t)(all & ~ones) : ones));
   }
-  g_dshot_high = (uint8_t)(base | all);
-  g_dshot_low = base;
+  g_dshot_high = g_bidir ? base : (uint8_t)(base | all);
+  g_dshot_low = g_bidir ? (uint8_t)(base | all) : base;
   g_out_armed = armed != 0u;
   g_dshot_dirty = 0;
+}
+
+/* Bytes the receive interrupt took (bidirectional DShot only): it writes
+ * the head, the main loop the tail, one byte each. */
+#define RX_RING 32u
+static uint8_t g_rx[RX_RING];
+static volatile uint8_t g_rx_head, g_rx_tail, g_rx_lost;
+
+ISR(USART_RX_vect) {
+  const uint8_t status = UCSR0A;
+  const uint8_t byte = UDR0;
+  const uint8_t head = g_rx_head;
+  const uint8_t next = (uint8_t)((head + 1u) & (RX_RING - 1u));
+  if (status & (_BV(FE0) | _BV(DOR0))) ++g_rx_lost; /* a broken or lost byte */
+  if (next == g_rx_tail) {
+    ++g_rx_lost;
+    return;
+  }
+  g_rx[head] = byte;
+  g_rx_head = next;
+}
+
+/* The frame in g_tx, by the UART's interrupt (bidirectional DShot, whose
+ * decoding would leave the wire idle between polls) or by the main loop. */
+ISR(USART_UDRE_vect) {
+  UDR0 = g_tx[g_tx_at++];
+  if (g_tx_at >= g_tx_len) UCSR0B = (uint8_t)(UCSR0B & ~_BV(UDRIE0));
+}
+
+static void start_tx(void) {
+  g_tx_at = 0;
+  if (g_bidir) UCSR0B = (uint8_t)(UCSR0B | _BV(UDRIE0));
+}
+
+static inline __attribute__((always_inline)) uint8_t rx_interrupt(void) { return (UCSR0B & _BV(RXCIE0)) != 0u; }
+
+static inline __attribute__((always_inline)) uint8_t rx_waiting(void) {
+  return rx_interrupt() ? g_rx_head != g_rx_tail : (UCSR0A & _BV(RXC0)) != 0u;
+}
+
+static void take_byte(uint8_t byte) { mm_link_push(&g_parser, byte); }
+
+/* Every received byte into the parser's ring (a DOR or FE flag counted). */
+static void read_uart(void) {
+  if (!rx_interrupt()) {
+    while (UCSR0A & _BV(RXC0)) {
+      const uint8_t status = UCSR0A;
+      const uint8_t byte = UDR0;
+      if (status & (_BV(FE0) | _BV(DOR0))) ++g_parser.malformed; /* a broken or lost byte */
+      mm_link_push(&g_parser, byte);
+    }
+  }
+  uint8_t tail = g_rx_tail;
+  while (tail != g_rx_head) {
+    mm_link_push(&g_parser, g_rx[tail]);
+    tail = (uint8_t)((tail + 1u) & (RX_RING - 1u));
+    g_rx_tail = tail;
+  }
+  if (g_rx_lost) {
+    cli();
+    g_parser.malformed += g_rx_lost;
+    g_rx_lost = 0;
+    sei();
+  }
 }
 
 static void dshot_send(void) {
@@ -298,8 +408,32 @@ static void dshot_send(void) {
   } else {
     mm_dshot_send150(g_dshot_ports, g_dshot_high, g_dshot_low);
   }
+  if (g_bidir) {
+    /* The main loop decodes the last frame's replies before it sends
+     * another frame, so none is sampled over. */
+    mm_reply_capture(g_dshot, g_dshot_pins, read_uart, take_byte);
+    g_decode_next = 0;
+  }
+  ++g_frame_count;
   ++g_periods; /* the watchdog's sign of life, as a pulse period is */
   if (g_cmd_left && --g_cmd_left == 0u) g_dshot_dirty = 1;
+}
+
+/* One channel's reply of the last frame; after the last, the reading joins
+ * the batch for the host (the oldest dropped if the batch is full, which the
+ * host sees as a gap in the frame counter). */
+static void decode_reply(void) {
+  g_reading[g_decode_next] = mm_reply_decode(g_decode_next);
+  if (++g_decode_next < g_config.count) return;
+  if (g_tlm.readings == MM_LINK_TELEMETRY_MAX_READINGS) {
+    for (uint8_t r = 1; r < MM_LINK_TELEMETRY_MAX_READINGS; ++r)
+      memcpy(g_tlm.period_us[r - 1u], g_tlm.period_us[r], sizeof g_tlm.period_us[r]);
+    --g_tlm.readings;
+    ++g_tlm.first;
+  }
+  if (g_tlm.readings == 0u) g_tlm.first = (uint16_t)(g_frame_count - 1u);
+  memcpy(g_tlm.period_us[g_tlm.readings], g_reading, sizeof g_reading);
+  ++g_tlm.readings;
 }
 
 /* A PULSES frame's bookkeeping once taken. */
@@ -308,6 +442,22 @@ static void taken(uint32_t sequence, uint32_t now) {
   ++g_report.frames;
   g_deadline = now + ((uint32_t)g_timeout_ticks_high << 8);
   g_link_ok = 1;
+}
+
+/* num / span for a quotient below 2048 (a throttle step), by long
+ * division on its 11 bits: a third of the cycles of the library's 32-bit
+ * division, four times a frame. */
+static uint16_t steps(uint32_t num, uint16_t span) {
+  uint32_t d = (uint32_t)span << 10;
+  uint16_t q = 0;
+  for (uint16_t bit = 1u << 10; bit != 0u; bit >>= 1) {
+    if (num >= d) {
+      num -= d;
+      q |= bit;
+    }
+    d >>= 1;
+  }
+  return q;
 }
 
 static void take_pulses(const mm_link_pulses* p, uint32_t now) {
@@ -328,7 +478,8 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
       if (t < lo) t = lo;
       if (t > hi) t = hi;
       g_dshot_throttle[k] =
-          (uint16_t)(DSHOT_MIN_THROTTLE + ((uint32_t)(t - lo) * DSHOT_THROTTLE_STEPS + span / 2u) / span);
+          (uint16_t)(DSHOT_MIN_THROTTLE +
+                     steps((uint32_t)(t - lo) * DSHOT_THROTTLE_STEPS + span / 2u, (uint16_t)span));
     }
     g_dshot_armed = p->armed;
     if (p->armed) g_cmd_left = 0; /* arming ends a special command */
@@ -399,7 +550,7 @@ static void queue_report(void) {
   g_report.session = g_session;
   g_report.version = MM_LINK_VERSION;
   g_tx_len = (uint8_t)mm_link_encode_report(&g_report, g_report_seq++, g_tx);
-  g_tx_at = 0;
+  start_tx();
 }
 
 int main(void) {
@@ -432,23 +583,31 @@ int main(void) {
     /* A received byte first, else one step of the search: a step takes a
      * few microseconds, a byte 40, so the UART's two-byte buffer never
      * overruns, even while the parser searches again after a bad frame. */
-    if (UCSR0A & _BV(RXC0)) {
-      const uint8_t status = UCSR0A;
-      const uint8_t byte = UDR0;
-      if (status & (_BV(FE0) | _BV(DOR0))) ++g_parser.malformed; /* a broken or lost byte */
-      mm_link_push(&g_parser, byte);
-    } else if (g_dshot && g_configured && !g_dshot_dirty && (int32_t)(now - g_next_frame) >= 0) {
-      /* A DShot frame, right after a look at the UART: its 27-107 us with
-       * interrupts off fit in the three bytes the UART holds (120 us). */
+    if (rx_waiting()) {
+      read_uart();
+    } else if (g_dshot && g_configured && !g_dshot_dirty && g_decode_next >= g_config.count &&
+               (int32_t)(now - g_next_frame) >= 0) {
+      /* A DShot frame once the last one's replies are decoded (they would
+       * be sampled over), right after a look at the UART: its 27-107 us
+       * with interrupts off fit in the three bytes the UART holds. */
+      /* On a fixed schedule: a frame sent late (the loop was busy: a
+       * burst of bytes, the replies) shortens the next gap, so the rate
+       * holds on average; only more than four periods behind does the
+       * schedule start again from now. */
       g_next_frame += g_period_ticks;
-      if ((int32_t)(now - g_next_frame) >= 0) g_next_frame = now + g_period_ticks; /* fell behind */
+      if ((int32_t)(now - g_next_frame) >= (int32_t)(4u * (uint32_t)g_period_ticks))
+        g_next_frame = now + g_period_ticks;
       dshot_send();
     } else if (g_dshot && g_dshot_dirty) {
       dshot_prepare();
     } else if (mm_link_pending(&g_parser)) {
+      /* A byte of the search before a reply: a byte takes some 20 us, a
+       * reply up to 100, and the ring of bytes must not fill. */
       mm_link_frame frame;
       const uint8_t type = mm_link_poll(&g_parser, &frame);
       if (type) take_frame(type, &frame, now);
+    } else if (g_dshot && g_decode_next < g_config.count) {
+      decode_reply();
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;
@@ -460,10 +619,14 @@ int main(void) {
       if (g_tx_at >= g_tx_len) g_next_report = now;
     }
     if (g_tx_at < g_tx_len) {
-      if (UCSR0A & _BV(UDRE0)) UDR0 = g_tx[g_tx_at++];
+      if (!(UCSR0B & _BV(UDRIE0)) && (UCSR0A & _BV(UDRE0))) UDR0 = g_tx[g_tx_at++];
     } else if ((int32_t)(now - g_next_report) >= 0) {
       g_next_report = now + REPORT_EVERY_TICKS;
       queue_report();
+    } else if (g_bidir && g_tlm.readings >= g_tlm_send_at) {
+      g_tx_len = (uint8_t)mm_link_encode_telemetry(&g_tlm, g_tlm_seq++, g_tx);
+      g_tlm.readings = 0;
+      start_tx();
     }
     /* The watchdog is fed only while the pulse interrupt is alive too. */
     const uint8_t periods = g_periods;

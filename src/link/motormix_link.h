@@ -9,8 +9,9 @@
  * 10^5 corrupted frames, and a 16-bit check lets one random frame in 65536
  * through. Multi-byte fields are little-endian.
  *
- * Link version 3 (MM_LINK_VERSION, in every REPORT; 3 added the protocol
- * to CONFIG and the COMMAND frame). Sessions: the chip
+ * Link version 4 (MM_LINK_VERSION, in every REPORT; 3 added the protocol
+ * to CONFIG and the COMMAND frame, 4 bidirectional DShot and TELEMETRY).
+ * Sessions: the chip
  * names a session in its reports, a 32-bit number that never repeats (its
  * EEPROM keeps the highest base used across resets) and that it moves on
  * at every link timeout. CONFIG and PULSES carry the session they are for
@@ -29,7 +30,9 @@
  *     until it has one; it takes a new one only while its outputs are
  *     disarmed. With DShot the period is the frame period, an armed width
  *     maps [min, max] onto throttle 48..2047 and a disarmed channel sends
- *     0 (motor stop): the disarmed widths are not used.
+ *     0 (motor stop): the disarmed widths are not used. With
+ *     MM_LINK_PROTOCOL_BIDIRECTIONAL the frames are inverted (idle high,
+ *     inverted checksum) and every ESC answers each one with its eRPM.
  *   MM_LINK_COMMAND (DShot only): a special command (1..47, the ESC's
  *     numbering), a channel mask and a count of frames to send it in (ESCs
  *     act on a setting only after 6), with the telemetry bit set as ESCs
@@ -49,6 +52,9 @@
  *     out of sequence, before a configuration, wrong count, a configuration
  *     while armed), the last accepted sequence number (u32), state flags
  *     (MM_LINK_FLAG_*), the session (u32) and the link version (u8).
+ *   MM_LINK_TELEMETRY (bidirectional DShot; after type: a counter u8): the
+ *     frame counter of the first reading (u16), readings, channels (u8
+ *     each), then each reading's periods (u16 a channel), oldest first.
  */
 #ifndef MOTORMIX_LINK_H
 #define MOTORMIX_LINK_H
@@ -67,7 +73,8 @@ extern "C" {
 #define MM_LINK_REPORT 0x02u
 #define MM_LINK_CONFIG 0x03u
 #define MM_LINK_COMMAND 0x04u
-#define MM_LINK_VERSION 3u
+#define MM_LINK_TELEMETRY 0x05u
+#define MM_LINK_VERSION 4u
 /* CONFIG's protocol */
 #define MM_LINK_PROTOCOL_PWM 0u
 #define MM_LINK_PROTOCOL_DSHOT150 1u
@@ -77,6 +84,17 @@ extern "C" {
 #define MM_LINK_MAX_DSHOT_CHANNELS 6u
 #define MM_LINK_MIN_DSHOT_PERIOD_US 250u
 #define MM_LINK_DSHOT_MAX_COMMAND 47u
+/* Bidirectional DShot: CONFIG's protocol with this bit (DShot300 or 600
+ * only); the first MM_LINK_MAX_BIDIR_CHANNELS channels (D2..D5), frames at
+ * most 800 Hz: the chip decodes every reply between two frames, and with
+ * four motors and the host's frames at 400 Hz it holds 850 Hz (measured in
+ * simavr), not 1 kHz. */
+#define MM_LINK_PROTOCOL_BIDIRECTIONAL 0x80u
+#define MM_LINK_PROTOCOL_SPEED_MASK 0x0Fu
+#define MM_LINK_MAX_BIDIR_CHANNELS 4u
+#define MM_LINK_MIN_BIDIR_PERIOD_US 1250u
+/* TELEMETRY: up to this many frames' replies in one */
+#define MM_LINK_TELEMETRY_MAX_READINGS 5u
 
 /* Limits both ends hold a configuration to (servo-style ESC pulses at
  * 40..500 Hz; a pulse ends at least MM_LINK_MIN_LOW_US before the next
@@ -93,8 +111,10 @@ extern "C" {
 #define MM_LINK_COMMAND_BODY 12u
 #define MM_LINK_PULSES_BODY(count) (11u + 2u * (count))
 #define MM_LINK_REPORT_BODY 30u
-/* Largest length field: a configuration with every channel. */
-#define MM_LINK_MAX_BODY MM_LINK_CONFIG_BODY(MM_LINK_MAX_CHANNELS)
+#define MM_LINK_TELEMETRY_BODY(readings, count) (6u + 2u * (readings) * (count))
+/* Largest length field: a telemetry frame of every reading. */
+#define MM_LINK_MAX_BODY \
+  MM_LINK_TELEMETRY_BODY(MM_LINK_TELEMETRY_MAX_READINGS, MM_LINK_MAX_BIDIR_CHANNELS)
 /* Largest frame on the wire: sync, length, body, CRC. */
 #define MM_LINK_MAX_FRAME (2u + 1u + MM_LINK_MAX_BODY + 4u)
 
@@ -133,6 +153,19 @@ typedef struct {
   uint16_t pulse_hus[MM_LINK_MAX_CHANNELS]; /* half microseconds: 3000 is 1500 us */
 } mm_link_pulses;
 
+/* The eRPM replies of consecutive DShot frames, as the chip decoded them:
+ * each the period of one electrical revolution in microseconds (the reply's
+ * mantissa << exponent: 65408, its largest, is a stopped motor), or
+ * MM_LINK_NO_REPLY when the reply was missing or broken (no falling edge,
+ * a run longer than GCR allows, a bad code or checksum). */
+#define MM_LINK_NO_REPLY 0u
+typedef struct {
+  uint16_t first;   /* the DShot frame counter of the first reading (mod 2^16) */
+  uint8_t readings; /* 1..MM_LINK_TELEMETRY_MAX_READINGS */
+  uint8_t count;    /* channels, 1..MM_LINK_MAX_BIDIR_CHANNELS */
+  uint16_t period_us[MM_LINK_TELEMETRY_MAX_READINGS][MM_LINK_MAX_BIDIR_CHANNELS];
+} mm_link_telemetry;
+
 typedef struct {
   uint32_t frames;
   uint32_t crc_errors;
@@ -157,6 +190,7 @@ size_t mm_link_encode_config(const mm_link_config* c, uint8_t* out);
 size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out);
 size_t mm_link_encode_command(const mm_link_command* c, uint8_t* out);
 size_t mm_link_encode_report(const mm_link_report* r, uint8_t sequence, uint8_t* out);
+size_t mm_link_encode_telemetry(const mm_link_telemetry* t, uint8_t sequence, uint8_t* out);
 
 /* What a completed frame held: its type says which member is valid. */
 typedef struct {
@@ -166,6 +200,7 @@ typedef struct {
     mm_link_pulses pulses;
     mm_link_report report;
     mm_link_command command;
+    mm_link_telemetry telemetry;
   } u;
 } mm_link_frame;
 

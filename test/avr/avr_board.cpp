@@ -1,7 +1,9 @@
 #include "avr_board.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
+#include <string>
 
 extern "C" {
 #include <avr_extint.h>
@@ -76,8 +78,8 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
     const char port = ch < 6 ? 'D' : 'B';
     const int bit = ch < 6 ? ch + 2 : ch - 6;
     pin_params_[ch] = {this, ch};
-    avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(port), bit), pin_changed,
-                            &pin_params_[ch]);
+    pin_irq_[ch] = avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(port), bit);
+    avr_irq_register_notify(pin_irq_[ch], pin_changed, &pin_params_[ch]);
   }
 }
 
@@ -102,9 +104,33 @@ void AvrBoard::on_xoff(bool off) {
   xoff_ = off;
 }
 
+bool AvrBoard::pin_is_output(int channel) const {
+  const char port = channel < 6 ? 'D' : 'B';
+  const int bit = channel < 6 ? channel + 2 : channel - 6;
+  avr_ioport_state_t state{};
+  avr_ioctl(avr_, AVR_IOCTL_IOPORT_GETSTATE(port), &state);
+  return ((state.ddr >> bit) & 1u) != 0;
+}
+
+void AvrBoard::drive_at(std::uint64_t cycle, int channel, bool high) {
+  drives_.push({cycle, drive_order_++, channel, high});
+}
+
+void AvrBoard::apply_due_drives() {
+  while (!drives_.empty() && drives_.top().cycle <= avr_->cycle) {
+    const Drive d = drives_.top();
+    drives_.pop();
+    if (pin_is_output(d.channel)) ++drive_conflicts_;
+    driving_ = true;
+    avr_raise_irq(pin_irq_[d.channel], d.high ? 1u : 0u);
+    driving_ = false;
+  }
+}
+
 bool AvrBoard::run_until(std::uint64_t cycle) {
   while (avr_->cycle < cycle) {
     if (!rx_.empty() && rx_.front().cycle <= avr_->cycle) feed_due_bytes();
+    if (!drives_.empty() && drives_.top().cycle <= avr_->cycle) apply_due_drives();
     const int state = avr_run(avr_);
     if (state == cpu_Done || state == cpu_Crashed) return false;
   }
@@ -144,7 +170,8 @@ void AvrBoard::on_pin(int channel, bool high) {
   if (level_[channel] == high) return;
   level_[channel] = high;
   const std::uint64_t now = avr_->cycle;
-  edges_.push_back({now, channel, high});
+  edges_.push_back({now, channel, high, driving_});
+  if (!driving_ && listener_) listener_(edges_.back());
   if (high) {
     rise_[channel] = now;
   } else if (rise_[channel] != 0) {

@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
+#include <queue>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,7 @@ struct PinEdge {
   std::uint64_t cycle;
   int channel;  // 0..7: D2..D9
   bool high;
+  bool by_esc = false;  // driven from outside (drive_at: an ESC's reply), not by the chip
 };
 
 // A pulse as measured on a pin: where it rose, how long it was high.
@@ -61,6 +64,20 @@ class AvrBoard {
   // Edges since the last call (every pin change).
   std::vector<PinEdge> take_edges();
   bool pin_high(int channel) const { return level_[channel]; }
+  // The chip drives the pin (DDR set), rather than listening on it.
+  bool pin_is_output(int channel) const;
+
+  // The line of a pin driven from outside at a cycle (an ESC answering
+  // bidirectional DShot), as the chip's input sees it then: applied between
+  // instructions, so within one instruction (1-4 cycles) of `cycle`.
+  void drive_at(std::uint64_t cycle, int channel, bool high);
+  // Called at every edge the chip makes (not those from drive_at), as it
+  // happens: what an emulated ESC answers from.
+  void set_edge_listener(std::function<void(const PinEdge&)> listener) {
+    listener_ = std::move(listener);
+  }
+  // Driven while the chip drove the same pin (a bus fight on hardware).
+  int drive_conflicts() const { return drive_conflicts_; }
 
   // Fault injection: clears the interrupt flag in SREG, as a firmware bug
   // that left interrupts off would.
@@ -84,6 +101,22 @@ class AvrBoard {
     std::uint8_t byte;
   };
   void feed_due_bytes();
+  void apply_due_drives();
+  struct Drive {
+    std::uint64_t cycle;
+    std::uint64_t order;
+    int channel;
+    bool high;
+    bool operator>(const Drive& o) const {
+      return cycle != o.cycle ? cycle > o.cycle : order > o.order;
+    }
+  };
+  std::priority_queue<Drive, std::vector<Drive>, std::greater<Drive>> drives_;
+  std::uint64_t drive_order_ = 0;
+  bool driving_ = false;
+  int drive_conflicts_ = 0;
+  std::function<void(const PinEdge&)> listener_;
+  avr_irq_t* pin_irq_[kChannels] = {};
 
   avr_t* avr_ = nullptr;
   avr_irq_t* uart_in_ = nullptr;

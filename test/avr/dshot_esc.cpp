@@ -9,27 +9,30 @@ constexpr std::size_t kBits = 16;
 constexpr double kFrameGapBits = 3.0;
 }  // namespace
 
-DshotEsc::DshotEsc(int channel, double nominal_bit_cycles)
-    : channel_(channel), nominal_(nominal_bit_cycles) {}
+DshotEsc::DshotEsc(int channel, double nominal_bit_cycles, bool inverted)
+    : channel_(channel), nominal_(nominal_bit_cycles), inverted_(inverted) {}
 
 void DshotEsc::feed(const std::vector<PinEdge>& edges) {
-  for (const PinEdge& e : edges) {
-    if (e.channel != channel_ || e.high == high_) continue;
-    high_ = e.high;
-    if (e.high) {
-      // A rise long after the last edge starts a frame; what was there
-      // and is not a whole frame is broken.
-      const std::uint64_t last = !falls_.empty() ? falls_.back() : 0;
-      if (!rises_.empty() && static_cast<double>(e.cycle - last) > kFrameGapBits * nominal_) {
-        ++broken_;
-        rises_.clear();
-        falls_.clear();
-      }
-      rises_.push_back(e.cycle);
-    } else if (!rises_.empty()) {
-      falls_.push_back(e.cycle);
-      if (falls_.size() == kBits) finish();
+  for (const PinEdge& e : edges) feed(e);
+}
+
+void DshotEsc::feed(const PinEdge& e) {
+  const bool active = inverted_ ? !e.high : e.high;
+  if (e.by_esc || e.channel != channel_ || active == high_) return;
+  high_ = active;
+  if (active) {
+    // A rise long after the last edge starts a frame; what was there
+    // and is not a whole frame is broken.
+    const std::uint64_t last = !falls_.empty() ? falls_.back() : 0;
+    if (!rises_.empty() && static_cast<double>(e.cycle - last) > kFrameGapBits * nominal_) {
+      ++broken_;
+      rises_.clear();
+      falls_.clear();
     }
+    rises_.push_back(e.cycle);
+  } else if (!rises_.empty()) {
+    falls_.push_back(e.cycle);
+    if (falls_.size() == kBits) finish();
   }
 }
 
@@ -60,7 +63,9 @@ void DshotEsc::finish() {
   const std::uint16_t data = static_cast<std::uint16_t>(word >> 4);
   f.value = static_cast<std::uint16_t>(data >> 1);
   f.telemetry = (data & 1u) != 0;
-  f.crc_ok = ((data ^ (data >> 4) ^ (data >> 8)) & 0x0Fu) == (word & 0x0Fu);
+  unsigned sum = data ^ (data >> 4) ^ (data >> 8);
+  if (inverted_) sum = ~sum;
+  f.crc_ok = (sum & 0x0Fu) == (word & 0x0Fu);
   frames_.push_back(f);
   rises_.clear();
   falls_.clear();

@@ -27,8 +27,12 @@ struct DshotFrame {
 class DshotEsc {
  public:
   // nominal_bit_cycles: the protocol's bit (26.67 at DShot600 at 16 MHz):
-  // a gap of more than 3 bits starts a new frame.
-  DshotEsc(int channel, double nominal_bit_cycles);
+  // a gap of more than 3 bits starts a new frame. inverted: bidirectional
+  // DShot (the line idles high, a bit is low for its "high" time, and the
+  // checksum is inverted).
+  DshotEsc(int channel, double nominal_bit_cycles, bool inverted = false);
+  // One edge as it happens (edges an ESC drove itself are skipped).
+  void feed(const PinEdge& e);
   // Takes the edges of every channel since the last call; frames complete
   // once their 16th bit has fallen.
   void feed(const std::vector<PinEdge>& edges);
@@ -41,6 +45,7 @@ class DshotEsc {
 
   int channel_;
   double nominal_;
+  bool inverted_;
   std::vector<std::uint64_t> rises_, falls_;
   std::vector<DshotFrame> frames_;
   bool high_ = false;

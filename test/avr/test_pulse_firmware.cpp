@@ -7,6 +7,7 @@
 
 #include "avr_board.hpp"
 #include "dshot_esc.hpp"
+#include "firmware_host.hpp"
 #include "motormix_link.h"
 
 #include <gtest/gtest.h>
@@ -26,8 +27,6 @@
 namespace motormix::avr {
 namespace {
 
-// The bound for a pulse against the width asked for.
-constexpr double kPulseToleranceUs = 1.0;
 // What the firmware reaches for a width in whole half microseconds with no
 // other channel within 2 us of it (an edge's timing is fixed to a cycle
 // or two: 0.0625 us each).
@@ -36,121 +35,7 @@ constexpr double kExactToleranceUs = 0.2;
 // off, and a width sent in half microseconds is rounded by a quarter.
 constexpr double kGroupedToleranceUs = 0.5 + 0.25 + kExactToleranceUs;
 constexpr double kPeriodUs = 2500.0;  // 400 Hz
-constexpr double kLinkTimeoutMs = 100.0;
 constexpr double kUsPerCycle = 1.0 / 16.0;
-
-class Host {
- public:
-  // Past the C start-up and the first report, which names the session.
-  Host() : board(MOTORMIX_FIRMWARE_ELF) { learn_session(); }
-
-  // Runs until a report names a session other than the one known (bounded),
-  // as a host does: frames go for the chip's current session.
-  void learn_session() {
-    const std::uint32_t before = session;
-    for (int i = 0; i < 200 && session == before; ++i) {
-      board.run_for_us(1000);
-      last_report();
-      session = report.session;
-    }
-    seq = report.last_sequence + 1;
-  }
-
-  mm_link_config config(std::uint8_t count = 4, std::uint16_t period_us = 2500,
-                        std::uint16_t disarmed = 1000,
-                        std::uint8_t protocol = MM_LINK_PROTOCOL_PWM) {
-    mm_link_config c{};
-    c.protocol = protocol;
-    c.period_us = period_us;
-    c.link_timeout_ms = static_cast<std::uint16_t>(kLinkTimeoutMs);
-    c.min_us = 1000;
-    c.max_us = 2000;
-    c.count = count;
-    for (int i = 0; i < count; ++i) c.disarmed_us[i] = disarmed;
-    return c;
-  }
-  void send_config(const mm_link_config& c) {
-    mm_link_config copy = c;
-    copy.session = session;
-    copy.sequence = seq++;
-    std::uint8_t buf[MM_LINK_MAX_FRAME];
-    const std::size_t n = mm_link_encode_config(&copy, buf);
-    ASSERT_GT(n, 0u);
-    board.send(buf, n);
-  }
-  std::vector<std::uint8_t> pulses_frame(const std::vector<double>& widths, bool armed) {
-    mm_link_pulses p{};
-    p.session = session;
-    p.sequence = seq++;
-    p.armed = static_cast<std::uint8_t>(armed ? (1u << widths.size()) - 1u : 0u);
-    p.count = static_cast<std::uint8_t>(widths.size());
-    for (std::size_t i = 0; i < widths.size(); ++i)
-      p.pulse_hus[i] = static_cast<std::uint16_t>(std::lround(2.0 * widths[i]));
-    std::vector<std::uint8_t> buf(MM_LINK_MAX_FRAME);
-    buf.resize(mm_link_encode_pulses(&p, buf.data()));
-    return buf;
-  }
-  void send_pulses(const std::vector<double>& widths, bool armed = true) {
-    board.send(pulses_frame(widths, armed));
-  }
-  void send_command(std::uint8_t command, std::uint8_t channels, std::uint8_t repeat) {
-    mm_link_command c{};
-    c.session = session;
-    c.sequence = seq++;
-    c.command = command;
-    c.channels = channels;
-    c.repeat = repeat;
-    std::uint8_t buf[MM_LINK_MAX_FRAME];
-    const std::size_t n = mm_link_encode_command(&c, buf);
-    ASSERT_GT(n, 0u);
-    board.send(buf, n);
-  }
-  // The last report the firmware sent (it sends one every 50 ms).
-  mm_link_report last_report() {
-    for (std::uint8_t b : board.take_output()) {
-      mm_link_frame f{};
-      if (mm_link_feed(&parser, b, &f) == MM_LINK_REPORT) {
-        report = f.u.report;
-        ++reports;
-      }
-    }
-    return report;
-  }
-  // Runs until everything sent is in, then takes the pulses since: how many
-  // of them are off `widths` by more than the bound (each printed), and
-  // adds their number to `pulses`. `what` and `k` name the frame just sent.
-  int drain_and_count_changed(const std::vector<double>& widths, int& pulses, const char* what,
-                              int k) {
-    while (board.sending()) board.run_for_us(200);
-    int changed = 0;
-    for (const Pulse& p : board.take_pulses()) {
-      ++pulses;
-      if (std::abs(p.width_us - widths[static_cast<std::size_t>(p.channel)]) > kPulseToleranceUs) {
-        ++changed;
-        std::printf("after %s frame %d: channel %d pulse %.3f us\n", what, k, p.channel,
-                    p.width_us);
-      }
-    }
-    return changed;
-  }
-  // The widths of each channel's last complete pulse.
-  static std::map<int, double> last_widths(const std::vector<Pulse>& pulses) {
-    std::map<int, double> w;
-    for (const Pulse& p : pulses) w[p.channel] = p.width_us;
-    return w;
-  }
-
-  AvrBoard board;
-  std::uint32_t session = 0;
-  std::uint32_t seq = 1;
-  mm_link_parser parser = [] {
-    mm_link_parser p;
-    mm_link_parser_init(&p);
-    return p;
-  }();
-  mm_link_report report{};
-  int reports = 0;
-};
 
 TEST(PulseFirmware, NoPulseBeforeAConfigurationThenDisarmedPulses) {
   Host h;
@@ -161,12 +46,17 @@ TEST(PulseFirmware, NoPulseBeforeAConfigurationThenDisarmedPulses) {
   const std::vector<Pulse> pulses = h.board.take_pulses();
   ASSERT_GE(pulses.size(), 4u * 10u);
   for (const Pulse& p : pulses) EXPECT_NEAR(p.width_us, 1000.0, kExactToleranceUs);
-  // 400 Hz: consecutive rises of channel 0 one period apart.
+  // 400 Hz: consecutive rises of channel 0 one period apart, to within what
+  // entering an interrupt varies by: the instruction in progress finishes
+  // first (up to 4 cycles, a call or a return), which the main loop's code
+  // decides, not the firmware's timing.
+  constexpr double kRiseJitterUs = 4.0 * kUsPerCycle;
   std::vector<std::uint64_t> rises;
   for (const Pulse& p : pulses)
     if (p.channel == 0) rises.push_back(p.rise_cycle);
   for (std::size_t i = 1; i < rises.size(); ++i)
-    EXPECT_NEAR(static_cast<double>(rises[i] - rises[i - 1]) * kUsPerCycle, kPeriodUs, 0.1);
+    EXPECT_NEAR(static_cast<double>(rises[i] - rises[i - 1]) * kUsPerCycle, kPeriodUs,
+                kRiseJitterUs);
   const mm_link_report r = h.last_report();
   EXPECT_TRUE(r.flags & MM_LINK_FLAG_CONFIGURED);
   EXPECT_FALSE(r.flags & MM_LINK_FLAG_ARMED);
