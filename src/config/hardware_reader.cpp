@@ -4,6 +4,7 @@
 
 #include "motormix_link.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -79,10 +80,27 @@ void read_hardware(MapReader section, Config& config) {
   hw.driver = section.choice("driver", HardwareDriver::kNone, kHardwareDriverNames);
   hw.protocol = section.choice("protocol", EscProtocol::kPwm, kEscProtocolNames);
   const bool dshot = hw.protocol != EscProtocol::kPwm;
-  // DShot frames are short (27-107 us): up to 4 kHz; servo pulses up to 500 Hz.
-  hw.pulse_rate_hz =
-      section.number("pulse_rate_hz", dshot ? 1000.0 : 400.0, 1e6 / MM_LINK_MAX_PERIOD_US,
-                     1e6 / (dshot ? MM_LINK_MIN_DSHOT_PERIOD_US : MM_LINK_MIN_PERIOD_US));
+  hw.bidirectional = section.boolean("bidirectional", false);
+  if (hw.bidirectional && hw.protocol != EscProtocol::kDshot300 &&
+      hw.protocol != EscProtocol::kDshot600) {
+    fail(section.path_of("bidirectional"),
+         "true with protocol " + std::string(to_string(hw.protocol)),
+         "false, or protocol dshot300 / dshot600 (the replies of DShot150 outlast the firmware's "
+         "window)");
+  }
+  if (hw.bidirectional && config.motors() > static_cast<int>(MM_LINK_MAX_BIDIR_CHANNELS)) {
+    fail(section.path_of("bidirectional"),
+         "true with " + std::to_string(config.motors()) + " motors",
+         "at most " + std::to_string(MM_LINK_MAX_BIDIR_CHANNELS) +
+             " motors (the firmware reads replies on pins D2..D5)");
+  }
+  // DShot frames are short (27-107 us): up to 4 kHz; servo pulses up to 500
+  // Hz; with replies to decode after each frame, 800 Hz.
+  const double max_rate_hz = 1e6 / (hw.bidirectional ? MM_LINK_MIN_BIDIR_PERIOD_US
+                                    : dshot          ? MM_LINK_MIN_DSHOT_PERIOD_US
+                                                     : MM_LINK_MIN_PERIOD_US);
+  hw.pulse_rate_hz = section.number("pulse_rate_hz", dshot ? std::min(1000.0, max_rate_hz) : 400.0,
+                                    1e6 / MM_LINK_MAX_PERIOD_US, max_rate_hz);
   if (dshot && hw.driver != HardwareDriver::kSerial) {
     fail(section.path_of("protocol"),
          std::string(to_string(hw.protocol)) + " with driver " + to_string(hw.driver),

@@ -1,5 +1,6 @@
 #include "output/output_process.hpp"
 
+#include "output/erpm_telemetry.hpp"
 #include "output/esc_command_check.hpp"
 #include "output/kiss_telemetry.hpp"
 #include "output/output_gate.hpp"
@@ -82,6 +83,7 @@ std::unique_ptr<PulseDriver> make_driver(const config::Config& config) {
     s.max_us = hi;
     s.disarmed_us = disarmed;
     s.protocol = static_cast<std::uint8_t>(hw.protocol);  // enum order is the link's
+    s.bidirectional = hw.bidirectional;
     return std::make_unique<SerialPulseDriver>(open_serial_port(hw.serial.device, hw.serial.baud),
                                                s);
   }
@@ -236,6 +238,14 @@ class OutputNode {
       msg.firmware_flags = static_cast<std::int8_t>(r->flags);
     }
     publisher_.publish(config_.channels.output_status, msg);
+  }
+
+  // Bidirectional DShot: each frame's eRPM replies as they come.
+  void publish_erpm(const PulseDriver::ErpmReading& reading) {
+    motormix::esc_telemetry_t msg;
+    if (!fill_erpm_message(reading, wall_us(), msg)) return;
+    publisher_.publish(config_.channels.esc_telemetry, msg);
+    ++telemetry_frames_;
   }
 
   void publish_telemetry(const TelemetryWire& wire, const KissReading& r) {
@@ -428,7 +438,10 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
       std::uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);
       node.step(now, false);
-      if (driver != nullptr && !driver->service(now)) {
+      const bool serviced = driver == nullptr || driver->service(now);
+      if (driver != nullptr)
+        for (const PulseDriver::ErpmReading& r : driver->take_erpm()) node.publish_erpm(r);
+      if (!serviced) {
         // The chip disarms on its own after its link timeout; reopened, it
         // is configured again before its first pulses.
         log << "motormix output: lost " << config.hardware.serial.device << " ("

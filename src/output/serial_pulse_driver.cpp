@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,7 +19,8 @@ std::uint16_t us(double v) {
 }  // namespace
 
 SerialPulseDriver::SerialPulseDriver(int fd, const SerialPulseSettings& s) : fd_(fd) {
-  config_.protocol = s.protocol;
+  config_.protocol = static_cast<std::uint8_t>(
+      s.protocol | (s.bidirectional ? MM_LINK_PROTOCOL_BIDIRECTIONAL : 0u));
   config_.period_us = us(s.period_us);
   config_.link_timeout_ms = us(s.link_timeout_ms);
   config_.min_us = us(s.min_us);
@@ -102,7 +104,9 @@ bool SerialPulseDriver::service(double now_s) {
     if (n > 0) {
       for (ssize_t i = 0; i < n; ++i) {
         mm_link_frame f{};
-        if (mm_link_feed(&parser_, buf[i], &f) == MM_LINK_REPORT) {
+        const std::uint8_t type = mm_link_feed(&parser_, buf[i], &f);
+        if (type == MM_LINK_TELEMETRY) take_telemetry(f.u.telemetry);
+        if (type == MM_LINK_REPORT) {
           report_ = f.u.report;
           ++reports_;
           // A new session (the chip started, or its link timed out): go on
@@ -128,6 +132,36 @@ bool SerialPulseDriver::service(double now_s) {
     next_config_s_ = now_s + 1.0;
   }
   return true;
+}
+
+// A reply's period is one electrical revolution in microseconds; its
+// largest (511 << 7) is what an ESC sends for a stopped motor.
+void SerialPulseDriver::take_telemetry(const mm_link_telemetry& t) {
+  constexpr double kStoppedPeriodUs = 511.0 * 128.0;
+  constexpr std::size_t kMaxWaiting = 64;  // readings nobody took: the oldest go
+  for (int r = 0; r < t.readings; ++r) {
+    ErpmReading reading;
+    reading.erpm.resize(static_cast<std::size_t>(t.count));
+    for (int c = 0; c < t.count; ++c) {
+      const double period = t.period_us[r][c];
+      double& erpm = reading.erpm[static_cast<std::size_t>(c)];
+      if (period == MM_LINK_NO_REPLY) {
+        erpm = std::numeric_limits<double>::quiet_NaN();
+        ++replies_missed_;
+      } else {
+        erpm = period >= kStoppedPeriodUs ? 0.0 : 60e6 / period;
+        ++replies_decoded_;
+      }
+    }
+    if (erpm_.size() >= kMaxWaiting) erpm_.erase(erpm_.begin());
+    erpm_.push_back(std::move(reading));
+  }
+}
+
+std::vector<PulseDriver::ErpmReading> SerialPulseDriver::take_erpm() {
+  std::vector<ErpmReading> out;
+  out.swap(erpm_);
+  return out;
 }
 
 std::optional<FirmwareReport> SerialPulseDriver::firmware_report() const {

@@ -179,11 +179,52 @@ TEST(OutputLink, DshotConfigurationsAndCommandsRoundTripWithinTheirLimits) {
       with([](mm_link_config& c) { c.period_us = 249; }),    // faster than 4 kHz
       with([](mm_link_config& c) { c.count = 7; }),          // D2..D7 only
       with([](mm_link_config& c) { c.min_us = c.max_us; }),  // no throttle range
-      with([](mm_link_config& c) { c.protocol = 0; })};      // servo pulses at 2 kHz
+      with([](mm_link_config& c) { c.protocol = 0; }),       // servo pulses at 2 kHz
+      with([](mm_link_config& c) {  // bidirectional DShot150: its replies outlast the window
+        c.protocol = MM_LINK_PROTOCOL_DSHOT150 | MM_LINK_PROTOCOL_BIDIRECTIONAL;
+        c.period_us = MM_LINK_MIN_BIDIR_PERIOD_US;
+      }),
+      with([](mm_link_config& c) {  // bidirectional faster than the chip decodes
+        c.protocol = MM_LINK_PROTOCOL_DSHOT600 | MM_LINK_PROTOCOL_BIDIRECTIONAL;
+      }),
+      with([](mm_link_config& c) {  // bidirectional on five channels
+        c.protocol = MM_LINK_PROTOCOL_DSHOT600 | MM_LINK_PROTOCOL_BIDIRECTIONAL;
+        c.period_us = MM_LINK_MIN_BIDIR_PERIOD_US;
+        c.count = 5;
+        c.disarmed_us[4] = 1000;
+      }),
+      with([](mm_link_config& c) { c.protocol = 0x43; })};  // an unknown flag
   for (const mm_link_config& c : bad) {
     EXPECT_EQ(mm_link_config_valid(&c), 0);
     EXPECT_EQ(mm_link_encode_config(&c, buf), 0U);
   }
+
+  mm_link_config bidir = dshot;
+  bidir.protocol = MM_LINK_PROTOCOL_DSHOT300 | MM_LINK_PROTOCOL_BIDIRECTIONAL;
+  bidir.period_us = MM_LINK_MIN_BIDIR_PERIOD_US;
+  EXPECT_EQ(mm_link_config_valid(&bidir), 1);
+
+  // TELEMETRY: readings of every channel; a count or reading count outside
+  // the limits is not sent.
+  mm_link_telemetry t{};
+  t.first = 40000;
+  t.readings = MM_LINK_TELEMETRY_MAX_READINGS;
+  t.count = 4;
+  for (int r = 0; r < t.readings; ++r)
+    for (int c = 0; c < 4; ++c) t.period_us[r][c] = static_cast<std::uint16_t>(100 * r + c);
+  const std::size_t tn = mm_link_encode_telemetry(&t, 3, buf);
+  ASSERT_EQ(tn, 7u + MM_LINK_TELEMETRY_BODY(MM_LINK_TELEMETRY_MAX_READINGS, 4u));
+  for (std::size_t i = 0; i < tn; ++i) type = mm_link_feed(&parser, buf[i], &got);
+  ASSERT_EQ(type, MM_LINK_TELEMETRY);
+  EXPECT_EQ(got.u.telemetry.first, 40000);
+  EXPECT_EQ(got.u.telemetry.readings, MM_LINK_TELEMETRY_MAX_READINGS);
+  EXPECT_EQ(got.u.telemetry.period_us[4][3], 403);
+  mm_link_telemetry too_many = t;
+  too_many.readings = MM_LINK_TELEMETRY_MAX_READINGS + 1;
+  EXPECT_EQ(mm_link_encode_telemetry(&too_many, 3, buf), 0U);
+  mm_link_telemetry five = t;
+  five.count = 5;
+  EXPECT_EQ(mm_link_encode_telemetry(&five, 3, buf), 0U);
 
   mm_link_command cmd{};
   cmd.session = 0xABCD0001U;

@@ -5,6 +5,7 @@
 // firmware's end of a pseudo-terminal (frames out, reports in, a chip that
 // lost its configuration configured again).
 
+#include "output/erpm_telemetry.hpp"
 #include "output/output_gate.hpp"
 #include "output/serial_port.hpp"
 #include "output/serial_pulse_driver.hpp"
@@ -233,6 +234,32 @@ TEST(OutputHardwareConfig, DshotOnlyThroughTheFirmwareOnPortDAndUnipolar) {
   EXPECT_NE(
       expect_hardware_error(serial + "  pulse_rate_hz: 2000\n").find("hardware.pulse_rate_hz"),
       std::string::npos);
+  // Bidirectional: DShot300/600, four motors, at most 800 frames a second.
+  EXPECT_NE(expect_hardware_error(serial + "  protocol: dshot150\n  bidirectional: true\n")
+                .find("hardware.bidirectional"),
+            std::string::npos);
+  EXPECT_NE(
+      expect_hardware_error(serial + "  bidirectional: true\n").find("hardware.bidirectional"),
+      std::string::npos);
+  EXPECT_NE(expect_hardware_error(
+                serial + "  protocol: dshot600\n  bidirectional: true\n  pulse_rate_hz: 1000\n")
+                .find("hardware.pulse_rate_hz"),
+            std::string::npos);
+  std::string hexa;
+  try {
+    config::load_config_text("geometry: {preset: hexa_x}\nhardware:\n" + serial +
+                                 "  protocol: dshot600\n  bidirectional: true\n",
+                             "test");
+  } catch (const config::ConfigError& e) {
+    hexa = e.what();
+  }
+  EXPECT_NE(hexa.find("D2..D5"), std::string::npos) << hexa;
+  const config::Config bidir =
+      config::load_config_text("geometry: {preset: quad_x}\nhardware:\n" + serial +
+                                   "  protocol: dshot300\n  bidirectional: true\n",
+                               "test");
+  EXPECT_TRUE(bidir.hardware.bidirectional);
+  EXPECT_DOUBLE_EQ(bidir.hardware.pulse_rate_hz, 800.0);
 }
 
 // A sysfs PWM tree as the kernel shows it: pwmchip0 with export, and the
@@ -341,6 +368,9 @@ struct PtyPair {
     }
     return out;
   }
+  void send(const std::uint8_t* buf, std::size_t n) {
+    ASSERT_EQ(::write(master, buf, n), static_cast<ssize_t>(n));
+  }
   void report(std::uint8_t flags, std::uint32_t session = 0x10001, std::uint32_t last = 0) {
     mm_link_report r{};
     r.frames = 7;
@@ -446,6 +476,68 @@ TEST(SerialPulses, ANonSerialDeviceIsRefusedByName) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/dev/null"), std::string::npos);
   }
+}
+
+// Bidirectional DShot: the CONFIG carries the flag; each TELEMETRY frame's
+// readings come out of take_erpm() as eRPM (60e6 / period), a missing reply
+// as NaN and counted, the largest period (a stopped motor) as 0; on the
+// bus a frame names only the motors whose reply was decoded.
+TEST(SerialPulses, BidirectionalDshotRepliesBecomeErpmAndEscTelemetry) {
+  PtyPair pty;
+  output::SerialPulseSettings s;
+  s.period_us = 1250;
+  s.min_us = 1000;
+  s.max_us = 2000;
+  s.disarmed_us = {1000, 1000, 1000, 1000};
+  s.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  s.bidirectional = true;
+  output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
+  pty.report(0, 0x30001, 0);
+  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
+    ASSERT_TRUE(driver.service(0.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const std::vector<mm_link_frame> config = pty.frames(1);
+  ASSERT_EQ(config.size(), 1u);
+  EXPECT_EQ(config[0].u.config.protocol,
+            MM_LINK_PROTOCOL_DSHOT600 | MM_LINK_PROTOCOL_BIDIRECTIONAL);
+
+  mm_link_telemetry t{};
+  t.first = 65535;  // the frame counter wraps: nothing depends on it
+  t.readings = 2;
+  t.count = 4;
+  const std::uint16_t periods[2][4] = {
+      {2000, MM_LINK_NO_REPLY, 511u << 7, 300},
+      {MM_LINK_NO_REPLY, MM_LINK_NO_REPLY, MM_LINK_NO_REPLY, MM_LINK_NO_REPLY}};
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 4; ++c) t.period_us[r][c] = periods[r][c];
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  const std::size_t n = mm_link_encode_telemetry(&t, 5, buf);
+  ASSERT_EQ(n, 7u + MM_LINK_TELEMETRY_BODY(2u, 4u));
+  pty.send(buf, n);
+  std::vector<output::PulseDriver::ErpmReading> got;
+  for (int i = 0; i < 1000 && got.size() < 2; ++i) {
+    ASSERT_TRUE(driver.service(0.0));
+    for (auto& r : driver.take_erpm()) got.push_back(std::move(r));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_DOUBLE_EQ(got[0].erpm[0], 30000.0);
+  EXPECT_TRUE(std::isnan(got[0].erpm[1]));
+  EXPECT_DOUBLE_EQ(got[0].erpm[2], 0.0);
+  EXPECT_DOUBLE_EQ(got[0].erpm[3], 200000.0);
+  EXPECT_EQ(driver.replies_decoded(), 3u);
+  EXPECT_EQ(driver.replies_missed(), 5u);
+
+  motormix::esc_telemetry_t msg;
+  ASSERT_TRUE(output::fill_erpm_message(got[0], 1234, msg));
+  EXPECT_EQ(msg.utime, 1234);
+  ASSERT_EQ(msg.count, 3);
+  EXPECT_EQ(msg.motor, (std::vector<std::int8_t>{1, 3, 4}));
+  EXPECT_FLOAT_EQ(msg.erpm[0], 30000.0F);
+  EXPECT_TRUE(std::isnan(msg.rpm[0]));
+  EXPECT_TRUE(std::isnan(msg.current_a[2]));
+  EXPECT_FALSE(output::fill_erpm_message(got[1], 1234, msg)) << "no reply in that frame";
 }
 
 }  // namespace

@@ -54,6 +54,7 @@ struct Hardware {
   HardwareDriver driver = HardwareDriver::kNone;
   EscProtocol protocol = EscProtocol::kPwm;
   double pulse_rate_hz = 400.0;       // pulses (or DShot frames) per second on every channel
+  bool bidirectional = false;         // DShot300/600: every ESC's eRPM back (esc_telemetry_t)
   double motor_pwm_timeout_s = 0.05;  // older motor_pwm_t: disarmed values
   SerialPulses serial;
   SysfsPwm sysfs;

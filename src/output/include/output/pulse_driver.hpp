@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace motormix::output {
 
@@ -37,6 +38,13 @@ class PulseDriver {
   // channel i), in `repeat` frames; the caller sends it only while every
   // output is disarmed. False when the hardware cannot (not DShot, not
   // written).
+  // Bidirectional DShot: the eRPM each ESC answered with, one reading per
+  // frame since the last call (oldest first), NaN where a reply was
+  // missing or broken. Empty for other drivers.
+  struct ErpmReading {
+    std::vector<double> erpm;  // one per channel
+  };
+  virtual std::vector<ErpmReading> take_erpm() { return {}; }
   virtual bool command(std::uint8_t command, std::uint32_t channels, std::uint8_t repeat) {
     (void)command;
     (void)channels;

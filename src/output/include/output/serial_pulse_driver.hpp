@@ -24,6 +24,9 @@ struct SerialPulseSettings {
   // MM_LINK_PROTOCOL_*: with DShot, period_us is the frame period and
   // min_us..max_us the throttle range (the firmware maps it onto 48..2047).
   std::uint8_t protocol = MM_LINK_PROTOCOL_PWM;
+  // Bidirectional DShot (DShot300 or 600): every ESC's eRPM back, read from
+  // the firmware's TELEMETRY frames by take_erpm().
+  bool bidirectional = false;
 };
 
 class SerialPulseDriver : public PulseDriver {
@@ -38,6 +41,10 @@ class SerialPulseDriver : public PulseDriver {
   bool service(double now_s) override;
   std::string describe() const override;
   std::optional<FirmwareReport> firmware_report() const override;
+  std::vector<ErpmReading> take_erpm() override;
+  // eRPM replies the firmware decoded, and those it found missing or broken.
+  std::uint64_t replies_decoded() const { return replies_decoded_; }
+  std::uint64_t replies_missed() const { return replies_missed_; }
 
   bool have_report() const { return reports_ > 0; }
   std::uint64_t reports() const { return reports_; }
@@ -64,6 +71,9 @@ class SerialPulseDriver : public PulseDriver {
   bool resend_config_ = true;
   std::uint64_t frames_sent_ = 0, write_failures_ = 0;
   bool lost_ = false;  // a write found the device gone: service() says so
+  void take_telemetry(const mm_link_telemetry& t);
+  std::vector<ErpmReading> erpm_;
+  std::uint64_t replies_decoded_ = 0, replies_missed_ = 0;
 };
 
 }  // namespace motormix::output
