@@ -53,6 +53,11 @@ void BidirEscs::on_edge(const PinEdge& e) {
   const auto ch = static_cast<std::size_t>(e.channel);
   escs_[ch].feed(e);
   for (const DshotFrame& f : escs_[ch].take_frames()) {
+    if (follow_erpm_ > 0.0 && f.crc_ok) {
+      constexpr double kMinThrottle = 48.0, kSteps = 1999.0;
+      erpm_[ch] = f.value >= kMinThrottle ? follow_erpm_ * (f.value - kMinThrottle) / kSteps : 0.0;
+    }
+    if ((stopped_.load() >> ch) & 1u) erpm_[ch] = 0.0;
     Answer a;
     a.frame = f;
     a.erpm = erpm_[ch];

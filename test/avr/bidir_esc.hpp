@@ -13,6 +13,7 @@
 #include "avr_board.hpp"
 #include "dshot_esc.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -38,6 +39,13 @@ class BidirEscs {
   // frame_bit_cycles: the frame's bit at 16 MHz (26.67 at DShot600).
   BidirEscs(AvrBoard& board, int count, double frame_bit_cycles, BidirEscNoise noise);
   void set_erpm(int channel, double erpm) { erpm_[static_cast<std::size_t>(channel)] = erpm; }
+  // Motors that turn as they are told: each frame sets its channel's eRPM
+  // to full_erpm times the throttle's share of 48..2047 (0 for a stop or a
+  // command). 0: off (set_erpm's values stand).
+  void follow_throttle(double full_erpm) { follow_erpm_ = full_erpm; }
+  // A motor that stopped (a burnt winding, a locked rotor): 0 eRPM from its
+  // next reply on, whatever it is told. Safe from another thread.
+  void stop_motor(int channel) { stopped_.fetch_or(1u << channel); }
 
   struct Answer {
     DshotFrame frame;
@@ -62,6 +70,8 @@ class BidirEscs {
   std::vector<DshotEsc> escs_;
   std::vector<double> erpm_, clock_;
   std::vector<std::vector<Answer>> answers_;
+  double follow_erpm_ = 0.0;
+  std::atomic<unsigned> stopped_{0};
 };
 
 }  // namespace motormix::avr

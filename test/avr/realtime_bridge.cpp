@@ -20,7 +20,19 @@ std::int64_t steady_us() {
       .count();
 }
 
+RealtimeBridge::RealtimeBridge(const std::string& elf_path, const Escs& escs)
+    : board_(elf_path),
+      escs_(std::make_unique<BidirEscs>(board_, escs.count, escs.frame_bit_cycles, escs.noise)),
+      keep_edges_(false) {
+  escs_->follow_throttle(escs.full_erpm);
+  open_pty_and_start();
+}
+
 RealtimeBridge::RealtimeBridge(const std::string& elf_path) : board_(elf_path) {
+  open_pty_and_start();
+}
+
+void RealtimeBridge::open_pty_and_start() {
   master_ = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (master_ < 0 || grantpt(master_) != 0 || unlockpt(master_) != 0) {
     throw std::runtime_error("cannot create a pseudo-terminal");
@@ -84,9 +96,11 @@ void RealtimeBridge::run() {
         return wall_now - static_cast<std::int64_t>(sim_now - static_cast<double>(cycle) / 16.0);
       };
       std::lock_guard<std::mutex> lock(mutex_);
-      for (const PinEdge& e : edges) edges_.push_back({e, wall_of(e.cycle)});
-      for (const Pulse& p : pulses)
-        pulses_.push_back({p.channel, wall_of(p.rise_cycle), p.width_us, p.rise_cycle});
+      if (keep_edges_)
+        for (const PinEdge& e : edges) edges_.push_back({e, wall_of(e.cycle)});
+      if (keep_edges_)
+        for (const Pulse& p : pulses)
+          pulses_.push_back({p.channel, wall_of(p.rise_cycle), p.width_us, p.rise_cycle});
     }
     const double sim_elapsed = board_.now_us() - sim0;
     const double wall_elapsed = static_cast<double>(steady_us() - wall0);

@@ -6,9 +6,11 @@
 // end as if it were the Nano's USB serial port.
 
 #include "avr_board.hpp"
+#include "bidir_esc.hpp"
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -26,6 +28,18 @@ struct TimedPulse {
 class RealtimeBridge {
  public:
   explicit RealtimeBridge(const std::string& elf_path);
+  // With ESCs on the pins answering bidirectional DShot (bidir_esc.hpp),
+  // their motors following the throttle up to full_erpm; no edges are kept
+  // (take_edges() stays empty: a second of them is a million).
+  struct Escs {
+    int count = 4;
+    double frame_bit_cycles = 16e6 / 600e3;  // DShot600
+    double full_erpm = 140000.0;             // 14 poles at 20000 rpm
+    BidirEscNoise noise;
+  };
+  RealtimeBridge(const std::string& elf_path, const Escs& escs);
+  // The ESCs' motor stopping (see BidirEscs::stop_motor); needs the ESCs.
+  void stop_motor(int channel) { escs_->stop_motor(channel); }
   ~RealtimeBridge();
   RealtimeBridge(const RealtimeBridge&) = delete;
   RealtimeBridge& operator=(const RealtimeBridge&) = delete;
@@ -48,8 +62,11 @@ class RealtimeBridge {
 
  private:
   void run();
+  void open_pty_and_start();
 
   AvrBoard board_;
+  std::unique_ptr<BidirEscs> escs_;
+  bool keep_edges_ = true;
   int master_ = -1;
   std::string slave_path_;
   std::mutex mutex_;
