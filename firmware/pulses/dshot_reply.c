@@ -16,13 +16,14 @@
  * ESC's clock puts it. Every channel of the port in each sample, so four
  * motors cost what one does.
  *
- * The window: at DShot600 165 samples (72 us), from 8 us after the frame
- * (replies seen 8..80 us after it, one takes 28); 72 us because the UART's
- * interrupt cannot run meanwhile, and the UART holds two bytes, 80 us at
- * 250000 baud, after the drain between the frame and the window. At
- * DShot300 a reply takes 56 us: 115 samples (100 us, from 4 us after the
- * frame: replies seen 4..104 us after it), the UART read by the sampling
- * loop itself (dshot.S). */
+ * The window follows the frame at once, interrupts off from the frame's
+ * start to the window's end (an interrupt between them would move the
+ * window, and replies start some 30 us after the frame): at DShot600 165
+ * samples (72 us, replies seen 2..74 us after the frame, one takes 28),
+ * short enough for the UART, which holds two bytes (80 us at 250000 baud)
+ * after the poll between the frame and the window; at DShot300 a reply
+ * takes 56 us: 115 samples (100 us, 2..102 us), the UART read by the
+ * sampling loop itself (dshot.S). */
 #include "dshot_reply.h"
 
 #include <avr/interrupt.h>
@@ -36,30 +37,25 @@ uint8_t mm_dshot_sample300(uint8_t* buffer, uint8_t n, uint8_t* uart);
 /* At DShot300 the bytes the UART received while sampling go after the
  * samples: one a sample at most, so they can never overrun it. */
 #define SAMPLES_300 115u /* 100.6 us */
-#define BUFFER (SAMPLES_300 * 2u > MM_REPLY_SAMPLES ? SAMPLES_300 * 2u : MM_REPLY_SAMPLES)
+#define PADDING 8u       /* see find_edges */
+#define BUFFER \
+  (SAMPLES_300 * 2u > MM_REPLY_SAMPLES + PADDING ? SAMPLES_300 * 2u : MM_REPLY_SAMPLES + PADDING)
 static uint8_t g_samples[BUFFER];
 static uint8_t g_count; /* samples in the last capture */
 static void find_edges(uint8_t pins);
 
 #define TICKS_PER_US 2u /* Timer1 at clk/8 */
-#define WAIT_600_US 8u
+#define WAIT_US 2u
 #define SAMPLES_600 MM_REPLY_SAMPLES /* 72 us */
-#define WAIT_300_US 4u
 #define REPLY_BITS 21u
 
-void mm_reply_capture(uint8_t speed, uint8_t pins, void (*drain)(void),
-                      void (*take)(uint8_t byte)) {
+void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*take)(uint8_t byte)) {
   /* The frame left the pins high: input with the pull-up on, no glitch. */
   DDRD = (uint8_t)(DDRD & ~pins);
   const uint16_t t0 = TCNT1;
-  const uint16_t wait =
-      (uint16_t)((speed == MM_LINK_PROTOCOL_DSHOT600 ? WAIT_600_US : WAIT_300_US) * TICKS_PER_US);
-  while ((uint16_t)(TCNT1 - t0) < wait) drain();
-  /* Interrupts off from the last drain on: a byte the interrupt took after
-   * it would reach the parser after those the window read. */
-  const uint8_t sreg = SREG;
-  cli();
-  drain();
+  while ((uint16_t)(TCNT1 - t0) < WAIT_US * TICKS_PER_US) {
+  }
+  poll();
   if (speed == MM_LINK_PROTOCOL_DSHOT600) {
     g_count = SAMPLES_600;
     mm_dshot_sample600(g_samples, g_count);
@@ -69,8 +65,7 @@ void mm_reply_capture(uint8_t speed, uint8_t pins, void (*drain)(void),
     const uint8_t n = mm_dshot_sample300(g_samples, g_count, uart);
     for (uint8_t k = 0; k < n; ++k) take(uart[k]);
   }
-  SREG = sreg;
-  drain();
+  poll();
   DDRD = (uint8_t)(DDRD | pins); /* PORTD still high there: idle */
   find_edges(pins);
 }
@@ -85,8 +80,12 @@ static const uint8_t kGcr[32] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
 static uint8_t g_first;
 
 static void find_edges(uint8_t pins) {
+  /* After the window: a sentinel (every line low) that ends each search,
+   * and idle (high) lines that a late reply's resync may read into. */
+  g_samples[g_count] = 0;
+  for (uint8_t k = 1; k < PADDING; ++k) g_samples[g_count + k] = 0xFFu;
   uint8_t i = 0;
-  while (i < g_count && (g_samples[i] & pins) == pins) ++i;
+  while ((g_samples[i] & pins) == pins) ++i;
   g_first = i;
 }
 
@@ -102,16 +101,18 @@ uint16_t mm_reply_decode(uint8_t channel) {
   const uint8_t pin = (uint8_t)(4u << channel); /* D2.. */
   const uint8_t* const s = g_samples;
   uint8_t i = g_first;
-  while (i < g_count && (s[i] & pin)) ++i; /* the start bit's fall */
-  if (i >= g_count) return MM_LINK_NO_REPLY;
+  while (s[i] & pin) ++i; /* the start bit's fall (the sentinel ends it) */
+  /* Low from the window's first sample: a reply that started before it
+   * (or a line held low), not to be read from the middle; and a reply whose
+   * last bit's middle (with a slow ESC's clock) is past the window. */
+  if (i == 0u || (uint16_t)i + kMid[REPLY_BITS - 1u] + 2u >= g_count) return MM_LINK_NO_REPLY;
   /* Each bit read in its middle, as a UART reads, counted from the last
    * change seen; a 1 is a change of level since the bit before; each five
    * bits a GCR code. */
   uint8_t anchor = i, k = 0, level = 0, before = i, code = 0, left = 5, value_ok = 1;
   uint16_t value = 0;
   for (uint8_t bit = 1; bit < REPLY_BITS; ++bit) {
-    const uint8_t at = (uint8_t)(anchor + kMid[++k]);
-    if (at >= g_count) return MM_LINK_NO_REPLY;
+    const uint8_t at = (uint8_t)(anchor + kMid[++k]); /* within the padding at worst */
     const uint8_t l = (uint8_t)(s[at] & pin);
     code = (uint8_t)(code << 1);
     if (l != level) {

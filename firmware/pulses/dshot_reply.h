@@ -10,14 +10,12 @@
 /* Samples of port D a capture holds. */
 #define MM_REPLY_SAMPLES 165u
 
-/* Releases `pins` (port D bits, idle high) to the ESCs right after a
- * frame, waits for the replies to start, samples port D for the window
- * (speed: MM_LINK_PROTOCOL_DSHOT300 or 600) and drives the pins high
- * again, then finds where each channel's line changed (the costly part,
- * about 100 us for all of them). drain() is called while waiting and after
- * the window; take() with each byte the UART received during a window that
- * read it (DShot300). */
-void mm_reply_capture(uint8_t speed, uint8_t pins, void (*drain)(void), void (*take)(uint8_t byte));
+/* Right after a frame, with interrupts still off: releases `pins` (port
+ * D bits, idle high) to the ESCs, samples port D for the replies (speed:
+ * MM_LINK_PROTOCOL_DSHOT300 or 600), drives the pins high again, then finds
+ * where the replies start. poll() takes a byte the UART holds (before and
+ * after the window); take() each byte the window itself read (DShot300). */
+void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*take)(uint8_t byte));
 
 /* The reply of a channel (0..3: D2..D5) in the last capture: the eRPM
  * period in microseconds (mantissa << exponent), or MM_LINK_NO_REPLY. */

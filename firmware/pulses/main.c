@@ -342,12 +342,11 @@ static void dshot_prepare(void) {
 static uint8_t g_rx[RX_RING];
 static volatile uint8_t g_rx_head, g_rx_tail, g_rx_lost;
 
-ISR(USART_RX_vect) {
-  const uint8_t status = UCSR0A;
-  const uint8_t byte = UDR0;
+/* A byte into the ring, with interrupts off (from the interrupt, or while
+ * a frame and its window keep them off). */
+static void rx_put(uint8_t byte) {
   const uint8_t head = g_rx_head;
   const uint8_t next = (uint8_t)((head + 1u) & (RX_RING - 1u));
-  if (status & (_BV(FE0) | _BV(DOR0))) ++g_rx_lost; /* a broken or lost byte */
   if (next == g_rx_tail) {
     ++g_rx_lost;
     return;
@@ -355,6 +354,17 @@ ISR(USART_RX_vect) {
   g_rx[head] = byte;
   g_rx_head = next;
 }
+
+/* The byte the UART holds, if any (a DOR or FE flag counted). */
+static void rx_take(void) {
+  const uint8_t status = UCSR0A;
+  if (!(status & _BV(RXC0))) return;
+  const uint8_t byte = UDR0;
+  if (status & (_BV(FE0) | _BV(DOR0))) ++g_rx_lost; /* a broken or lost byte */
+  rx_put(byte);
+}
+
+ISR(USART_RX_vect) { rx_take(); }
 
 /* The frame in g_tx, by the UART's interrupt (bidirectional DShot, whose
  * decoding would leave the wire idle between polls) or by the main loop. */
@@ -368,13 +378,13 @@ static void start_tx(void) {
   if (g_bidir) UCSR0B = (uint8_t)(UCSR0B | _BV(UDRIE0));
 }
 
-static inline __attribute__((always_inline)) uint8_t rx_interrupt(void) { return (UCSR0B & _BV(RXCIE0)) != 0u; }
+static inline __attribute__((always_inline)) uint8_t rx_interrupt(void) {
+  return (UCSR0B & _BV(RXCIE0)) != 0u;
+}
 
 static inline __attribute__((always_inline)) uint8_t rx_waiting(void) {
   return rx_interrupt() ? g_rx_head != g_rx_tail : (UCSR0A & _BV(RXC0)) != 0u;
 }
-
-static void take_byte(uint8_t byte) { mm_link_push(&g_parser, byte); }
 
 /* Every received byte into the parser's ring (a DOR or FE flag counted). */
 static void read_uart(void) {
@@ -393,26 +403,36 @@ static void read_uart(void) {
     g_rx_tail = tail;
   }
   if (g_rx_lost) {
+    const uint8_t sreg = SREG;
     cli();
     g_parser.malformed += g_rx_lost;
     g_rx_lost = 0;
-    sei();
+    SREG = sreg;
   }
 }
 
 static void dshot_send(void) {
-  if (g_dshot == MM_LINK_PROTOCOL_DSHOT600) {
+  if (g_bidir) {
+    /* The window right after the frame, interrupts off throughout (the
+     * sender restores them as they were). The main loop decodes the last
+     * frame's replies before it sends another frame, so none is sampled
+     * over. */
+    const uint8_t sreg = SREG;
+    cli();
+    if (g_dshot == MM_LINK_PROTOCOL_DSHOT600) {
+      mm_dshot_send600(g_dshot_ports, g_dshot_high, g_dshot_low);
+    } else {
+      mm_dshot_send300(g_dshot_ports, g_dshot_high, g_dshot_low);
+    }
+    mm_reply_capture(g_dshot, g_dshot_pins, rx_take, rx_put);
+    SREG = sreg;
+    g_decode_next = 0;
+  } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT600) {
     mm_dshot_send600(g_dshot_ports, g_dshot_high, g_dshot_low);
   } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT300) {
     mm_dshot_send300(g_dshot_ports, g_dshot_high, g_dshot_low);
   } else {
     mm_dshot_send150(g_dshot_ports, g_dshot_high, g_dshot_low);
-  }
-  if (g_bidir) {
-    /* The main loop decodes the last frame's replies before it sends
-     * another frame, so none is sampled over. */
-    mm_reply_capture(g_dshot, g_dshot_pins, read_uart, take_byte);
-    g_decode_next = 0;
   }
   ++g_frame_count;
   ++g_periods; /* the watchdog's sign of life, as a pulse period is */
@@ -566,8 +586,10 @@ int main(void) {
   DDRD |= d;
   DDRB |= b;
 
-  UBRR0 = (uint16_t)(F_CPU / (8UL * BAUD) - 1UL);
+  /* Double speed before the rate: simavr takes the byte time from the
+   * rate's write, with the U2X0 it finds then (the chip does not care). */
   UCSR0A = _BV(U2X0);
+  UBRR0 = (uint16_t)(F_CPU / (8UL * BAUD) - 1UL);
   UCSR0B = _BV(RXEN0) | _BV(TXEN0);
   UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
 
@@ -601,13 +623,23 @@ int main(void) {
     } else if (g_dshot && g_dshot_dirty) {
       dshot_prepare();
     } else if (mm_link_pending(&g_parser)) {
-      /* A byte of the search before a reply: a byte takes some 20 us, a
-       * reply up to 100, and the ring of bytes must not fill. */
-      mm_link_frame frame;
-      const uint8_t type = mm_link_poll(&g_parser, &frame);
-      if (type) take_frame(type, &frame, now);
+      /* The bytes waiting, before the replies: a byte takes some 7 us, a
+       * reply 80. With replies on, every byte queued at once (the UART's
+       * interrupt keeps reading meanwhile): a turn of this loop costs as
+       * much as a byte. A PULSES frame ends the turn, to be prepared. */
+      uint8_t more = g_bidir ? 32u : 1u;
+      do {
+        mm_link_frame frame;
+        const uint8_t type = mm_link_poll(&g_parser, &frame);
+        if (type) {
+          take_frame(type, &frame, now);
+          break;
+        }
+      } while (--more && mm_link_pending(&g_parser));
     } else if (g_dshot && g_decode_next < g_config.count) {
-      decode_reply();
+      /* Every channel's reply in one turn: the UART's interrupt reads
+       * meanwhile, and turns of this loop cost. */
+      while (g_decode_next < g_config.count) decode_reply();
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;
@@ -619,14 +651,30 @@ int main(void) {
       if (g_tx_at >= g_tx_len) g_next_report = now;
     }
     if (g_tx_at < g_tx_len) {
-      if (!(UCSR0B & _BV(UDRIE0)) && (UCSR0A & _BV(UDRE0))) UDR0 = g_tx[g_tx_at++];
-    } else if ((int32_t)(now - g_next_report) >= 0) {
-      g_next_report = now + REPORT_EVERY_TICKS;
-      queue_report();
+      if (UCSR0B & _BV(UDRIE0)) {
+        /* The UART's interrupt sends, and the loop helps where it may not
+         * have come for a byte while interrupts were off (a frame and its
+         * window); with pulses the loop alone, no interrupts touched. */
+        const uint8_t sreg = SREG;
+        cli();
+        if ((UCSR0A & _BV(UDRE0)) && g_tx_at < g_tx_len) {
+          UDR0 = g_tx[g_tx_at++];
+          if (g_tx_at >= g_tx_len) UCSR0B = (uint8_t)(UCSR0B & ~_BV(UDRIE0));
+        }
+        SREG = sreg;
+      } else if (UCSR0A & _BV(UDRE0)) {
+        UDR0 = g_tx[g_tx_at++];
+      }
     } else if (g_bidir && g_tlm.readings >= g_tlm_send_at) {
+      /* A batch of replies before a report: a batch held behind a report
+       * (1.6 ms on the wire) and the next batch would overflow, a report
+       * waits a batch at most. */
       g_tx_len = (uint8_t)mm_link_encode_telemetry(&g_tlm, g_tlm_seq++, g_tx);
       g_tlm.readings = 0;
       start_tx();
+    } else if ((int32_t)(now - g_next_report) >= 0) {
+      g_next_report = now + REPORT_EVERY_TICKS;
+      queue_report();
     }
     /* The watchdog is fed only while the pulse interrupt is alive too. */
     const uint8_t periods = g_periods;
