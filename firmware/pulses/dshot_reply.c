@@ -89,13 +89,14 @@ static void find_edges(uint8_t pins) {
   g_first = i;
 }
 
-/* Where bit k after a change is read: its middle, in samples from the
- * first sample of the new level (the change came half a sample before it
- * on average): round((k + 0.5) * 3.048 - 0.5). A reply bit is 3.048
- * samples both ways: 21.333 cycles over 7 at DShot600, 42.667 over 14 at
- * DShot300. */
-static const uint8_t kMid[REPLY_BITS] = {1,  4,  7,  10, 13, 16, 19, 22, 25, 28, 31,
-                                         35, 38, 41, 44, 47, 50, 53, 56, 59, 62};
+/* A reply bit in samples, 8.8 fixed point: 3.048 both ways (21.333 cycles
+ * over 7 at DShot600, 42.667 over 14 at DShot300). A bit is read in its
+ * middle: from a change first seen at sample e (it came half a sample
+ * earlier on average), the middle of that bit is e + 1.024; positions carry
+ * half a sample more so that the whole part is the nearest sample. */
+#define BIT_Q8 780u
+#define FIRST_MID_Q8 390u /* (1.024 + 0.5) * 256 */
+#define LAST_MID 62u      /* the 21st bit's, from the start's fall */
 
 uint16_t mm_reply_decode(uint8_t channel) {
   const uint8_t pin = (uint8_t)(4u << channel); /* D2.. */
@@ -105,14 +106,16 @@ uint16_t mm_reply_decode(uint8_t channel) {
   /* Low from the window's first sample: a reply that started before it
    * (or a line held low), not to be read from the middle; and a reply whose
    * last bit's middle (with a slow ESC's clock) is past the window. */
-  if (i == 0u || (uint16_t)i + kMid[REPLY_BITS - 1u] + 2u >= g_count) return MM_LINK_NO_REPLY;
+  if (i == 0u || (uint16_t)i + LAST_MID + 2u >= g_count) return MM_LINK_NO_REPLY;
   /* Each bit read in its middle, as a UART reads, counted from the last
    * change seen; a 1 is a change of level since the bit before; each five
-   * bits a GCR code. */
-  uint8_t anchor = i, k = 0, level = 0, before = i, code = 0, left = 5, value_ok = 1;
+   * bits a GCR code. Within the padding after the window at worst. */
+  uint16_t mid = (uint16_t)(((uint16_t)i << 8) + FIRST_MID_Q8);
+  uint8_t level = 0, before = i, code = 0, left = 5, value_ok = 1;
   uint16_t value = 0;
   for (uint8_t bit = 1; bit < REPLY_BITS; ++bit) {
-    const uint8_t at = (uint8_t)(anchor + kMid[++k]); /* within the padding at worst */
+    mid = (uint16_t)(mid + BIT_Q8);
+    const uint8_t at = (uint8_t)(mid >> 8);
     const uint8_t l = (uint8_t)(s[at] & pin);
     code = (uint8_t)(code << 1);
     if (l != level) {
@@ -128,8 +131,7 @@ uint16_t mm_reply_decode(uint8_t channel) {
           if ((uint8_t)(at - before) > 3u && (uint8_t)(q[-3] & pin) == l) --e;
         }
       }
-      anchor = e;
-      k = 0;
+      mid = (uint16_t)(((uint16_t)e << 8) + FIRST_MID_Q8);
       level = l;
     }
     before = at;

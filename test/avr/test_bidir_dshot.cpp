@@ -1,8 +1,8 @@
 // Bidirectional DShot in the firmware (firmware/pulses/dshot_reply.c),
 // against emulated ESCs that answer every frame with their eRPM
-// (bidir_esc.hpp): jittered edges, ESC clocks off by up to 1 %, replies
-// starting 25-35 us after the frame, 1 % of frames left unanswered, and
-// spikes on some replies. The chip samples port D once for all four
+// (bidir_esc.hpp): edges jittered by up to 3 cycles (0.19 us), ESC clocks
+// off by up to 2 %, replies starting 20-40 us after the frame, 1 % of
+// frames left unanswered, and spikes on 0.5 % of the replies. The chip samples port D once for all four
 // motors, decodes each reply and sends the periods to the host in
 // TELEMETRY frames; here they are matched, frame by frame, with what each
 // ESC sent.
@@ -195,6 +195,11 @@ TEST(PulseFirmwareBidir, EveryMotorsReplyDecodedOnTheChipWithNoise) {
     BidirEscNoise noise;
     noise.seed = 11;
     noise.spike_share = 0.005;
+    // Twice the defaults' jitter and clock error, and a wider delay.
+    noise.edge_jitter_cycles = 3.0;
+    noise.clock_error_max = 0.02;
+    noise.delay_us_min = 20.0;
+    noise.delay_us_max = 40.0;
     std::vector<Tally> tally(kChannels);
     double rate = 0.0;
     run_speed(speed, noise, tally, rate);
