@@ -22,11 +22,13 @@ if(NOT MOTORMIX_BUILD_FIRMWARE STREQUAL "OFF")
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_isr.S
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot.S
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_reply.c
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/serial.c
       ${CMAKE_CURRENT_SOURCE_DIR}/src/link/motormix_link.c)
     set(fw_headers
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_schedule.h
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_timing.h
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_reply.h
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/serial.h
       ${CMAKE_CURRENT_SOURCE_DIR}/src/link/motormix_link.h)
     # Warnings as errors always: the firmware is built by one known compiler.
     add_custom_command(OUTPUT ${MOTORMIX_FIRMWARE_ELF} ${fw_dir}/motormix-pulses.hex

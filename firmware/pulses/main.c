@@ -39,11 +39,11 @@
 #include "motormix_link.h"
 #include "pulse_schedule.h"
 #include "pulse_timing.h"
+#include "serial.h"
 
 #if F_CPU != 16000000UL
 #error "the pulse timing is for 16 MHz (Timer1 at clk/8: 2 ticks per microsecond)"
 #endif
-#define BAUD 250000UL
 #define REPORT_EVERY_TICKS 100000UL /* 50 ms */
 
 /* ---- shared with the pulse interrupt (pulse_isr.S) ---- */
@@ -111,9 +111,7 @@ static uint32_t g_session;
 static uint32_t g_now_high, g_deadline, g_next_report;
 static uint16_t g_last_tcnt;
 static uint16_t g_timeout_ticks_high; /* link timeout - one period, in ticks >> 8 */
-static uint8_t g_tx[MM_LINK_MAX_FRAME];
-static uint8_t g_tx_len, g_report_seq;
-static volatile uint8_t g_tx_at;
+static uint8_t g_report_seq;
 
 /* Reset cause, saved before anything else runs (the watchdog stays on
  * after a watchdog reset and must be stopped at once). */
@@ -204,13 +202,11 @@ static void stop_pulses(void) {
   pins_low();
 }
 
-static void read_uart(void);
-
 static void apply_config(const mm_link_config* c) {
   stop_pulses();
   /* Polled unless bidirectional (a frame being sent is finished by the loop). */
-  UCSR0B = (uint8_t)(UCSR0B & ~(_BV(RXCIE0) | _BV(UDRIE0)));
-  read_uart();
+  mm_serial_interrupts(0);
+  mm_serial_read(&g_parser);
   g_config = *c;
   g_period_ticks = (uint16_t)(c->period_us * MM_TICKS_PER_US);
   /* Disarmed pulses start within the timeout of the last frame: the link
@@ -237,7 +233,7 @@ static void apply_config(const mm_link_config* c) {
      * the UART read by its interrupt while the replies are decoded. */
     if (g_bidir) {
       PORTD = (uint8_t)(PORTD | g_dshot_pins);
-      UCSR0B = (uint8_t)(UCSR0B | _BV(RXCIE0));
+      mm_serial_interrupts(1);
     }
     g_decode_next = c->count;
     g_tlm.readings = 0;
@@ -336,81 +332,6 @@ static void dshot_prepare(void) {
   g_dshot_dirty = 0;
 }
 
-/* Bytes the receive interrupt took (bidirectional DShot only): it writes
- * the head, the main loop the tail, one byte each. */
-#define RX_RING 32u
-static uint8_t g_rx[RX_RING];
-static volatile uint8_t g_rx_head, g_rx_tail, g_rx_lost;
-
-/* A byte into the ring, with interrupts off (from the interrupt, or while
- * a frame and its window keep them off). */
-static void rx_put(uint8_t byte) {
-  const uint8_t head = g_rx_head;
-  const uint8_t next = (uint8_t)((head + 1u) & (RX_RING - 1u));
-  if (next == g_rx_tail) {
-    ++g_rx_lost;
-    return;
-  }
-  g_rx[head] = byte;
-  g_rx_head = next;
-}
-
-/* The byte the UART holds, if any (a DOR or FE flag counted). */
-static void rx_take(void) {
-  const uint8_t status = UCSR0A;
-  if (!(status & _BV(RXC0))) return;
-  const uint8_t byte = UDR0;
-  if (status & (_BV(FE0) | _BV(DOR0))) ++g_rx_lost; /* a broken or lost byte */
-  rx_put(byte);
-}
-
-ISR(USART_RX_vect) { rx_take(); }
-
-/* The frame in g_tx, by the UART's interrupt (bidirectional DShot, whose
- * decoding would leave the wire idle between polls) or by the main loop. */
-ISR(USART_UDRE_vect) {
-  UDR0 = g_tx[g_tx_at++];
-  if (g_tx_at >= g_tx_len) UCSR0B = (uint8_t)(UCSR0B & ~_BV(UDRIE0));
-}
-
-static void start_tx(void) {
-  g_tx_at = 0;
-  if (g_bidir) UCSR0B = (uint8_t)(UCSR0B | _BV(UDRIE0));
-}
-
-static inline __attribute__((always_inline)) uint8_t rx_interrupt(void) {
-  return (UCSR0B & _BV(RXCIE0)) != 0u;
-}
-
-static inline __attribute__((always_inline)) uint8_t rx_waiting(void) {
-  return rx_interrupt() ? g_rx_head != g_rx_tail : (UCSR0A & _BV(RXC0)) != 0u;
-}
-
-/* Every received byte into the parser's ring (a DOR or FE flag counted). */
-static void read_uart(void) {
-  if (!rx_interrupt()) {
-    while (UCSR0A & _BV(RXC0)) {
-      const uint8_t status = UCSR0A;
-      const uint8_t byte = UDR0;
-      if (status & (_BV(FE0) | _BV(DOR0))) ++g_parser.malformed; /* a broken or lost byte */
-      mm_link_push(&g_parser, byte);
-    }
-  }
-  uint8_t tail = g_rx_tail;
-  while (tail != g_rx_head) {
-    mm_link_push(&g_parser, g_rx[tail]);
-    tail = (uint8_t)((tail + 1u) & (RX_RING - 1u));
-    g_rx_tail = tail;
-  }
-  if (g_rx_lost) {
-    const uint8_t sreg = SREG;
-    cli();
-    g_parser.malformed += g_rx_lost;
-    g_rx_lost = 0;
-    SREG = sreg;
-  }
-}
-
 static void dshot_send(void) {
   if (g_bidir) {
     /* The window right after the frame, interrupts off throughout (the
@@ -424,7 +345,7 @@ static void dshot_send(void) {
     } else {
       mm_dshot_send300(g_dshot_ports, g_dshot_high, g_dshot_low);
     }
-    mm_reply_capture(g_dshot, g_dshot_pins, rx_take, rx_put);
+    mm_reply_capture(g_dshot, g_dshot_pins, mm_serial_take, mm_serial_put);
     SREG = sreg;
     g_decode_next = 0;
   } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT600) {
@@ -569,8 +490,7 @@ static void queue_report(void) {
                              (g_configured && !g_link_ok ? MM_LINK_FLAG_TIMED_OUT : 0u));
   g_report.session = g_session;
   g_report.version = MM_LINK_VERSION;
-  g_tx_len = (uint8_t)mm_link_encode_report(&g_report, g_report_seq++, g_tx);
-  start_tx();
+  mm_serial_send((uint8_t)mm_link_encode_report(&g_report, g_report_seq++, mm_serial_frame()));
 }
 
 int main(void) {
@@ -586,12 +506,7 @@ int main(void) {
   DDRD |= d;
   DDRB |= b;
 
-  /* Double speed before the rate: simavr takes the byte time from the
-   * rate's write, with the U2X0 it finds then (the chip does not care). */
-  UCSR0A = _BV(U2X0);
-  UBRR0 = (uint16_t)(F_CPU / (8UL * BAUD) - 1UL);
-  UCSR0B = _BV(RXEN0) | _BV(TXEN0);
-  UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
+  mm_serial_init();
 
   TCCR1A = 0;
   TCCR1B = _BV(CS11); /* clk/8, normal mode: free-running, compare A drives the edges */
@@ -605,8 +520,8 @@ int main(void) {
     /* A received byte first, else one step of the search: a step takes a
      * few microseconds, a byte 40, so the UART's two-byte buffer never
      * overruns, even while the parser searches again after a bad frame. */
-    if (rx_waiting()) {
-      read_uart();
+    if (mm_serial_waiting()) {
+      mm_serial_read(&g_parser);
     } else if (g_dshot && g_configured && !g_dshot_dirty && g_decode_next >= g_config.count &&
                (int32_t)(now - g_next_frame) >= 0) {
       /* A DShot frame once the last one's replies are decoded (they would
@@ -623,11 +538,15 @@ int main(void) {
     } else if (g_dshot && g_dshot_dirty) {
       dshot_prepare();
     } else if (mm_link_pending(&g_parser)) {
-      /* The bytes waiting, before the replies: a byte takes some 7 us, a
-       * reply 80. With replies on, every byte queued at once (the UART's
-       * interrupt keeps reading meanwhile): a turn of this loop costs as
-       * much as a byte. A PULSES frame ends the turn, to be prepared. */
-      uint8_t more = g_bidir ? 32u : 1u;
+      /* Bytes of the search, before the replies: a step takes some 7 us, a
+       * reply 80, and a turn of this loop as much as a step. Polled (with
+       * pulses), three steps between two looks at the UART (a byte comes
+       * every 40 us, the UART holds two): after a bad frame the search
+       * goes over its bytes again, and at the wire's full rate one step a
+       * turn fell behind and filled the ring. With replies on, every byte
+       * queued (the UART's interrupt reads meanwhile). A frame taken ends
+       * the turn: a PULSES frame is to be prepared. */
+      uint8_t more = g_bidir ? 32u : 3u;
       do {
         mm_link_frame frame;
         const uint8_t type = mm_link_poll(&g_parser, &frame);
@@ -648,30 +567,16 @@ int main(void) {
        * to the host at once. */
       next_session();
       ++g_report.link_timeouts;
-      if (g_tx_at >= g_tx_len) g_next_report = now;
+      if (!mm_serial_sending()) g_next_report = now;
     }
-    if (g_tx_at < g_tx_len) {
-      if (UCSR0B & _BV(UDRIE0)) {
-        /* The UART's interrupt sends, and the loop helps where it may not
-         * have come for a byte while interrupts were off (a frame and its
-         * window); with pulses the loop alone, no interrupts touched. */
-        const uint8_t sreg = SREG;
-        cli();
-        if ((UCSR0A & _BV(UDRE0)) && g_tx_at < g_tx_len) {
-          UDR0 = g_tx[g_tx_at++];
-          if (g_tx_at >= g_tx_len) UCSR0B = (uint8_t)(UCSR0B & ~_BV(UDRIE0));
-        }
-        SREG = sreg;
-      } else if (UCSR0A & _BV(UDRE0)) {
-        UDR0 = g_tx[g_tx_at++];
-      }
+    if (mm_serial_sending()) {
+      mm_serial_poll_send();
     } else if (g_bidir && g_tlm.readings >= g_tlm_send_at) {
       /* A batch of replies before a report: a batch held behind a report
        * (1.6 ms on the wire) and the next batch would overflow, a report
        * waits a batch at most. */
-      g_tx_len = (uint8_t)mm_link_encode_telemetry(&g_tlm, g_tlm_seq++, g_tx);
+      mm_serial_send((uint8_t)mm_link_encode_telemetry(&g_tlm, g_tlm_seq++, mm_serial_frame()));
       g_tlm.readings = 0;
-      start_tx();
     } else if ((int32_t)(now - g_next_report) >= 0) {
       g_next_report = now + REPORT_EVERY_TICKS;
       queue_report();
