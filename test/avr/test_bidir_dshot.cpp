@@ -2,10 +2,9 @@
 // against emulated ESCs that answer every frame with their eRPM
 // (bidir_esc.hpp): edges jittered by up to 3 cycles (0.19 us), ESC clocks
 // off by up to 2 %, replies starting 20-40 us after the frame, 1 % of
-// frames left unanswered, and spikes on 0.5 % of the replies. The chip samples port D once for all four
-// motors, decodes each reply and sends the periods to the host in
-// TELEMETRY frames; here they are matched, frame by frame, with what each
-// ESC sent.
+// frames left unanswered, and spikes on 0.5 % of the replies. The chip samples port D once for all
+// four motors, decodes each reply and sends the periods to the host in TELEMETRY frames; here they
+// are matched, frame by frame, with what each ESC sent.
 
 #include "avr_board.hpp"
 #include "bidir_esc.hpp"
