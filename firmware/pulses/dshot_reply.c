@@ -10,11 +10,13 @@
  * three bits, which is what lets a run of samples be counted in bits.
  *
  * Sampling: every 7 cycles at DShot600, 14 at DShot300 (dshot.S): 3.05
- * samples a reply bit both ways, so a run of n samples is round(n / 3.05)
- * bits; with the quantisation of one sample, that holds while each edge is
- * within +-0.38 samples (2.7 cycles at DShot600, 0.17 us) of where the
- * ESC's clock puts it. Every channel of the port in each sample, so four
- * motors cost what one does.
+ * samples a reply bit both ways. Each bit is read in its middle and the
+ * count goes back in step at every change (GCR changes level at least
+ * every three bits), so a bit is read right while its edges are within
+ * 1.5 samples of where they were counted: half a sample for where between
+ * two samples a change came, 0.2 for three bits of a clock 2 % off, the
+ * rest (5 cycles at DShot600) for jitter. Every channel of the port in
+ * each sample, so four motors cost one pass of sampling.
  *
  * The window follows the frame at once, interrupts off from the frame's
  * start to the window's end (an interrupt between them would move the
