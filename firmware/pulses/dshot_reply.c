@@ -39,12 +39,12 @@ uint8_t mm_dshot_sample300(uint8_t* buffer, uint8_t n, uint8_t* uart);
 /* At DShot300 the bytes the UART received while sampling go after the
  * samples: one a sample at most, so they can never overrun it. */
 #define SAMPLES_300 115u /* 100.6 us */
-#define PADDING 8u       /* see find_edges */
+#define PADDING 8u       /* see find_first_low */
 #define BUFFER \
   (SAMPLES_300 * 2u > MM_REPLY_SAMPLES + PADDING ? SAMPLES_300 * 2u : MM_REPLY_SAMPLES + PADDING)
 static uint8_t g_samples[BUFFER];
 static uint8_t g_count; /* samples in the last capture */
-static void find_edges(uint8_t pins);
+static void find_first_low(uint8_t pins);
 
 #define TICKS_PER_US 2u /* Timer1 at clk/8 */
 #define WAIT_US 2u
@@ -69,7 +69,7 @@ void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*ta
   }
   poll();
   DDRD = (uint8_t)(DDRD | pins); /* PORTD still high there: idle */
-  find_edges(pins);
+  find_first_low(pins);
 }
 
 /* GCR code -> nibble; 0xFF: not a code. */
@@ -81,7 +81,7 @@ static const uint8_t kGcr[32] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
  * earlier, so each channel's search starts there. */
 static uint8_t g_first;
 
-static void find_edges(uint8_t pins) {
+static void find_first_low(uint8_t pins) {
   /* After the window: a sentinel (every line low) that ends each search,
    * and idle (high) lines that a late reply's resync may read into. */
   g_samples[g_count] = 0;

@@ -93,11 +93,10 @@ static uint8_t g_dshot_dirty; /* the frame's port values are to be made again */
 static uint8_t g_cmd, g_cmd_channels, g_cmd_left;
 static uint32_t g_next_frame;
 static uint8_t g_dshot_pins; /* port D bits of the DShot channels */
-/* Replies: the channel to decode next (g_config.count: none), the readings
- * waiting to go to the host, the frame counter. */
-static uint8_t g_decode_next;
+/* Replies: the last frame's are yet to be decoded, the readings waiting to
+ * go to the host, the frame counter. */
+static uint8_t g_replies_waiting;
 static mm_link_telemetry g_tlm;
-static uint16_t g_reading[MM_LINK_MAX_BIDIR_CHANNELS]; /* the frame being decoded */
 static uint16_t g_frame_count;
 static uint8_t g_tlm_send_at, g_tlm_seq;
 
@@ -235,7 +234,7 @@ static void apply_config(const mm_link_config* c) {
       PORTD = (uint8_t)(PORTD | g_dshot_pins);
       mm_serial_interrupts(1);
     }
-    g_decode_next = c->count;
+    g_replies_waiting = 0;
     g_tlm.readings = 0;
     g_tlm.count = c->count;
     /* Replies go in batches of about 3 ms of frames: at 1 kHz a TELEMETRY
@@ -302,13 +301,12 @@ static uint16_t dshot_packet(uint16_t value, uint8_t telemetry) {
 static void dshot_prepare(void) {
   uint16_t packet[MM_LINK_MAX_DSHOT_CHANNELS];
   uint8_t bit[MM_LINK_MAX_DSHOT_CHANNELS];
-  uint8_t all = 0;
+  const uint8_t all = g_dshot_pins;
   const uint8_t armed = g_link_ok ? g_dshot_armed : 0u;
   for (uint8_t k = 0; k < g_config.count; ++k) {
     uint8_t d, b;
     mm_channel_bits(k, &d, &b);
     bit[k] = d;
-    all = (uint8_t)(all | d);
     if ((armed >> k) & 1u) {
       packet[k] = dshot_packet(g_dshot_throttle[k], 0);
     } else if (g_cmd_left && ((g_cmd_channels >> k) & 1u)) {
@@ -347,7 +345,7 @@ static void dshot_send(void) {
     }
     mm_reply_capture(g_dshot, g_dshot_pins, mm_serial_take, mm_serial_put);
     SREG = sreg;
-    g_decode_next = 0;
+    g_replies_waiting = 1;
   } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT600) {
     mm_dshot_send600(g_dshot_ports, g_dshot_high, g_dshot_low);
   } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT300) {
@@ -360,12 +358,10 @@ static void dshot_send(void) {
   if (g_cmd_left && --g_cmd_left == 0u) g_dshot_dirty = 1;
 }
 
-/* One channel's reply of the last frame; after the last, the reading joins
- * the batch for the host (the oldest dropped if the batch is full, which the
- * host sees as a gap in the frame counter). */
-static void decode_reply(void) {
-  g_reading[g_decode_next] = mm_reply_decode(g_decode_next);
-  if (++g_decode_next < g_config.count) return;
+/* Every channel's reply of the last frame, as one reading in the batch for
+ * the host (the oldest dropped if the batch is full, which the host sees as
+ * a gap in the frame counter). */
+static void decode_replies(void) {
   if (g_tlm.readings == MM_LINK_TELEMETRY_MAX_READINGS) {
     for (uint8_t r = 1; r < MM_LINK_TELEMETRY_MAX_READINGS; ++r)
       memcpy(g_tlm.period_us[r - 1u], g_tlm.period_us[r], sizeof g_tlm.period_us[r]);
@@ -373,8 +369,10 @@ static void decode_reply(void) {
     ++g_tlm.first;
   }
   if (g_tlm.readings == 0u) g_tlm.first = (uint16_t)(g_frame_count - 1u);
-  memcpy(g_tlm.period_us[g_tlm.readings], g_reading, sizeof g_reading);
+  for (uint8_t ch = 0; ch < g_config.count; ++ch)
+    g_tlm.period_us[g_tlm.readings][ch] = mm_reply_decode(ch);
   ++g_tlm.readings;
+  g_replies_waiting = 0;
 }
 
 /* A PULSES frame's bookkeeping once taken. */
@@ -522,15 +520,15 @@ int main(void) {
      * overruns, even while the parser searches again after a bad frame. */
     if (mm_serial_waiting()) {
       mm_serial_read(&g_parser);
-    } else if (g_dshot && g_configured && !g_dshot_dirty && g_decode_next >= g_config.count &&
+    } else if (g_dshot && g_configured && !g_dshot_dirty && !g_replies_waiting &&
                (int32_t)(now - g_next_frame) >= 0) {
       /* A DShot frame once the last one's replies are decoded (they would
        * be sampled over), right after a look at the UART: its 27-107 us
-       * with interrupts off fit in the three bytes the UART holds. */
-      /* On a fixed schedule: a frame sent late (the loop was busy: a
-       * burst of bytes, the replies) shortens the next gap, so the rate
-       * holds on average; only more than four periods behind does the
-       * schedule start again from now. */
+       * with interrupts off fit in the three bytes the UART holds. On a
+       * fixed schedule: a frame sent late (the loop was busy: a burst of
+       * bytes, the replies) shortens the next gap, so the rate holds on
+       * average; only more than four periods behind does the schedule
+       * start again from now. */
       g_next_frame += g_period_ticks;
       if ((int32_t)(now - g_next_frame) >= (int32_t)(4u * (uint32_t)g_period_ticks))
         g_next_frame = now + g_period_ticks;
@@ -555,10 +553,10 @@ int main(void) {
           break;
         }
       } while (--more && mm_link_pending(&g_parser));
-    } else if (g_dshot && g_decode_next < g_config.count) {
+    } else if (g_replies_waiting) {
       /* Every channel's reply in one turn: the UART's interrupt reads
        * meanwhile, and turns of this loop cost. */
-      while (g_decode_next < g_config.count) decode_reply();
+      decode_replies();
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;

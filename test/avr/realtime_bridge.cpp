@@ -23,7 +23,7 @@ std::int64_t steady_us() {
 RealtimeBridge::RealtimeBridge(const std::string& elf_path, const Escs& escs)
     : board_(elf_path),
       escs_(std::make_unique<BidirEscs>(board_, escs.count, escs.frame_bit_cycles, escs.noise)),
-      keep_edges_(false) {
+      keep_pin_records_(false) {
   escs_->follow_throttle(escs.full_erpm);
   open_pty_and_start();
 }
@@ -96,9 +96,9 @@ void RealtimeBridge::run() {
         return wall_now - static_cast<std::int64_t>(sim_now - static_cast<double>(cycle) / 16.0);
       };
       std::lock_guard<std::mutex> lock(mutex_);
-      if (keep_edges_)
+      if (keep_pin_records_)
         for (const PinEdge& e : edges) edges_.push_back({e, wall_of(e.cycle)});
-      if (keep_edges_)
+      if (keep_pin_records_)
         for (const Pulse& p : pulses)
           pulses_.push_back({p.channel, wall_of(p.rise_cycle), p.width_us, p.rise_cycle});
     }

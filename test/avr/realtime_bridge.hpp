@@ -29,8 +29,9 @@ class RealtimeBridge {
  public:
   explicit RealtimeBridge(const std::string& elf_path);
   // With ESCs on the pins answering bidirectional DShot (bidir_esc.hpp),
-  // their motors following the throttle up to full_erpm; no edges are kept
-  // (take_edges() stays empty: a second of them is a million).
+  // their motors following the throttle up to full_erpm; no edges or pulses
+  // are kept (take_edges() and take_pulses() stay empty: a second of edges is
+  // a million).
   struct Escs {
     int count = 4;
     double frame_bit_cycles = 16e6 / 600e3;  // DShot600
@@ -66,7 +67,7 @@ class RealtimeBridge {
 
   AvrBoard board_;
   std::unique_ptr<BidirEscs> escs_;
-  bool keep_edges_ = true;
+  bool keep_pin_records_ = true;
   int master_ = -1;
   std::string slave_path_;
   std::mutex mutex_;
