@@ -22,6 +22,7 @@ if(NOT MOTORMIX_BUILD_FIRMWARE STREQUAL "OFF")
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_isr.S
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot.S
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_reply.c
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_reply_bits.S
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/serial.c
       ${CMAKE_CURRENT_SOURCE_DIR}/src/link/motormix_link.c)
     set(fw_headers

@@ -49,7 +49,6 @@ static void find_first_low(uint8_t pins);
 #define TICKS_PER_US 2u /* Timer1 at clk/8 */
 #define WAIT_US 2u
 #define SAMPLES_600 MM_REPLY_SAMPLES /* 72 us */
-#define REPLY_BITS 21u
 
 void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*take)(uint8_t byte)) {
   /* The frame left the pins high: input with the pull-up on, no glitch. */
@@ -91,66 +90,41 @@ static void find_first_low(uint8_t pins) {
   g_first = i;
 }
 
-/* A reply bit in samples, 8.8 fixed point: 3.048 both ways (21.333 cycles
- * over 7 at DShot600, 42.667 over 14 at DShot300). A bit is read in its
- * middle: from a change first seen at sample e (it came half a sample
- * earlier on average), the middle of that bit is e + 1.024; positions carry
- * half a sample more so that the whole part is the nearest sample. */
-#define BIT_Q8 780u
-#define FIRST_MID_Q8 390u /* (1.024 + 0.5) * 256 */
-#define LAST_MID 62u      /* the 21st bit's, from the start's fall */
+/* A reply bit in samples: 3.048 both ways (21.333 cycles over 7 at
+ * DShot600, 42.667 over 14 at DShot300). A bit is read in its middle: from
+ * a change first seen at sample e (it came half a sample earlier on
+ * average), the middle of that bit is e + 1.024; positions carry half a
+ * sample more so that the whole part is the nearest sample. The bit loop
+ * (dshot_reply_bits.S) keeps them as a pointer and an 8-bit fraction of
+ * 1/256 sample: 3 + 12/256 a bit, e + 1 + 134/256 after a change. */
+#define LAST_MID 62u /* the 21st bit's, from the start's fall */
+#define CODES 4u
+void mm_reply_codes(const uint8_t* fall, uint8_t pin, uint8_t* codes);
 
 uint16_t mm_reply_decode(uint8_t channel) {
   const uint8_t pin = (uint8_t)(4u << channel); /* D2.. */
-  const uint8_t* const s = g_samples;
-  uint8_t i = g_first;
-  while (s[i] & pin) ++i; /* the start bit's fall (the sentinel ends it) */
+  const uint8_t* q = g_samples + g_first;
+  while (*q & pin) ++q; /* the start bit's fall (the sentinel ends it) */
+  const uint8_t i = (uint8_t)(q - g_samples);
   /* Low from the window's first sample: a reply that started before it
    * (or a line held low), not to be read from the middle; and a reply whose
    * last bit's middle (with a slow ESC's clock) is past the window. */
   if (i == 0u || (uint16_t)i + LAST_MID + 2u >= g_count) return MM_LINK_NO_REPLY;
-  /* Each bit read in its middle, as a UART reads, counted from the last
-   * change seen; a 1 is a change of level since the bit before; each five
-   * bits a GCR code. Within the padding after the window at worst. */
-  uint16_t mid = (uint16_t)(((uint16_t)i << 8) + FIRST_MID_Q8);
-  uint8_t level = 0, before = i, code = 0, left = 5, value_ok = 1;
-  uint16_t value = 0;
-  for (uint8_t bit = 1; bit < REPLY_BITS; ++bit) {
-    mid = (uint16_t)(mid + BIT_Q8);
-    const uint8_t at = (uint8_t)(mid >> 8);
-    const uint8_t l = (uint8_t)(s[at] & pin);
-    code = (uint8_t)(code << 1);
-    if (l != level) {
-      code |= 1u;
-      /* Back in step: the first sample of the new level since the last
-       * bit's middle, which is 3 or 4 samples before this one. */
-      const uint8_t* q = s + at;
-      uint8_t e = at;
-      if ((uint8_t)(q[-1] & pin) == l) {
-        --e;
-        if ((uint8_t)(q[-2] & pin) == l) {
-          --e;
-          if ((uint8_t)(at - before) > 3u && (uint8_t)(q[-3] & pin) == l) --e;
-        }
-      }
-      mid = (uint16_t)(((uint16_t)e << 8) + FIRST_MID_Q8);
-      level = l;
-    }
-    before = at;
-    if (--left == 0u) {
-      const uint8_t nibble = kGcr[code & 0x1Fu];
-      if (nibble == 0xFFu) value_ok = 0;
-      value = (uint16_t)((value << 4) | (nibble & 0x0Fu));
-      code = 0;
-      left = 5;
-    }
+  /* Within the padding after the window at worst. */
+  uint8_t code[CODES];
+  mm_reply_codes(q, pin, code);
+  uint8_t nibble[CODES], bad = 0;
+  for (uint8_t n = 0; n < CODES; ++n) {
+    nibble[n] = kGcr[code[n]];
+    bad |= nibble[n];
   }
-  if (!value_ok) return MM_LINK_NO_REPLY;
-  uint16_t sum = (uint16_t)(value ^ (value >> 8));
-  sum = (uint16_t)(sum ^ (sum >> 4));
-  if ((sum & 0x0Fu) != 0x0Fu) return MM_LINK_NO_REPLY;
-  const uint16_t period = (uint16_t)(value >> 4);
-  const uint16_t mantissa = (uint16_t)(period & 0x1FFu);
+  /* 0xFF (not a code) is the only entry above 15. */
+  if (bad & 0xF0u) return MM_LINK_NO_REPLY;
+  /* The checksum: the inverted xor of the three nibbles before it. */
+  if ((uint8_t)(nibble[0] ^ nibble[1] ^ nibble[2] ^ nibble[3]) != 0x0Fu) return MM_LINK_NO_REPLY;
+  /* 3-bit exponent, 9-bit mantissa. */
+  const uint16_t mantissa =
+      (uint16_t)(((uint16_t)(nibble[0] & 1u) << 8) | (uint8_t)(nibble[1] << 4) | nibble[2]);
   if (mantissa == 0u) return MM_LINK_NO_REPLY;
-  return (uint16_t)(mantissa << (period >> 9));
+  return (uint16_t)(mantissa << (nibble[0] >> 1));
 }

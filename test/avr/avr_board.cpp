@@ -1,6 +1,7 @@
 #include "avr_board.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -48,6 +49,10 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
   std::free(fw.flash);
   std::free(fw.eeprom);
   avr_->frequency = static_cast<std::uint32_t>(kCpuHz);
+  if (const char* path = std::getenv("MOTORMIX_AVR_PROFILE")) {
+    profile_path_ = path;
+    profile_.assign((avr_->flashend + 1u) / 2u, 0);
+  }
   avr_->log = 0;
   // D2 and D3 (motors 1 and 2) are also INT0 and INT1, low-level triggered
   // at reset; the firmware never enables them, but simavr polls such a pin
@@ -84,6 +89,16 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
 }
 
 AvrBoard::~AvrBoard() {
+  if (!profile_path_.empty()) {
+    if (std::FILE* f = std::fopen(profile_path_.c_str(), "a")) {
+      for (std::size_t w = 0; w < profile_.size(); ++w) {
+        if (profile_[w] != 0) {
+          std::fprintf(f, "%zu %llu\n", 2 * w, static_cast<unsigned long long>(profile_[w]));
+        }
+      }
+      std::fclose(f);
+    }
+  }
   if (avr_) {
     avr_terminate(avr_);  // frees what it allocated, not the part itself
     std::free(avr_);
@@ -131,7 +146,10 @@ bool AvrBoard::run_until(std::uint64_t cycle) {
   while (avr_->cycle < cycle) {
     if (!rx_.empty() && rx_.front().cycle <= avr_->cycle) feed_due_bytes();
     if (!drives_.empty() && drives_.top().cycle <= avr_->cycle) apply_due_drives();
+    const std::size_t word = avr_->pc / 2u;
+    const std::uint64_t before = avr_->cycle;
     const int state = avr_run(avr_);
+    if (word < profile_.size()) profile_[word] += avr_->cycle - before;
     if (state == cpu_Done || state == cpu_Crashed) return false;
   }
   return true;

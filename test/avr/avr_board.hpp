@@ -94,6 +94,11 @@ class AvrBoard {
   void on_xoff(bool off);
   // Times simavr's receiver was full (bytes then wait, as behind RTS).
   int xoffs() const { return xoffs_; }
+  // Where the cycles went: with MOTORMIX_AVR_PROFILE=FILE set, every
+  // instruction's cycles (an interrupt's entry counted on the one it
+  // followed) are added up by program address and appended to FILE as
+  // "address cycles" lines when the board goes (tools/avr_profile.py names
+  // the functions).
 
  private:
   struct Pending {
@@ -122,6 +127,8 @@ class AvrBoard {
   avr_irq_t* uart_in_ = nullptr;
   bool xoff_ = false;
   int xoffs_ = 0;
+  std::string profile_path_;
+  std::vector<std::uint64_t> profile_;  // cycles by flash word
   std::uint64_t byte_cycles_;
   std::deque<Pending> rx_;
   std::uint64_t rx_free_at_ = 0;
