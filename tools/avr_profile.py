@@ -28,7 +28,10 @@ def functions(elf):
         elif len(parts) == 3 and parts[1] in "tTwW":  # no size: up to the next symbol
             spans.append((int(parts[0], 16), 0, parts[2]))
     spans.sort()
-    return spans
+    # A symbol without a size (a linker symbol such as __stack) names an
+    # address only where no sized function holds it.
+    sized = [(a, n) for a, n, _ in spans if n]
+    return [s for s in spans if s[1] or not any(a <= s[0] < a + n for a, n in sized)]
 
 
 def main():

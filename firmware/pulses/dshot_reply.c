@@ -39,12 +39,12 @@ uint8_t mm_dshot_sample300(uint8_t* buffer, uint8_t n, uint8_t* uart);
 /* At DShot300 the bytes the UART received while sampling go after the
  * samples: one a sample at most, so they can never overrun it. */
 #define SAMPLES_300 115u /* 100.6 us */
-#define PADDING 8u       /* see find_first_low */
+#define PADDING 8u       /* see find_falls */
 #define BUFFER \
   (SAMPLES_300 * 2u > MM_REPLY_SAMPLES + PADDING ? SAMPLES_300 * 2u : MM_REPLY_SAMPLES + PADDING)
 static uint8_t g_samples[BUFFER];
 static uint8_t g_count; /* samples in the last capture */
-static void find_first_low(uint8_t pins);
+static void find_falls(uint8_t pins);
 
 #define TICKS_PER_US 2u /* Timer1 at clk/8 */
 #define WAIT_US 2u
@@ -68,7 +68,7 @@ void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*ta
   }
   poll();
   DDRD = (uint8_t)(DDRD | pins); /* PORTD still high there: idle */
-  find_first_low(pins);
+  find_falls(pins);
 }
 
 /* GCR code -> nibble; 0xFF: not a code. */
@@ -76,18 +76,17 @@ static const uint8_t kGcr[32] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
                                  11,   0xFF, 13,   14,   15,   0xFF, 0xFF, 2,    3,    0xFF, 5,
                                  6,    7,    0xFF, 0,    8,    1,    0xFF, 4,    12,   0xFF};
 
-/* The first sample where any channel's line is low: no reply starts
- * earlier, so each channel's search starts there. */
-static uint8_t g_first;
+/* Each channel's first low sample, the start of its reply (D2.. first),
+ * found for all of them in one pass (dshot_reply_bits.S). */
+static uint8_t g_fall[MM_LINK_MAX_BIDIR_CHANNELS];
+void mm_reply_falls(const uint8_t* samples, uint8_t pins, uint8_t* falls);
 
-static void find_first_low(uint8_t pins) {
-  /* After the window: a sentinel (every line low) that ends each search,
+static void find_falls(uint8_t pins) {
+  /* After the window: a sentinel (every line low) that ends the search,
    * and idle (high) lines that a late reply's resync may read into. */
   g_samples[g_count] = 0;
   for (uint8_t k = 1; k < PADDING; ++k) g_samples[g_count + k] = 0xFFu;
-  uint8_t i = 0;
-  while ((g_samples[i] & pins) == pins) ++i;
-  g_first = i;
+  mm_reply_falls(g_samples, pins, g_fall);
 }
 
 /* A reply bit in samples: 3.048 both ways (21.333 cycles over 7 at
@@ -103,9 +102,8 @@ void mm_reply_codes(const uint8_t* fall, uint8_t pin, uint8_t* codes);
 
 uint16_t mm_reply_decode(uint8_t channel) {
   const uint8_t pin = (uint8_t)(4u << channel); /* D2.. */
-  const uint8_t* q = g_samples + g_first;
-  while (*q & pin) ++q; /* the start bit's fall (the sentinel ends it) */
-  const uint8_t i = (uint8_t)(q - g_samples);
+  const uint8_t i = g_fall[channel];            /* the start bit's fall (or the sentinel) */
+  const uint8_t* const q = g_samples + i;
   /* Low from the window's first sample: a reply that started before it
    * (or a line held low), not to be read from the middle; and a reply whose
    * last bit's middle (with a slow ESC's clock) is past the window. */

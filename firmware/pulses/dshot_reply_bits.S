@@ -1,9 +1,43 @@
-; The bit loop of a bidirectional DShot reply (dshot_reply.c says how a
-; reply is read): each of the 20 bits after the start bit read in its
+; The loops of reading bidirectional DShot replies (dshot_reply.c says how
+; a reply is read), in assembly because they are most of the chip's work
+; with replies on (four channels every frame).
+;
+; void mm_reply_falls(const uint8_t* samples, uint8_t pins, uint8_t* falls);
+; samples (r25:r24), ending in a sample with every line low; pins (r22):
+; the channels' bits of port D (D2..D5); falls (r21:r20): for each channel
+; in pins, the index of its first low sample. One pass for all channels,
+; 6 cycles a sample (the search per channel took 7 a sample, each).
+  .section .text.mm_reply_falls,"ax",@progbits
+  .global mm_reply_falls
+mm_reply_falls:
+  movw r26, r24        ; X: the next sample
+  movw r30, r20        ; Z: falls
+  movw r18, r24        ; the first sample, for the index
+1:
+  ld r24, X+
+  com r24              ; the lines low
+  and r24, r22         ; of the channels not yet found
+  breq 1b
+  mov r25, r26         ; the index of this sample (low bytes: below 256)
+  sub r25, r18
+  dec r25
+  eor r22, r24         ; found now
+  sbrc r24, 2
+  std Z+0, r25
+  sbrc r24, 3
+  std Z+1, r25
+  sbrc r24, 4
+  std Z+2, r25
+  sbrc r24, 5
+  std Z+3, r25
+  tst r22
+  brne 1b
+  ret
+
+; The bit loop of a reply: each of the 20 bits after the start bit read in its
 ; middle, a change of level since the bit before a 1, back in step at every
-; change. Assembly because it is most of the chip's work with replies on
-; (four channels every frame): 12 cycles a bit without a change, about 25
-; with one, against some 26 and 45 for the same steps compiled from C.
+; change: 12 cycles a bit without a change, about 25 with one, against
+; some 26 and 45 for the same steps compiled from C.
 ;
 ; void mm_reply_codes(const uint8_t* fall, uint8_t pin, uint8_t* codes);
 ; fall (r25:r24): the sample where the start bit's fall was first seen;

@@ -299,31 +299,32 @@ static uint16_t dshot_packet(uint16_t value, uint8_t telemetry) {
  * while the link holds, a special command on its channels while one is
  * being sent, motor stop (0) otherwise. */
 static void dshot_prepare(void) {
-  uint16_t packet[MM_LINK_MAX_DSHOT_CHANNELS];
-  uint8_t bit[MM_LINK_MAX_DSHOT_CHANNELS];
+  /* A channel at a time, its packet kept in registers and shifted out a
+   * bit at a time into the 16 port values (a 16-bit mask per bit and
+   * channel took 2400 cycles a frame, longer than a DShot300 frame). DShot
+   * channels are D2.. in channel order. */
+  uint8_t* const ports = g_dshot_ports;
+  for (uint8_t i = 0; i < 16u; ++i) ports[i] = 0;
   const uint8_t all = g_dshot_pins;
   const uint8_t armed = g_link_ok ? g_dshot_armed : 0u;
-  for (uint8_t k = 0; k < g_config.count; ++k) {
-    uint8_t d, b;
-    mm_channel_bits(k, &d, &b);
-    bit[k] = d;
+  uint8_t pin = 4u; /* D2 */
+  for (uint8_t k = 0; k < g_config.count; ++k, pin = (uint8_t)(pin << 1)) {
+    uint16_t packet;
     if ((armed >> k) & 1u) {
-      packet[k] = dshot_packet(g_dshot_throttle[k], 0);
+      packet = dshot_packet(g_dshot_throttle[k], 0);
     } else if (g_cmd_left && ((g_cmd_channels >> k) & 1u)) {
-      packet[k] = dshot_packet(g_cmd, 1); /* ESCs take commands with the bit set */
+      packet = dshot_packet(g_cmd, 1); /* ESCs take commands with the bit set */
     } else {
-      packet[k] = dshot_packet(0, 0);
+      packet = dshot_packet(0, 0);
     }
+    uint8_t* p = ports;
+    for (uint8_t i = 16u; i != 0u; --i, ++p, packet = (uint16_t)(packet << 1))
+      if (packet & 0x8000u) *p |= pin;
   }
   const uint8_t base = (uint8_t)(PORTD & ~all);
-  uint16_t mask = 0x8000u;
-  for (uint8_t i = 0; i < 16u; ++i, mask >>= 1) {
-    uint8_t ones = 0;
-    for (uint8_t k = 0; k < g_config.count; ++k)
-      if (packet[k] & mask) ones = (uint8_t)(ones | bit[k]);
-    /* Inverted (bidirectional): a bit is low for its high time. */
-    g_dshot_ports[i] = (uint8_t)(base | (g_bidir ? (uint8_t)(all & ~ones) : ones));
-  }
+  /* Inverted (bidirectional): a bit is low for its high time. */
+  const uint8_t flip = g_bidir ? all : 0u;
+  for (uint8_t i = 0; i < 16u; ++i) ports[i] = (uint8_t)(base | (ports[i] ^ flip));
   g_dshot_high = g_bidir ? base : (uint8_t)(base | all);
   g_dshot_low = g_bidir ? (uint8_t)(base | all) : base;
   g_out_armed = armed != 0u;
@@ -480,6 +481,80 @@ static void take_frame(uint8_t type, const mm_link_frame* f, uint32_t now) {
   }
 }
 
+/* On a fixed schedule: a frame sent late (the loop was busy: a burst of
+ * bytes, the replies) shortens the next gap, so the rate holds on average;
+ * only more than four periods behind does the schedule start again from
+ * now. True when a frame is to go now (the schedule then moved on). */
+static uint8_t frame_due(uint32_t now) {
+  if ((int32_t)(now - g_next_frame) < 0) return 0;
+  g_next_frame += g_period_ticks;
+  if ((int32_t)(now - g_next_frame) >= (int32_t)(4u * (uint32_t)g_period_ticks))
+    g_next_frame = now + g_period_ticks;
+  return 1;
+}
+
+/* Up to `steps` bytes of the search; a frame taken ends it (a PULSES frame
+ * is to be prepared). */
+static void search(uint32_t now, uint8_t steps) {
+  do {
+    mm_link_frame frame;
+    const uint8_t type = mm_link_poll(&g_parser, &frame);
+    if (type) {
+      take_frame(type, &frame, now);
+      return;
+    }
+  } while (--steps && mm_link_pending(&g_parser));
+}
+
+/* The host's bytes with bidirectional DShot, up to SEARCH_STEPS of them:
+ * those to be searched again after a bad frame first, then the ring's,
+ * each straight into the parser. A frame taken ends it (a PULSES frame is
+ * to be prepared). */
+#define SEARCH_STEPS 24u /* some 100 us: a frame due waits no longer */
+static void bidir_bytes(uint32_t now) {
+  uint8_t steps = SEARCH_STEPS;
+  do {
+    mm_link_frame frame;
+    uint8_t type;
+    if (mm_link_pending(&g_parser)) {
+      type = mm_link_poll(&g_parser, &frame);
+    } else if (mm_serial_waiting()) {
+      type = mm_link_step(&g_parser, mm_serial_next(&g_parser), &frame);
+    } else {
+      return;
+    }
+    if (type) {
+      take_frame(type, &frame, now);
+      return;
+    }
+  } while (--steps);
+}
+
+/* A turn with bidirectional DShot, where the UART's interrupt fills a ring
+ * and a turn may take long: the frame first when it is due (once the last
+ * frame's replies are decoded: they would be sampled over, and once a new
+ * throttle is in the port values), then those replies, then the port
+ * values, then the host's bytes; and one turn of bytes at least between
+ * two frames. Bytes last: with the wire full (a byte every 40 us) a byte a
+ * turn, before everything else, left no turn for the replies, no frame
+ * went, and the hardware watchdog reset the chip. A turn of bytes owed:
+ * frames due back to back (a rate the chip cannot hold) would leave none
+ * for the host, whose frames would stop and the link time out. */
+static uint8_t g_bytes_owed;
+static void bidir_turn(uint32_t now) {
+  if (!g_dshot_dirty && !g_replies_waiting && !g_bytes_owed && frame_due(now)) {
+    dshot_send();
+  } else if (g_replies_waiting) {
+    decode_replies();
+    g_bytes_owed = 1;
+  } else if (g_dshot_dirty) {
+    dshot_prepare();
+  } else {
+    bidir_bytes(now);
+    g_bytes_owed = 0;
+  }
+}
+
 static void queue_report(void) {
   g_report.crc_errors = g_parser.crc_errors;
   g_report.malformed = g_parser.malformed;
@@ -515,48 +590,26 @@ int main(void) {
   uint8_t seen_periods = g_periods;
   for (;;) {
     const uint32_t now = now_ticks();
-    /* A received byte first, else one step of the search: a step takes a
-     * few microseconds, a byte 40, so the UART's two-byte buffer never
-     * overruns, even while the parser searches again after a bad frame. */
-    if (mm_serial_waiting()) {
+    if (g_bidir) {
+      bidir_turn(now);
+    } else if (mm_serial_waiting()) {
+      /* A received byte first, else one step of the search: a step takes a
+       * few microseconds, a byte 40, so the UART's two-byte buffer never
+       * overruns, even while the parser searches again after a bad frame. */
       mm_serial_read(&g_parser);
-    } else if (g_dshot && g_configured && !g_dshot_dirty && !g_replies_waiting &&
-               (int32_t)(now - g_next_frame) >= 0) {
-      /* A DShot frame once the last one's replies are decoded (they would
-       * be sampled over), right after a look at the UART: its 27-107 us
-       * with interrupts off fit in the three bytes the UART holds. On a
-       * fixed schedule: a frame sent late (the loop was busy: a burst of
-       * bytes, the replies) shortens the next gap, so the rate holds on
-       * average; only more than four periods behind does the schedule
-       * start again from now. */
-      g_next_frame += g_period_ticks;
-      if ((int32_t)(now - g_next_frame) >= (int32_t)(4u * (uint32_t)g_period_ticks))
-        g_next_frame = now + g_period_ticks;
+    } else if (g_dshot && g_configured && !g_dshot_dirty && frame_due(now)) {
+      /* A DShot frame right after a look at the UART: its 27-107 us with
+       * interrupts off fit in the three bytes the UART holds. */
       dshot_send();
     } else if (g_dshot && g_dshot_dirty) {
       dshot_prepare();
     } else if (mm_link_pending(&g_parser)) {
-      /* Bytes of the search, before the replies: a step takes some 7 us, a
-       * reply 80, and a turn of this loop as much as a step. Polled (with
-       * pulses), three steps between two looks at the UART (a byte comes
-       * every 40 us, the UART holds two): after a bad frame the search
-       * goes over its bytes again, and at the wire's full rate one step a
-       * turn fell behind and filled the ring. With replies on, every byte
-       * queued (the UART's interrupt reads meanwhile). A frame taken ends
-       * the turn: a PULSES frame is to be prepared. */
-      uint8_t more = g_bidir ? 32u : 3u;
-      do {
-        mm_link_frame frame;
-        const uint8_t type = mm_link_poll(&g_parser, &frame);
-        if (type) {
-          take_frame(type, &frame, now);
-          break;
-        }
-      } while (--more && mm_link_pending(&g_parser));
-    } else if (g_replies_waiting) {
-      /* Every channel's reply in one turn: the UART's interrupt reads
-       * meanwhile, and turns of this loop cost. */
-      decode_replies();
+      /* Bytes of the search: a step takes some 7 us and a turn of this
+       * loop as much; three steps between two looks at the UART (a byte
+       * comes every 40 us, the UART holds two): after a bad frame the
+       * search goes over its bytes again, and at the wire's full rate one
+       * step a turn fell behind. */
+      search(now, 3u);
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;

@@ -26,6 +26,9 @@ static inline uint8_t mm_serial_waiting(void) {
 /* Every byte received into the parser (a byte lost or broken counted as
  * malformed there). */
 void mm_serial_read(mm_link_parser* parser);
+/* Interrupt-driven only, with a byte waiting: the oldest byte of the ring.
+ * The bytes the ring lost meanwhile go to the parser's malformed count. */
+uint8_t mm_serial_next(mm_link_parser* parser);
 /* With interrupts off (a frame and its window): the byte the UART holds,
  * if any, into the ring; a byte read elsewhere into the ring. */
 void mm_serial_take(void);

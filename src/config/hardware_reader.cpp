@@ -95,7 +95,7 @@ void read_hardware(MapReader section, Config& config) {
              " motors (the firmware reads replies on pins D2..D5)");
   }
   // DShot frames are short (27-107 us): up to 4 kHz; servo pulses up to 500
-  // Hz; with replies to decode after each frame, 800 Hz.
+  // Hz; with replies to decode after each frame, 1 kHz.
   const double max_rate_hz = 1e6 / (hw.bidirectional ? MM_LINK_MIN_BIDIR_PERIOD_US
                                     : dshot          ? MM_LINK_MIN_DSHOT_PERIOD_US
                                                      : MM_LINK_MIN_PERIOD_US);

@@ -86,13 +86,13 @@ extern "C" {
 #define MM_LINK_DSHOT_MAX_COMMAND 47u
 /* Bidirectional DShot: CONFIG's protocol with this bit (DShot300 or 600
  * only); the first MM_LINK_MAX_BIDIR_CHANNELS channels (D2..D5), frames at
- * most 800 Hz: the chip decodes every reply between two frames, and with
- * four motors and the host's frames at 400 Hz it holds 850 Hz (measured in
- * simavr), not 1 kHz. */
+ * most 1 kHz: the chip decodes every reply between two frames; with four
+ * motors and the host's frames at 400 Hz it holds 1.43 kHz (measured in
+ * simavr), where its TELEMETRY frames nearly fill the wire back. */
 #define MM_LINK_PROTOCOL_BIDIRECTIONAL 0x80u
 #define MM_LINK_PROTOCOL_SPEED_MASK 0x0Fu
 #define MM_LINK_MAX_BIDIR_CHANNELS 4u
-#define MM_LINK_MIN_BIDIR_PERIOD_US 1250u
+#define MM_LINK_MIN_BIDIR_PERIOD_US 1000u
 /* TELEMETRY: up to this many frames' replies in one */
 #define MM_LINK_TELEMETRY_MAX_READINGS 5u
 
@@ -213,19 +213,22 @@ typedef struct {
  * miss an incoming byte. */
 #define MM_LINK_PENDING 128u /* a power of two, at least 2 * MM_LINK_MAX_FRAME */
 typedef struct {
+  /* The fields every byte touches first, near the start: on the chip they
+   * are reached in one instruction from the parser's address (within 63
+   * bytes of it), the arrays after them. */
   uint8_t state;
   uint8_t length;
   uint8_t have;
-  uint32_t crc; /* running CRC over length..body */
-  uint8_t body[MM_LINK_MAX_BODY + 4u];
-  uint8_t raw[MM_LINK_MAX_FRAME]; /* every byte since the sync being tried */
   uint8_t raw_len;
-  uint8_t pending[MM_LINK_PENDING]; /* a ring of bytes to search */
   uint8_t pending_head;
   uint8_t pending_len;
+  uint32_t crc; /* running CRC over length..body */
   uint32_t crc_errors;
   uint32_t malformed; /* a length out of range, an unknown type, a bad payload, a byte
                          dropped because the ring was full */
+  uint8_t body[MM_LINK_MAX_BODY + 4u];
+  uint8_t raw[MM_LINK_MAX_FRAME];   /* every byte since the sync being tried */
+  uint8_t pending[MM_LINK_PENDING]; /* a ring of bytes to search */
 } mm_link_parser;
 
 void mm_link_parser_init(mm_link_parser* p);
@@ -237,6 +240,11 @@ void mm_link_push(mm_link_parser* p, uint8_t byte);
  * and passed every check (its decoded content in *frame), 0 otherwise. */
 uint8_t mm_link_poll(mm_link_parser* p, mm_link_frame* frame);
 static inline uint8_t mm_link_pending(const mm_link_parser* p) { return p->pending_len; }
+/* One received byte, searched at once when nothing waits to be searched
+ * (else queued behind what does, and one queued byte searched): what
+ * mm_link_push and mm_link_poll do, without the trip through the ring in
+ * the common case. Returns as mm_link_poll. */
+uint8_t mm_link_step(mm_link_parser* p, uint8_t byte, mm_link_frame* frame);
 
 /* Push, then poll until a frame completes or nothing is queued: the host's
  * way, where no byte can be missed. */

@@ -4,9 +4,8 @@
 #include "output/esc_command_check.hpp"
 #include "output/kiss_telemetry.hpp"
 #include "output/output_gate.hpp"
+#include "output/pulse_drivers.hpp"
 #include "output/serial_port.hpp"
-#include "output/serial_pulse_driver.hpp"
-#include "output/sysfs_pwm_driver.hpp"
 
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
@@ -56,39 +55,6 @@ constexpr int kMaxMessagesPerDrain = 1000;
 
 using bus::monotonic_s;
 using bus::wall_us;
-
-std::vector<PulseRange> ranges_of(const config::Config& config) {
-  std::vector<PulseRange> out;
-  for (const OutputChannel& ch : config.outputs) {
-    out.push_back({std::min(ch.min, ch.max), std::max(ch.min, ch.max), ch.disarmed});
-  }
-  return out;
-}
-
-std::unique_ptr<PulseDriver> make_driver(const config::Config& config) {
-  const config::Hardware& hw = config.hardware;
-  const double period_us = 1e6 / hw.pulse_rate_hz;
-  std::vector<double> disarmed;
-  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
-  for (const PulseRange& r : ranges_of(config)) {
-    disarmed.push_back(r.disarmed);
-    lo = std::min(lo, r.low);
-    hi = std::max(hi, r.high);
-  }
-  if (hw.driver == config::HardwareDriver::kSerial) {
-    SerialPulseSettings s;
-    s.period_us = period_us;
-    s.link_timeout_ms = hw.serial.link_timeout_s * 1e3;
-    s.min_us = lo;
-    s.max_us = hi;
-    s.disarmed_us = disarmed;
-    s.protocol = static_cast<std::uint8_t>(hw.protocol);  // enum order is the link's
-    s.bidirectional = hw.bidirectional;
-    return std::make_unique<SerialPulseDriver>(open_serial_port(hw.serial.device, hw.serial.baud),
-                                               s);
-  }
-  return std::make_unique<SysfsPwmDriver>(hw.sysfs, period_us, disarmed);
-}
 
 struct TelemetryWire {
   config::TelemetryPort port;
@@ -417,7 +383,17 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   double next_published = start;
   int code = 0;
   while (true) {
-    if (poll(fds.data(), fds.size(), -1) < 0) {
+    // Woken for a frame waiting for the wire too (the serial driver's
+    // pacing), not only by the bus, the tick or a signal.
+    const double wake_s =
+        driver != nullptr ? driver->waiting_until_s() : std::numeric_limits<double>::infinity();
+    timespec wait{};
+    if (std::isfinite(wake_s)) {
+      const double d = std::max(0.0, wake_s - monotonic_s());
+      wait.tv_sec = static_cast<time_t>(d);
+      wait.tv_nsec = static_cast<long>((d - static_cast<double>(wait.tv_sec)) * 1e9);
+    }
+    if (ppoll(fds.data(), fds.size(), std::isfinite(wake_s) ? &wait : nullptr, nullptr) < 0) {
       if (errno == EINTR) continue;
       log << "motormix output: poll failed: " << std::strerror(errno) << std::endl;
       code = 1;
@@ -434,6 +410,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     }
     const double now = monotonic_s();
     node.write_taken(now);
+    if (driver != nullptr) driver->send_waiting();
     if (fds[1].revents & POLLIN) {
       std::uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);

@@ -1,5 +1,7 @@
 #include "output/serial_pulse_driver.hpp"
 
+#include "bus/clock.hpp"
+
 #include <unistd.h>
 #include <algorithm>
 #include <cerrno>
@@ -18,7 +20,8 @@ std::uint16_t us(double v) {
 
 }  // namespace
 
-SerialPulseDriver::SerialPulseDriver(int fd, const SerialPulseSettings& s) : fd_(fd) {
+SerialPulseDriver::SerialPulseDriver(int fd, const SerialPulseSettings& s)
+    : fd_(fd), byte_s_(10.0 / std::max(s.baud, 1.0)) {
   config_.protocol = static_cast<std::uint8_t>(
       s.protocol | (s.bidirectional ? MM_LINK_PROTOCOL_BIDIRECTIONAL : 0u));
   config_.period_us = us(s.period_us);
@@ -50,6 +53,8 @@ bool SerialPulseDriver::send(const std::uint8_t* bytes, std::size_t n) {
       lost_ = true;
     return false;
   }
+  const double now = bus::monotonic_s();
+  wire_free_s_ = std::max(now, wire_free_s_) + static_cast<double>(n) * byte_s_ / kWireShare;
   return true;
 }
 
@@ -70,16 +75,47 @@ bool SerialPulseDriver::write(const double* pulse_us, int count, std::uint32_t a
     ++held_;
     return true;
   }
+  const auto mask = static_cast<std::uint8_t>(armed & ((1U << count) - 1U));
+  if (sent_pulses_ && mask == last_armed_ && bus::monotonic_s() < wire_free_s_) {
+    // The wire is still busy: this one waits, in place of an older one.
+    if (waiting_.valid) ++superseded_;
+    waiting_.valid = true;
+    waiting_.armed = mask;
+    waiting_.count = count;
+    std::copy(pulse_us, pulse_us + count, waiting_.pulse_us);
+    return true;
+  }
+  waiting_.valid = false;
+  return send_pulses(pulse_us, count, mask);
+}
+
+bool SerialPulseDriver::send_pulses(const double* pulse_us, int count, std::uint8_t armed) {
   mm_link_pulses p{};
   p.session = session_;
   p.sequence = ++sequence_;
-  p.armed = static_cast<std::uint8_t>(armed & ((1U << count) - 1U));
+  p.armed = armed;
   p.count = static_cast<std::uint8_t>(count);
   for (int i = 0; i < count; ++i) p.pulse_hus[i] = us(2.0 * pulse_us[i]);
   std::uint8_t buf[MM_LINK_MAX_FRAME];
   const bool ok = send(buf, mm_link_encode_pulses(&p, buf));
-  if (ok) ++frames_sent_;
+  if (ok) {
+    ++frames_sent_;
+    sent_pulses_ = true;
+    last_armed_ = armed;
+  }
   return ok;
+}
+
+double SerialPulseDriver::waiting_until_s() const {
+  return waiting_.valid ? wire_free_s_ : std::numeric_limits<double>::infinity();
+}
+
+// The frame that waited, once the wire is free (for the session the last
+// report named, which may be newer than when it was written).
+void SerialPulseDriver::send_waiting() {
+  if (!waiting_.valid || session_ == 0 || bus::monotonic_s() < wire_free_s_) return;
+  waiting_.valid = false;
+  send_pulses(waiting_.pulse_us, waiting_.count, waiting_.armed);
 }
 
 bool SerialPulseDriver::command(std::uint8_t command, std::uint32_t channels, std::uint8_t repeat) {
@@ -131,7 +167,8 @@ bool SerialPulseDriver::service(double now_s) {
     send_config();
     next_config_s_ = now_s + 1.0;
   }
-  return true;
+  send_waiting();
+  return !lost_;
 }
 
 // A reply's period is one electrical revolution in microseconds; its
@@ -181,6 +218,8 @@ std::string SerialPulseDriver::describe() const {
   std::ostringstream s;
   s << "serial: " << frames_sent_ << " frames sent, " << write_failures_ << " not written";
   if (held_ > 0) s << ", " << held_ << " held before the firmware's first report";
+  if (superseded_ > 0)
+    s << ", " << superseded_ << " replaced by a newer one while the wire was busy";
   if (reports_ == 0) {
     s << "; no report from the firmware yet (it reports every 50 ms; a firmware older than "
          "link version "

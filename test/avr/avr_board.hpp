@@ -56,6 +56,8 @@ class AvrBoard {
   void send(const std::uint8_t* bytes, std::size_t n);
   void send(const std::vector<std::uint8_t>& bytes) { send(bytes.data(), bytes.size()); }
   bool sending() const { return !rx_.empty(); }
+  // Bytes still to go to the RX pin.
+  std::size_t queued() const { return rx_.size(); }
   // Bytes the firmware sent since the last call.
   std::vector<std::uint8_t> take_output();
 

@@ -79,6 +79,14 @@ vehicle:
 output: {mode: magnitude_direction, min: 0, max: 1, disarmed: 0}
 vehicle: {wheel_radius_m: 0.05, track_m: 0.3, max_wheel_speed_rad_s: 20}
 )",
+    // DShot and bidirectional DShot: hardware.pulse_rate_hz's default and
+    // range follow the protocol.
+    R"(geometry: {preset: quad_x}
+hardware: {driver: serial, serial: {device: /dev/ttyUSB0}, protocol: dshot600}
+)",
+    R"(geometry: {preset: quad_x}
+hardware: {driver: serial, serial: {device: /dev/ttyUSB0}, protocol: dshot300, bidirectional: true}
+)",
 };
 
 std::string unit_of(const std::string& path) {
@@ -145,11 +153,13 @@ std::string reference_table() {
     // Derived from the geometry, one per vehicle: too many to list (the
     // key's page says how they are derived).
     if (row.defaults.size() > kMostDefaultsListed) defaults = "derived";
-    if (row.defaults.size() > 1) defaults += " (by vehicle)";
+    // What the values depend on: the protocol for the hardware's keys.
+    const std::string by = path.rfind("hardware.", 0) == 0 ? " (by protocol)" : " (by vehicle)";
+    if (row.defaults.size() > 1) defaults += by;
     const std::string kind = row.kind == "value" ? "list or structure" : row.kind;
     std::string allowed;
     for (const std::string& a : row.allowed) allowed += (allowed.empty() ? "" : "; or ") + a;
-    if (row.allowed.size() > 1) allowed += " (by vehicle)";
+    if (row.allowed.size() > 1) allowed += by;
     out << "| `" << path << "` | " << kind << " | " << escape(defaults) << " | " << escape(allowed)
         << " | " << unit_of(path) << " |\n";
   }

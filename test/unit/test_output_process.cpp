@@ -11,6 +11,8 @@
 #include "output/serial_pulse_driver.hpp"
 #include "output/sysfs_pwm_driver.hpp"
 
+#include "bus/clock.hpp"
+
 #include <motormix/config/load_config.hpp>
 
 #include <gtest/gtest.h>
@@ -234,7 +236,7 @@ TEST(OutputHardwareConfig, DshotOnlyThroughTheFirmwareOnPortDAndUnipolar) {
   EXPECT_NE(
       expect_hardware_error(serial + "  pulse_rate_hz: 2000\n").find("hardware.pulse_rate_hz"),
       std::string::npos);
-  // Bidirectional: DShot300/600, four motors, at most 800 frames a second.
+  // Bidirectional: DShot300/600, four motors, at most 1000 frames a second.
   EXPECT_NE(expect_hardware_error(serial + "  protocol: dshot150\n  bidirectional: true\n")
                 .find("hardware.bidirectional"),
             std::string::npos);
@@ -242,7 +244,7 @@ TEST(OutputHardwareConfig, DshotOnlyThroughTheFirmwareOnPortDAndUnipolar) {
       expect_hardware_error(serial + "  bidirectional: true\n").find("hardware.bidirectional"),
       std::string::npos);
   EXPECT_NE(expect_hardware_error(
-                serial + "  protocol: dshot600\n  bidirectional: true\n  pulse_rate_hz: 1000\n")
+                serial + "  protocol: dshot600\n  bidirectional: true\n  pulse_rate_hz: 1100\n")
                 .find("hardware.pulse_rate_hz"),
             std::string::npos);
   std::string hexa;
@@ -259,7 +261,7 @@ TEST(OutputHardwareConfig, DshotOnlyThroughTheFirmwareOnPortDAndUnipolar) {
                                    "  protocol: dshot300\n  bidirectional: true\n",
                                "test");
   EXPECT_TRUE(bidir.hardware.bidirectional);
-  EXPECT_DOUBLE_EQ(bidir.hardware.pulse_rate_hz, 800.0);
+  EXPECT_DOUBLE_EQ(bidir.hardware.pulse_rate_hz, 1000.0);
 }
 
 // A sysfs PWM tree as the kernel shows it: pwmchip0 with export, and the
@@ -467,6 +469,57 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   got = pty.frames(1);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
+}
+
+// Values faster than the output's share of the wire (a loop rate above
+// some 580 Hz for four motors at 250000 baud): a frame per share of time,
+// the newest waiting in place of older ones and sent when its time comes;
+// a change of arming never waits. Without the pacing every write went to
+// the kernel's queue: the pins followed tens of milliseconds late.
+TEST(SerialPulses, FramesFasterThanTheWireWaitNewestFirstAndArmingNeverWaits) {
+  PtyPair pty;
+  output::SerialPulseSettings s;
+  s.period_us = 1000;
+  s.min_us = 1000;
+  s.max_us = 2000;
+  s.disarmed_us = {1000, 1000, 1000, 1000};
+  s.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
+  pty.report(MM_LINK_FLAG_CONFIGURED, 0x40001, 0);
+  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
+    ASSERT_TRUE(driver.service(0.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(pty.frames(1).size(), 1u);  // the configuration
+  // The first frame arms (never waits); twenty more as fast as they come.
+  constexpr double kFrameS = (7.0 + MM_LINK_PULSES_BODY(4)) * 10.0 / 250000.0 / output::kWireShare;
+  constexpr int kWrites = 20;
+  const double start = bus::monotonic_s();
+  double pulses[4] = {1100, 1100, 1100, 1100};
+  for (int k = 0; k < kWrites; ++k) {
+    pulses[0] = 1100.0 + k;
+    ASSERT_TRUE(driver.write(pulses, 4, output::kAllArmed));
+  }
+  const double elapsed = bus::monotonic_s() - start;
+  EXPECT_TRUE(std::isfinite(driver.waiting_until_s()));
+  // Once the wire is free, the newest goes.
+  while (bus::monotonic_s() < driver.waiting_until_s()) {
+  }
+  driver.send_waiting();
+  EXPECT_FALSE(std::isfinite(driver.waiting_until_s()));
+  // A disarm goes at once, busy wire or not.
+  ASSERT_TRUE(driver.write(pulses, 4, 0));
+  const std::vector<mm_link_frame> got = pty.frames(kWrites + 1, 200);
+  // At most one frame per frame time while writing (plus the first), then
+  // the one that waited, then the disarm.
+  const auto on_wire_while_writing = static_cast<std::size_t>(elapsed / kFrameS) + 1;
+  ASSERT_GE(got.size(), 3u);
+  EXPECT_LE(got.size(), on_wire_while_writing + 2) << "written in " << elapsed * 1e3 << " ms";
+  EXPECT_EQ(got.front().u.pulses.pulse_hus[0], 2200);
+  EXPECT_EQ(got[got.size() - 2].u.pulses.pulse_hus[0], 2 * (1100 + kWrites - 1)) << "the newest";
+  EXPECT_EQ(got.back().u.pulses.armed, 0);
+  EXPECT_EQ(driver.superseded(), static_cast<std::uint64_t>(kWrites + 1 - got.size()));
+  EXPECT_NE(driver.describe().find("replaced by a newer one"), std::string::npos);
 }
 
 TEST(SerialPulses, ANonSerialDeviceIsRefusedByName) {

@@ -4,6 +4,7 @@
 // microseconds (already the disarmed ones when not armed).
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,6 +52,11 @@ class PulseDriver {
     (void)repeat;
     return false;
   }
+  // A driver paced to its wire keeps the newest frame while the wire is
+  // busy: when that frame can go (monotonic seconds; infinity when none
+  // waits), and sending it once that time has come (else nothing).
+  virtual double waiting_until_s() const { return std::numeric_limits<double>::infinity(); }
+  virtual void send_waiting() {}
   // The hardware's latest report, when it sends one.
   virtual std::optional<FirmwareReport> firmware_report() const { return std::nullopt; }
   // One line on the hardware's own state, for the log.

@@ -5,6 +5,16 @@
 // once a second; one PULSES frame per write, for the session the last
 // report named; the firmware's reports read back. A write that finds the device gone makes
 // service() return false: the caller reopens it (a new driver).
+//
+// Paced to the wire: frames take at most kWireShare of it. A PULSES frame
+// goes once the one before has had its share of time (its bytes' time on
+// the wire over kWireShare, from the baud rate), else it waits, the newest
+// replacing one that waited, until then (waiting_until_s, send_waiting).
+// Values faster than that (a loop rate above some 580 Hz for four motors at
+// 250000 baud) would otherwise queue in the kernel, tens of milliseconds of
+// old thrust ahead of the newest, and leave the chip no time for its own
+// work (with bidirectional DShot it then loses host frames). A frame that
+// arms or disarms a channel never waits.
 
 #include "output/pulse_driver.hpp"
 
@@ -27,7 +37,11 @@ struct SerialPulseSettings {
   // Bidirectional DShot (DShot300 or 600): every ESC's eRPM back, read from
   // the firmware's TELEMETRY frames by take_erpm().
   bool bidirectional = false;
+  double baud = 250000.0;  // for the pacing: 10 bits a byte
 };
+
+// The most of the wire the driver's frames take (see above).
+inline constexpr double kWireShare = 0.6;
 
 class SerialPulseDriver : public PulseDriver {
  public:
@@ -42,6 +56,8 @@ class SerialPulseDriver : public PulseDriver {
   std::string describe() const override;
   std::optional<FirmwareReport> firmware_report() const override;
   std::vector<ErpmReading> take_erpm() override;
+  double waiting_until_s() const override;
+  void send_waiting() override;
   // eRPM replies the firmware decoded, and those it found missing or broken.
   std::uint64_t replies_decoded() const { return replies_decoded_; }
   std::uint64_t replies_missed() const { return replies_missed_; }
@@ -50,6 +66,8 @@ class SerialPulseDriver : public PulseDriver {
   std::uint64_t reports() const { return reports_; }
   const mm_link_report& report() const { return report_; }
   std::uint64_t frames_sent() const { return frames_sent_; }
+  // PULSES frames replaced by a newer one while they waited for the wire.
+  std::uint64_t superseded() const { return superseded_; }
   std::uint64_t write_failures() const { return write_failures_; }
   std::uint32_t session() const { return session_; }
   // Sessions the firmware named (its start, then one per link timeout).
@@ -58,6 +76,7 @@ class SerialPulseDriver : public PulseDriver {
  private:
   bool send(const std::uint8_t* bytes, std::size_t n);
   void send_config();
+  bool send_pulses(const double* pulse_us, int count, std::uint8_t armed);
 
   int fd_;
   mm_link_config config_{};
@@ -71,6 +90,19 @@ class SerialPulseDriver : public PulseDriver {
   bool resend_config_ = true;
   std::uint64_t frames_sent_ = 0, write_failures_ = 0;
   bool lost_ = false;  // a write found the device gone: service() says so
+  // Pacing: when the next frame may go (monotonic seconds), and the newest
+  // frame waiting for that.
+  double byte_s_ = 10.0 / 250000.0;
+  double wire_free_s_ = 0.0;
+  bool sent_pulses_ = false;
+  std::uint8_t last_armed_ = 0;
+  struct Waiting {
+    bool valid = false;
+    std::uint8_t armed = 0;
+    int count = 0;
+    double pulse_us[MM_LINK_MAX_CHANNELS] = {};
+  } waiting_;
+  std::uint64_t superseded_ = 0;
   void take_telemetry(const mm_link_telemetry& t);
   std::vector<ErpmReading> erpm_;
   std::uint64_t replies_decoded_ = 0, replies_missed_ = 0;
