@@ -5,7 +5,11 @@
 // message and writes the same frame, with no gate, no clamping, no timer.
 //
 //   output_latency relay DEVICE                (the baseline process)
-//   output_latency measure --motormix BIN --count N --rate HZ
+//   output_latency measure --motormix BIN --count N --rate HZ [--protocol P]
+//
+// --protocol (pwm, dshot150, dshot300, dshot600; default pwm) is what
+// `motormix output` is configured with; the host's path, motor_pwm_t to a
+// PULSES frame, is the same for each, which the run shows.
 //
 // Run inside a private bus (scripts/private-bus). Bounded: N messages, then
 // the children are stopped.
@@ -181,23 +185,29 @@ int main(int argc, char** argv) {
   std::string motormix, self = argv[0];
   int count = 2000;
   double rate = 400;
+  std::string protocol = "pwm";
   for (int i = 2; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--protocol") == 0) protocol = argv[i + 1];
     if (std::strcmp(argv[i], "--motormix") == 0) motormix = argv[i + 1];
     if (std::strcmp(argv[i], "--count") == 0) count = std::atoi(argv[i + 1]);
     if (std::strcmp(argv[i], "--rate") == 0) rate = std::atof(argv[i + 1]);
   }
   if (argc < 2 || std::strcmp(argv[1], "measure") != 0 || motormix.empty() || count < 1 ||
-      count > 100000 || rate <= 0 || rate > 2000) {
+      count > 100000 || rate <= 0 || rate > 2000 ||
+      (protocol != "pwm" && protocol != "dshot150" && protocol != "dshot300" &&
+       protocol != "dshot600")) {
     std::fprintf(stderr,
-                 "usage: output_latency measure --motormix BIN [--count N] [--rate HZ]\n"
+                 "usage: output_latency measure --motormix BIN [--count N] [--rate HZ] "
+                 "[--protocol pwm|dshot150|dshot300|dshot600]\n"
                  "       output_latency relay DEVICE\n");
     return 2;
   }
   const std::string config = "/tmp/motormix-output-latency.yaml";
   std::ofstream(config) << "geometry: {preset: quad_x}\n"
-                           "hardware: {driver: serial, serial: {device: /dev/null}}\n";
+                           "hardware: {driver: serial, serial: {device: /dev/null}, protocol: "
+                        << protocol << "}\n";
   measure_one("bare relay (baseline)", {self, "relay"}, true, count, rate);
-  measure_one("motormix output",
+  measure_one(("motormix output, " + protocol).c_str(),
               {motormix, "output", "--config", config, "--set", "hardware.serial.device=@DEVICE@"},
               false, count, rate);
   std::remove(config.c_str());

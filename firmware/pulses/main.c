@@ -510,7 +510,7 @@ static void search(uint32_t now, uint8_t steps) {
  * those to be searched again after a bad frame first, then the ring's,
  * each straight into the parser. A frame taken ends it (a PULSES frame is
  * to be prepared). */
-#define SEARCH_STEPS 24u /* some 100 us: a frame due waits no longer */
+#define SEARCH_STEPS 24u /* some 200 us: a frame due waits no longer */
 static void bidir_bytes(uint32_t now) {
   uint8_t steps = SEARCH_STEPS;
   do {
