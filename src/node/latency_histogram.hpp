@@ -46,7 +46,8 @@ class LatencyHistogram {
   // to the microsecond.
   double percentile(double fraction) const {
     if (count_ == 0) return 0.0;
-    const auto wanted = static_cast<std::int64_t>(std::ceil(fraction * static_cast<double>(count_)));
+    const auto wanted =
+        static_cast<std::int64_t>(std::ceil(fraction * static_cast<double>(count_)));
     std::int64_t seen = 0;
     for (std::size_t us = 0; us < bins_.size(); ++us) {
       seen += bins_[us];

@@ -75,11 +75,15 @@ int main(int argc, char** argv) {
   }
   const double status_hz = 10.0;
   motormix::test::BusRecorder bus("SOAK_PWM", "SOAK_STATUS", /*keep_pwm=*/false);
-  std::vector<std::string> run = {
-      motormix, "run", "--config", config, "--set", "loop_rate_hz=" + std::to_string(rate),
-      "--set", "status_rate_hz=10", "--set", "channels.setpoint=SOAK_SETPOINT", "--set",
-      "channels.pid=SOAK_PID", "--set", "channels.motor_pwm=SOAK_PWM", "--set",
-      "channels.status=SOAK_STATUS", "--set", "inputs.arm_max_throttle=0.1"};
+  std::vector<std::string> run = {motormix,   "run",
+                                  "--config", config,
+                                  "--set",    "loop_rate_hz=" + std::to_string(rate),
+                                  "--set",    "status_rate_hz=10",
+                                  "--set",    "channels.setpoint=SOAK_SETPOINT",
+                                  "--set",    "channels.pid=SOAK_PID",
+                                  "--set",    "channels.motor_pwm=SOAK_PWM",
+                                  "--set",    "channels.status=SOAK_STATUS",
+                                  "--set",    "inputs.arm_max_throttle=0.1"};
   if (!timing_report.empty()) {
     run.push_back("--timing-report");
     run.push_back(timing_report);

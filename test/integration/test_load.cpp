@@ -142,9 +142,9 @@ TEST(Load, TwentyVehiclesOnOneBusWithoutCrossTalk) {
   for (int v = 0; v < kVehicles; ++v) {
     mixers.push_back(std::make_unique<ChildProcess>(std::vector<std::string>{
         motormix_binary(), "run", "--config", source_path("config/team_quad.yaml"), "--set",
-        "output.spool_up_s=0", "--set", "channels.setpoint=" + channel("SETPOINT", v), "--set", "channels.pid=" + channel("PID", v),
-        "--set", "channels.motor_pwm=" + channel("PWM", v), "--set",
-        "channels.status=" + channel("STATUS", v),
+        "output.spool_up_s=0", "--set", "channels.setpoint=" + channel("SETPOINT", v), "--set",
+        "channels.pid=" + channel("PID", v), "--set", "channels.motor_pwm=" + channel("PWM", v),
+        "--set", "channels.status=" + channel("STATUS", v),
         // Throughput and cross-talk are measured here, not failsafe timing
         // (tested alone elsewhere): with sixty busy threads on two cores a
         // publisher or a loop can sleep past 100 ms, and a failsafe would end

@@ -10,11 +10,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
-#include <iterator>
-#include <csignal>
 #include <iostream>
+#include <iterator>
 #include <random>
 #include <thread>
 
@@ -204,10 +204,11 @@ TEST_F(ProcessSafety, RealtimeRequestsAreGrantedOrRefusedWithAWarningAndFlyingGo
     const std::string report_path = dir + "/timing_report.json";
     const std::string err_path = dir + "/realtime_stderr.txt";
     std::remove(report_path.c_str());
-    start({"realtime.priority=20", "realtime.cpus=[0]", "realtime.lock_memory=true"},
-          "config/team_quad.yaml", {"--timing-report", report_path},
-          refused_namespace ? std::vector<std::string>{"unshare", "-r"} : std::vector<std::string>{},
-          err_path);
+    start(
+        {"realtime.priority=20", "realtime.cpus=[0]", "realtime.lock_memory=true"},
+        "config/team_quad.yaml", {"--timing-report", report_path},
+        refused_namespace ? std::vector<std::string>{"unshare", "-r"} : std::vector<std::string>{},
+        err_path);
     arm();
     EXPECT_TRUE(mixer_->running());
     mixer_->signal(SIGTERM);

@@ -65,7 +65,8 @@ TEST(RecordedLog, ReplaysLikeTheOriginal) {
 
   const std::string out = dir + "/recorded_dropout.out.lcmlog";
   const std::string cmd = std::string(motormix_binary()) + " replay --every-input --config " +
-                          source_path("config/quad_x.yaml") + " --set inputs.yaw_source=setpoint --set output.spool_up_s=0 " +
+                          source_path("config/quad_x.yaml") +
+                          " --set inputs.yaw_source=setpoint --set output.spool_up_s=0 " +
                           recorded + " " + out + " > /dev/null 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 

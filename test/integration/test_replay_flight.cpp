@@ -62,8 +62,7 @@ std::vector<motor_pwm_t> replay_outputs(const std::string& log, const std::strin
                                         const std::string& channel) {
   const std::string cmd = std::string(motormix_binary()) + " replay --config " +
                           source_path("config/team_quad.yaml") + " --set output.spool_up_s=0 " +
-                          log + " " + out +
-                          " > /dev/null 2>&1";
+                          log + " " + out + " > /dev/null 2>&1";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::vector<motor_pwm_t> outputs;
   lcm::LogFile file(out, "r");
@@ -94,8 +93,8 @@ TEST(ReplayFlight, TeamQuadFlightThroughTheRunningMixer) {
   // Staleness is exercised elsewhere; here generous timeouts keep a loaded CI
   // machine's scheduling hiccups from turning a correct run into a failsafe.
   ChildProcess mixer({motormix_binary(), "run", "--config", source_path("config/team_quad.yaml"),
-                      "--set", "output.spool_up_s=0", "--set", "inputs.setpoint_timeout_ms=2000", "--set",
-                      "inputs.pid_timeout_ms=2000"});
+                      "--set", "output.spool_up_s=0", "--set", "inputs.setpoint_timeout_ms=2000",
+                      "--set", "inputs.pid_timeout_ms=2000"});
   ASSERT_TRUE(mixer.started());
   ASSERT_TRUE(bus.wait_until([](const auto& pwm, const auto&) { return !pwm.empty(); }, 10s))
       << "motormix published nothing";

@@ -52,7 +52,8 @@ class SequentialDesaturation {
       for (int a = 0; a < 4; ++a) {
         mix_[static_cast<std::size_t>(a)][static_cast<std::size_t>(i)] =
             static_cast<Scalar>(mixing(i, a));
-        eff_[static_cast<std::size_t>(a)][static_cast<std::size_t>(i)] = static_cast<Scalar>(e(a, i));
+        eff_[static_cast<std::size_t>(a)][static_cast<std::size_t>(i)] =
+            static_cast<Scalar>(e(a, i));
       }
     }
   }

@@ -251,7 +251,8 @@ TEST(VehicleModel, WheelsDriveForwardAndTurnAsTheirDirectionPinsSay) {
   forward[index(Axis::kThrust)] = 0.5;
   mixer.mix(forward, out);
   for (int k = 0; k < 1000; ++k) v.step(out.output, out.direction, 0, Environment{}, 1e-3);
-  EXPECT_GT(v.forward_speed(), 0.4 * c.vehicle_model.wheels.radius_m * c.vehicle_model.wheels.max_speed_rad_s);
+  EXPECT_GT(v.forward_speed(),
+            0.4 * c.vehicle_model.wheels.radius_m * c.vehicle_model.wheels.max_speed_rad_s);
   EXPECT_GT(v.body().position.x(), 0.1);
   AxisVector back = -forward;
   mixer.mix(back, out);

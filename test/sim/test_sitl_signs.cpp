@@ -80,8 +80,7 @@ std::array<double, 3> rates_after_step(int axis) {
     const bool airborne = bus.have_state && -bus.state.position[2] > kTakenOffM;
     if (airborne && step_start == Clock::time_point{}) step_start = Clock::now();
     const bool stepping = step_start != Clock::time_point{};
-    if (stepping &&
-        Clock::now() - step_start > std::chrono::duration<double>(kStepS[axis])) {
+    if (stepping && Clock::now() - step_start > std::chrono::duration<double>(kStepS[axis])) {
       for (int i = 0; i < 3; ++i) rates[static_cast<std::size_t>(i)] = bus.state.rates[i];
       break;
     }

@@ -228,10 +228,9 @@ TEST_F(ControlLoopTest, MessagesFromTheFutureAreRejected) {
 class FailsafeActionTest : public ::testing::Test {
  protected:
   ControlLoop make(const std::string& action) {
-    config::Config c =
-        config::load_config_file(source_path("config/team_quad.yaml"),
-                                 {"inputs.failsafe=" + action, "inputs.hold_last_ms=200",
-                                  "output.spool_up_s=0"});
+    config::Config c = config::load_config_file(
+        source_path("config/team_quad.yaml"),
+        {"inputs.failsafe=" + action, "inputs.hold_last_ms=200", "output.spool_up_s=0"});
     return ControlLoop(c, config::build_mixer(c));
   }
   static void arm(ControlLoop& loop) {
@@ -262,7 +261,6 @@ TEST_F(FailsafeActionTest, IdleSpinsWithZeroDemand) {
   EXPECT_TRUE(r.mix.armed);
   for (int i = 0; i < 4; ++i) EXPECT_EQ(r.mix.output[i], 1150.0);
 }
-
 
 // A status reports what is true in its own cycle: once disarmed, nothing
 // saturated, nothing limited, nothing unallocated, even right after a

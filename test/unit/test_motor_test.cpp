@@ -98,8 +98,9 @@ TEST_F(MotorTestLoop, RefusesWhatIsOutOfBounds) {
   EXPECT_EQ(request(0, 1, std::nan(""), 1.0), MotorTestResult::kRefusedInvalid);
   EXPECT_EQ(request(0, 1, 0.1, std::numeric_limits<double>::infinity()),
             MotorTestResult::kRefusedInvalid);
-  EXPECT_EQ(loop_.on_motor_test(MotorTestSample{utime_ - 5000, 1, 0.1, 1.0}, 0, kWall),  // went back
-            MotorTestResult::kRefusedInvalid);
+  EXPECT_EQ(
+      loop_.on_motor_test(MotorTestSample{utime_ - 5000, 1, 0.1, 1.0}, 0, kWall),  // went back
+      MotorTestResult::kRefusedInvalid);
   EXPECT_EQ(loop_.cycle(kMs).motor_test, -1);
   EXPECT_EQ(loop_.counters().motor_tests_refused, 9);
   EXPECT_EQ(loop_.counters().motor_tests_started, 0);

@@ -24,8 +24,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <cmath>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <limits>
@@ -240,7 +240,8 @@ TEST(NoHeap, TheSpinLandingFliesWithoutAllocating) {
   DescentInput in;
   for (std::int64_t k = 1; k < 4000; ++k) {
     const double t = static_cast<double>(k) * 0.0025;
-    in.attitude = Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * std::sin(t), Eigen::Vector3d::UnitX()));
+    in.attitude =
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * std::sin(t), Eigen::Vector3d::UnitX()));
     in.rates = {2.0 * std::cos(t), 1.0, 15.0};
     in.velocity = k < 2000 ? Eigen::Vector3d(0.1, 0.0, 1.0) : Eigen::Vector3d::Zero();
     if (k % 500 == 0) in.velocity.setConstant(std::numeric_limits<double>::quiet_NaN());

@@ -61,7 +61,6 @@ MOTORMIX_ALWAYS_INLINE bool closer_in_order(const AxisVector& a, const AxisVecto
   return std::abs(a[index(Axis::kYaw)]) < std::abs(b[index(Axis::kYaw)]) - tolerance;
 }
 
-
 // Whether the repair replaces the clip (the sequence's result clipped, what
 // PX4 delivers): only when it is no worse in priority order with ties within
 // `tie`, and better with ties within `counts` only. A higher priority
@@ -205,9 +204,9 @@ class PrioritizedAllocator::Kernel {
     // torque yet land closer to the demand. The clip stays unless the
     // repair delivers the demand better in priority order (roll and pitch,
     // then thrust, then yaw) without losing more than the tie tolerance on
-    // any key (prefer_repair). The demand's roll/pitch error is needed only by the shortcut below with airmode, and from the demand
-    // alone: taken before the clip and the scales, its root is ready when
-    // they are.
+    // any key (prefer_repair). The demand's roll/pitch error is needed only by the shortcut below
+    // with airmode, and from the demand alone: taken before the clip and the scales, its root is
+    // ready when they are.
     const double demanded = a_.effectiveness_inverts_mixing_ && a_.airmode_ != Airmode::kOff
                                 ? demanded_roll_pitch(demand)
                                 : 0.0;
@@ -238,7 +237,8 @@ class PrioritizedAllocator::Kernel {
     const AxisVector repair_left = undelivered(demand, u);
     // The shortcut holds only for repaired commands in range.
     const bool repair_closer = verdict == RollPitchVerdict::kRepairCloser && repair_fits;
-    if (!repair_closer && !prefer_repair(repair_left, clip_left, a_.gain_that_counts_, a_.tie_tolerance_)) {
+    if (!repair_closer &&
+        !prefer_repair(repair_left, clip_left, a_.gain_that_counts_, a_.tie_tolerance_)) {
       store(clipped, commands);
       return detail::describe_with<N>(clip_left, clipped.data(), n_, a_.cycle_constants_);
     }

@@ -4,10 +4,9 @@
 
 #include <array>
 #include <cmath>
-#include <sstream>
-#include <cmath>
 #include <functional>
 #include <map>
+#include <sstream>
 
 namespace motormix {
 

@@ -49,7 +49,8 @@ int main(int argc, char** argv) {
     } else if (strcmp(ev->channel, "MIXER_STATUS") == 0) {
       motormix_mixer_status_t m;
       n = motormix_mixer_status_t_decode(ev->data, 0, (int)ev->datalen, &m);
-      if (n >= 0) printf("status %d %lld %d %lld\n", n, (long long)m.utime, m.state, (long long)m.cycles);
+      if (n >= 0)
+        printf("status %d %lld %d %lld\n", n, (long long)m.utime, m.state, (long long)m.cycles);
     } else {
       lcm_eventlog_free_event(ev);
       continue;

@@ -63,7 +63,7 @@ struct AttitudeSample {
   static constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
   std::int64_t utime = 0;
   std::array<double, 4> q{1.0, 0.0, 0.0, 0.0};  // w, x, y, z; all NaN: attitude unknown
-  std::array<double, 3> rates{};                 // rad/s, body FRD
+  std::array<double, 3> rates{};                // rad/s, body FRD
   // m/s NED; all NaN: unknown (the spin landing then follows the throttle).
   std::array<double, 3> velocity{kUnknown, kUnknown, kUnknown};
 };
