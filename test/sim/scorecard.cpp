@@ -257,10 +257,6 @@ std::vector<Case> cases(const std::string& source, const std::vector<std::string
 
 constexpr double kTargetAltitudeLossM = 1.0;
 constexpr double kTargetAttitudeMaxDeg = 15.0;
-// Missed since 0.10 by hexa X with the optimal strategy (16.9 degrees): the
-// stopped rotor freewheels down under its air drag instead of being braked
-// to rest. Named here and in test_sim.cpp, listed in issue 48's closing note.
-constexpr double kFreewheelAttitudeMaxDeg = 18.0;
 constexpr double kPx4Margin = 1.05;
 // Every cell must have flown: armed for at least this share of its
 // simulated time (the scenarios arm within half a second), and an aircraft
@@ -308,9 +304,7 @@ std::vector<std::string> target_misses(const std::vector<nlohmann::json>& result
     if (target_vehicle && target_column && reported) ++target_cells;
     if (target_vehicle && target_column && reported &&
         (r["crashed"].get<bool>() || r["altitude_loss_m"].get<double>() > kTargetAltitudeLossM ||
-         r["attitude_error_max_deg"].get<double>() > (v == "hexa_x" && c == "optimal"
-                                                          ? kFreewheelAttitudeMaxDeg
-                                                          : kTargetAttitudeMaxDeg))) {
+         r["attitude_error_max_deg"].get<double>() > kTargetAttitudeMaxDeg)) {
       misses.push_back("motor out: " + describe(r) + ": " + r.dump());
     }
     for (const char* airmode : {"roll_pitch", "roll_pitch_yaw"}) {

@@ -95,6 +95,28 @@ TEST(FailureOptimal, HexaAndOctoHoldHoverWithAnyOneMotorOut) {
   }
 }
 
+// `optimal` with a motor out and more yaw asked than fits (the controller's
+// yaw demand grows while the vehicle turns): yaw gives way to roll and pitch
+// as with `prioritized`. At the configured yaw weight (0.2 of roll's) the
+// weighted trade left roll and pitch short by a quarter to two thirds here,
+// and the closed-loop hexa flew 10-17 degrees off (SIM.md's target: 15).
+constexpr double kYawYieldedRollPitch = 0.002;  // of a 0.05 demand: yaw's hundredth weight
+TEST(FailureOptimal, YawGivesWayToRollAndPitchWithAMotorOut) {
+  for (const char* name : {"hexa_x", "octo_x"}) {
+    const config::Config c = preset(name, "optimal");
+    const Mixer mixer = config::build_mixer(c);
+    for (int m = 0; m < c.motors(); ++m) {
+      MixerOutput out;
+      const AxisVector demand(0.05, -0.05, 0.8, 0.5);
+      mixer.mix(demand, out, 0.0, motor(m));
+      const AxisVector error = demand - produced(c, motor(m), out.command);
+      EXPECT_NEAR(error[index(Axis::kRoll)], 0.0, kYawYieldedRollPitch) << name << " m" << m + 1;
+      EXPECT_NEAR(error[index(Axis::kPitch)], 0.0, kYawYieldedRollPitch) << name << " m" << m + 1;
+      EXPECT_GT(std::abs(error[index(Axis::kYaw)]), 0.1) << "yaw gave way";
+    }
+  }
+}
+
 // `prioritized` with a motor out: roll, pitch and thrust are held, and yaw
 // gives way first.
 TEST(FailurePrioritized, HexaHoldsRollPitchThrustAndYawGivesWay) {
