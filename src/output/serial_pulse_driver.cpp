@@ -76,7 +76,7 @@ bool SerialPulseDriver::write(const double* pulse_us, int count, std::uint32_t a
     return true;
   }
   const auto mask = static_cast<std::uint8_t>(armed & ((1U << count) - 1U));
-  if (sent_pulses_ && mask == last_armed_ && bus::monotonic_s() < wire_free_s_) {
+  if (sent_pulses_ && mask == last_armed_ && bus::monotonic_s() < wire_free_s_ - credit_s_) {
     // The wire is still busy: this one waits, in place of an older one.
     if (waiting_.valid) ++superseded_;
     waiting_.valid = true;
@@ -97,7 +97,9 @@ bool SerialPulseDriver::send_pulses(const double* pulse_us, int count, std::uint
   p.count = static_cast<std::uint8_t>(count);
   for (int i = 0; i < count; ++i) p.pulse_hus[i] = us(2.0 * pulse_us[i]);
   std::uint8_t buf[MM_LINK_MAX_FRAME];
-  const bool ok = send(buf, mm_link_encode_pulses(&p, buf));
+  const std::size_t n = mm_link_encode_pulses(&p, buf);
+  credit_s_ = static_cast<double>(n) * byte_s_ / kWireShare;
+  const bool ok = send(buf, n);
   if (ok) {
     ++frames_sent_;
     sent_pulses_ = true;
@@ -107,13 +109,13 @@ bool SerialPulseDriver::send_pulses(const double* pulse_us, int count, std::uint
 }
 
 double SerialPulseDriver::waiting_until_s() const {
-  return waiting_.valid ? wire_free_s_ : std::numeric_limits<double>::infinity();
+  return waiting_.valid ? wire_free_s_ - credit_s_ : std::numeric_limits<double>::infinity();
 }
 
 // The frame that waited, once the wire is free (for the session the last
 // report named, which may be newer than when it was written).
 void SerialPulseDriver::send_waiting() {
-  if (!waiting_.valid || session_ == 0 || bus::monotonic_s() < wire_free_s_) return;
+  if (!waiting_.valid || session_ == 0 || bus::monotonic_s() < wire_free_s_ - credit_s_) return;
   waiting_.valid = false;
   send_pulses(waiting_.pulse_us, waiting_.count, waiting_.armed);
 }

@@ -90,11 +90,14 @@ void run_speed(const Speed& speed, const BidirEscNoise& noise, std::vector<Tally
     for (int ch = 0; ch < kChannels; ++ch) escs.set_erpm(ch, erpm_at(ch, ms));
     const double ms_end_us = h.board.now_us() + 1000.0;
     if (traffic == HostTraffic::kOutputsMost) {
+      // The output's worst: its one frame of credit spent at every turn,
+      // two frames back to back every two shares of time.
       while (next_send_us < ms_end_us) {
         h.board.run_for_us(std::max(0.0, next_send_us - h.board.now_us()));
         send_random();
-        ++sent_frames;
-        next_send_us += frame_us / kOutputWireShare;
+        send_random();
+        sent_frames += 2;
+        next_send_us += 2.0 * frame_us / kOutputWireShare;
       }
     } else if (traffic == HostTraffic::kSaturated) {
       // Always a frame waiting behind the one on the wire.
@@ -244,7 +247,8 @@ TEST(PulseFirmwareBidir, EveryMotorsReplyDecodedOnTheChipWithNoise) {
 }
 
 // The host's frames as often as `motormix output` sends them at most (some
-// 580 a second with four motors): every one taken, every reply decoded.
+// 580 a second with four motors, in pairs: its one frame of credit): every
+// one taken, every reply decoded.
 // Back to back (some 930 a second, the wire full, as a host other than
 // motormix's output might): the chip still sends its frames at the rate
 // configured, decodes and delivers every motor's replies, never resets nor

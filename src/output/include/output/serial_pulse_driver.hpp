@@ -6,15 +6,19 @@
 // report named; the firmware's reports read back. A write that finds the device gone makes
 // service() return false: the caller reopens it (a new driver).
 //
-// Paced to the wire: frames take at most kWireShare of it. A PULSES frame
-// goes once the one before has had its share of time (its bytes' time on
-// the wire over kWireShare, from the baud rate), else it waits, the newest
-// replacing one that waited, until then (waiting_until_s, send_waiting).
-// Values faster than that (a loop rate above some 580 Hz for four motors at
-// 250000 baud) would otherwise queue in the kernel, tens of milliseconds of
-// old thrust ahead of the newest, and leave the chip no time for its own
-// work (with bidirectional DShot it then loses host frames). A frame that
-// arms or disarms a channel never waits.
+// Paced to the wire: frames take at most kWireShare of it on average. Each
+// frame sent owes its bytes' time on the wire over kWireShare (from the baud
+// rate); a PULSES frame goes while what is owed is at most one frame's
+// time, else it waits, the newest replacing one that waited, until then
+// (waiting_until_s, send_waiting). That one frame of credit lets two values
+// that a publisher's jitter brings close together go at once (with no
+// credit, a 400 Hz stream's frames waited up to 1.7 ms whenever two came
+// less than 1.7 ms apart), and two frames fit the chip's receive ring.
+// Values faster than the share (a loop rate above some 580 Hz for four
+// motors at 250000 baud) would otherwise queue in the kernel, tens of
+// milliseconds of old thrust ahead of the newest, and leave the chip no time
+// for its own work (with bidirectional DShot it then loses host frames). A
+// frame that arms or disarms a channel never waits.
 
 #include "output/pulse_driver.hpp"
 
@@ -90,10 +94,11 @@ class SerialPulseDriver : public PulseDriver {
   bool resend_config_ = true;
   std::uint64_t frames_sent_ = 0, write_failures_ = 0;
   bool lost_ = false;  // a write found the device gone: service() says so
-  // Pacing: when the next frame may go (monotonic seconds), and the newest
-  // frame waiting for that.
+  // Pacing: until when the wire's share is owed (monotonic seconds), one
+  // PULSES frame's share of time (the credit), and the newest frame waiting.
   double byte_s_ = 10.0 / 250000.0;
   double wire_free_s_ = 0.0;
+  double credit_s_ = 0.0;
   bool sent_pulses_ = false;
   std::uint8_t last_armed_ = 0;
   struct Waiting {
