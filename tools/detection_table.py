@@ -11,7 +11,11 @@ Three tables, every flight in lockstep through `motormix sim --json`:
   motors named right, crashes, altitude loss, the attitude error of the
   failure's first second and of the whole flight;
 - false alarms: every aircraft configuration, healthy scenario and strategy
-  on N seeds, per source: flights with a false detection and simulated hours;
+  on N seeds, per source: simulated hours and flights with a false
+  detection, in the air and on the ground (within ON_GROUND_M of it, or
+  after a crash: a strategy that cannot fly the scenario drags the vehicle
+  along the ground, where contact and ground effect push it as a lost
+  motor would);
 - other failures (half a prop, an intermittent motor, a desync, dead
   telemetry on a working motor) with the default sources, against the same
   flights without the detector.
@@ -30,6 +34,7 @@ HEALTHY = ["hover", "steps", "flips", "gusts", "battery_sag"]
 SOURCES = {"telemetry": "[telemetry]", "rates": "[rates]", "both": "[telemetry, rates]",
            "outputs": "[outputs]"}
 AT = {"steps": 10.5, "gusts": 7.0}
+ON_GROUND_M = 0.5  # a declaration this close to the ground is not one in flight
 MOTORS = {"hexa_x": 6, "octo_x": 8}
 
 
@@ -103,18 +108,24 @@ def false_alarm_table(motormix, seeds, pool):
     results = pool.map(lambda j: (j[0], fly(motormix, *j[1]), j[1]), jobs)
     cells = {}
     for key, r, job in results:
-        c = cells.setdefault(key, {"flights": 0, "false": 0, "seconds": 0.0, "where": set()})
+        c = cells.setdefault(key, {"flights": 0, "air": 0, "ground": 0, "seconds": 0.0,
+                                   "where": set()})
         c["flights"] += 1
         c["seconds"] += r["sim_seconds"]
         if r["false_detections"]:
-            c["false"] += 1
-            c["where"].add(f"{job[3][-1].split('=')[1]} {job[1]}")
-    lines = ["| sources | vehicle | flights | simulated h | flights with a false detection | where |",
-             "|---|---|---|---|---|---|"]
+            # A healthy flight has no failure: every declaration is false.
+            in_air = any(d["height_m"] >= ON_GROUND_M and not d["crashed"]
+                         for d in r["detections"])
+            c["air" if in_air else "ground"] += 1
+            c["where"].add(f"{job[3][-1].split('=')[1]} {job[1]}"
+                           + ("" if in_air else " (ground)"))
+    lines = ["| sources | vehicle | flights | simulated h | flights with a false detection in the "
+             f"air | on the ground (below {ON_GROUND_M} m, or crashed) | where |",
+             "|---|---|---|---|---|---|---|"]
     for (source, vehicle), c in cells.items():
         where = ", ".join(sorted(c["where"])[:4]) + (" ..." if len(c["where"]) > 4 else "")
         lines.append(f"| {source} | {vehicle} | {c['flights']} | {c['seconds'] / 3600:.2f} "
-                     f"| {c['false']} | {where} |")
+                     f"| {c['air']} | {c['ground']} | {where} |")
     return "\n".join(lines)
 
 

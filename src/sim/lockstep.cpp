@@ -118,7 +118,7 @@ SimResult run_lockstep(const config::Config& config_in, Mixer mixer, const Scena
     }
 
     scorer.add(t, ref, cmd, vehicle, mixer_armed, cycle.mix.allocation.axis_limited);
-    detections.add(t, cycle);
+    detections.add(t, cycle, vehicle);
 
     plant.integrate(periods, cycle.mix.output, cycle.mix.direction, health, clock, t);
     if (end_of_period(r, vehicle, k, t + period)) break;

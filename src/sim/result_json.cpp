@@ -72,7 +72,9 @@ void add_detections(nlohmann::json& j, const SimResult& r, const config::Config&
   for (const SimResult::Declaration& d : r.declarations) {
     declared.push_back({{"at_s", d.at_s},
                         {"motor", config.motor_names()[static_cast<std::size_t>(d.motor)]},
-                        {"by", to_string(d.source)}});
+                        {"by", to_string(d.source)},
+                        {"height_m", d.height_m},
+                        {"crashed", d.crashed}});
   }
   j["detections"] = declared;
 }

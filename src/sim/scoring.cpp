@@ -19,13 +19,14 @@ DetectionScorer::DetectionScorer(const std::vector<MotorFailure>& failures) {
   for (const MotorFailure& f : failures) outcomes_.push_back({f, -1.0, -1, DetectionSource::kNone});
 }
 
-void DetectionScorer::add(double t, MotorMask declared, DetectionSource source) {
+void DetectionScorer::add(double t, MotorMask declared, DetectionSource source,
+                          const VehicleModel& vehicle) {
   const MotorMask fresh = declared & ~seen_;
   seen_ |= declared;
   if (declared == 0) seen_ = 0;  // disarmed: a new flight
   for (int m = 0; fresh >> m != 0; ++m) {
     if (((fresh >> m) & 1U) == 0) continue;
-    declarations_.push_back({t, m, source});
+    declarations_.push_back({t, m, source, -vehicle.body().position.z(), vehicle.crashed()});
     // The earliest undetected thrust-losing failure of this motor; else the
     // earliest undetected one of any motor (named wrong).
     FailureOutcome* match = nullptr;

@@ -243,7 +243,7 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     // run in real time here).
     const double declared_t =
         mix.detected_utime > 0 ? t + static_cast<double>(mix.detected_utime - now) / 1e6 : t;
-    detections.add(std::min(t, declared_t), mix.detected, mix.detected_by);
+    detections.add(std::min(t, declared_t), mix.detected, mix.detected_by, vehicle);
     plant.integrate(
         periods,
         mix.outputs.size() == config.motors() ? mix.outputs : MotorVector::Zero(config.motors()),

@@ -81,6 +81,11 @@ struct SimResult {
     double at_s = 0.0;
     int motor = -1;
     DetectionSource source = DetectionSource::kNone;
+    // Where the vehicle was: height of its centre above the ground (m), and
+    // whether it had crashed. Near the ground, ground effect and contact push
+    // the body with torques no flying model holds.
+    double height_m = 0.0;
+    bool crashed = false;
   };
   std::vector<Declaration> declarations;
   double sim_seconds = 0.0;
@@ -135,14 +140,14 @@ class Scorer {
 class DetectionScorer {
  public:
   explicit DetectionScorer(const std::vector<MotorFailure>& failures);
-  // A cycle's result at time t.
-  void add(double t, const loop::CycleResult& cycle) {
-    add(t, cycle.detection.failed, cycle.detection.source);
+  // A cycle's result at time t, with the vehicle then.
+  void add(double t, const loop::CycleResult& cycle, const VehicleModel& vehicle) {
+    add(t, cycle.detection.failed, cycle.detection.source, vehicle);
   }
   // What the detector has declared by time t (0 after disarming), and the
   // source of its latest declaration: from a cycle, or from the mixer's
   // status over the bus.
-  void add(double t, MotorMask declared, DetectionSource source);
+  void add(double t, MotorMask declared, DetectionSource source, const VehicleModel& vehicle);
   void finish(SimResult& r) const;
 
  private:
