@@ -6,7 +6,8 @@ with the CLI in lockstep:
 
 Each row: a quad configuration, a scenario (spin_landing, spin_landing_gusts),
 how the failure became known (reported after the scenario's 100 ms, found by
-motormix's detector) and what of the real world the simulator plays
+motormix's detector; "detected prop_lost" and "detected prop_damaged": a
+thrown prop or a broken tip instead of a stop, found by the detector) and what of the real world the simulator plays
 (docs/simulation.md: "realism on" is the default; a model error flies a
 vehicle other than the configured one); every motor stopping at 8 s at 10 m
 on N seeds from S (by default 11 on: seeds the tests do not use). Columns:
@@ -42,6 +43,13 @@ ROWS = [
     ("team_quad", "spin_landing", "detected", NO_MOMENTUM),
     ("quad_x", "spin_landing", "detected", ("idealized (--ideal)", ["--ideal"])),
     ("quad_x", "spin_landing", "detected", ("rotor inertia x2", ["--truth", "rotor_inertia=2"])),
+    # The other failures that lose a motor's thrust, found by the detector:
+    # a thrown prop (its thrust gone at once) and a broken tip.
+    ("quad_x", "spin_landing", "detected prop_lost", ON),
+    ("quad_x", "spin_landing_gusts", "detected prop_lost", ON),
+    ("team_quad", "spin_landing_gusts", "detected prop_lost", ON),
+    ("quad_x", "spin_landing_gusts", "detected prop_damaged", ON),
+    ("team_quad", "spin_landing_gusts", "detected prop_damaged", ON),
 ]
 # The robustness table: the simulated vehicle off its configuration (realism
 # on), each motor reported after 100 ms; columns vehicle x scenario.
@@ -79,12 +87,14 @@ def fly(motormix, config, scenario, known, world, motor, seed):
     """motor: 0-based, or a pair of 1-based motors stopping together."""
     args = [motormix, "sim", "--config", f"config/{config}.yaml", "--scenario", scenario,
             "--seed", str(seed), "--json"] + world[1]
-    if known == "detected":
+    if known.startswith("detected"):
         args += ["--undetected", "--set", "failure_detection.enabled=true"]
+    # "detected KIND": a failure of that kind rather than a stop.
+    kind = known.split()[1] if len(known.split()) > 1 else "stop"
     # The scenario stops motor 1 (and 2); others instead.
     args += ["--no-scenario-failures"]
     for m in (motor if isinstance(motor, tuple) else (motor + 1,)):
-        args += ["--fail", f"{m}@8"]
+        args += ["--fail", f"{m}@8:{kind}"]
     out = subprocess.run(args, capture_output=True, text=True)
     return json.loads(out.stdout)
 

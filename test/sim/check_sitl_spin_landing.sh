@@ -4,8 +4,10 @@
 # stops at 8 s at 10 m, twice: once with nobody reporting it (the mixer's
 # own detector, ESC telemetry and rates, finds it, as a real stack would
 # without a motor_status publisher), once reported on motor_status 100 ms
-# later; and a third time with motors 1 and 2 (opposite) stopping together,
-# found by the detector, landing on the other two. The simulated vehicle
+# later; a third time with motors 1 and 2 (opposite) stopping together,
+# found by the detector, landing on the other two; and a fourth with motor 1
+# throwing its prop (its thrust gone at once, the unloaded motor running
+# fast), found by the detector from its ESC telemetry. The simulated vehicle
 # publishes its attitude, rates and velocity.
 # Each flight passes when the quad did not crash, touched down no faster
 # than 2 m/s, and the mixer logged taking over and disarming on touchdown.
@@ -52,4 +54,6 @@ fly "found by the detector" 'landing spinning on the other three' --undetected
 fly "reported after 100 ms" 'landing spinning on the other three'
 fly "two opposite motors, found by the detector" 'landing spinning on the other two' \
   --undetected --no-scenario-failures --fail 1@8 --fail 2@8
+fly "a thrown prop, found by the detector" 'landing spinning on the other three' \
+  --undetected --no-scenario-failures --fail 1@8:prop_lost
 exit $failed
