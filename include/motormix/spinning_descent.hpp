@@ -31,6 +31,11 @@
 //     torques), solved exactly; when that leaves a motor's range, the
 //     thrusts inside the ranges closest to the demands (least squares over
 //     the box, the thrust weighted below the torques);
+//   * the spin-up: until the spin is reached, the two motors beside the dead
+//     one are raised together (which changes neither tilting torque) as far
+//     as their range allows, so the yaw torque, and with it the spin and the
+//     stiffness it brings, comes sooner; the vehicle may climb, at most as
+//     fast as it will come down;
 //   * landing: the controller says so (the loop then disarms) when the spin
 //     it had reached is lost while the vehicle is still (the ground took
 //     it: nothing in the air can), or once the descent has been flown and
@@ -180,6 +185,9 @@ class SpinningDescent {
   double collective(const DescentInput& in, const Eigen::Vector3d& up_body, double dt);
   // The working motors' thrusts closest to demand (thrust, torque x, y).
   Eigen::Vector3d allocate(const SpinEquilibrium& eq, const Eigen::Vector3d& demand) const;
+  // Before the spin is reached: `f` raised toward the yaw torque's most (see there).
+  Eigen::Vector3d spin_up(const SpinEquilibrium& eq, const Eigen::Vector3d& f,
+                          const DescentInput& in) const;
 
   SpinningDescentModel m_;
   SpinningDescentSettings s_;

@@ -34,15 +34,16 @@ using test::source_path;
 constexpr int kSeeds = 5;
 constexpr double kReportedAfterS = 0.100;
 constexpr double kFailAtS = 8.0;  // hovering at 10 m by then
-// Largest thrust-axis tilt in still air (issue 48: 60 degrees). In wind and
-// gusts the flights land but a torque gust one second after the failure,
-// before the spin gives the body its stiffness, tilts the team quad to
-// 65-71 degrees: measured, not met, not asserted (SIM.md).
-constexpr double kStillAirTiltMaxDeg = 60.0;
+// Largest thrust-axis tilt (issue 48: 60 degrees), in still air and in wind
+// and gusts: there a torque gust one second after the failure, before the
+// spin gives the body its stiffness, tilts the team quad up to 55 degrees
+// (58 before the spin-up on the yaw torque's most; SIM.md).
+constexpr double kTiltMaxDeg = 60.0;
 // Off its configuration: rotor inertia x2, or mass, inertia, drag each
-// +-30 % (issue 48: at least 95 % land). A vehicle 30 % heavier than its
-// configuration does not land in wind and gusts (its three motors cannot
-// carry it and tilt it): not asserted there (SIM.md).
+// +-30 % (issue 48: at least 95 % land). The quad X 30 % heavier than its
+// configuration lands in wind and gusts in 30 of 40 flights of SIM.md (its
+// two motors beside the dead one cannot carry it until the spin is up):
+// not asserted there; the team quad is.
 constexpr double kModelErrorFactor = 0.3;
 const Realism kRealism{};
 constexpr double kTouchdownMaxMps = kCrashSpeedMps;
@@ -163,37 +164,38 @@ const Vehicle kQuadX{"quad_x", {}};
 const Vehicle kTeamQuad{"team_quad", {}};
 
 TEST(SpinLanding, QuadXLandsOnEveryMotorReportedAfter100Ms) {
-  expect_landings(kQuadX, "spin_landing", kReportedAfterS, false, kAll, {}, kRealism,
-                  kStillAirTiltMaxDeg);
+  expect_landings(kQuadX, "spin_landing", kReportedAfterS, false, kAll, {}, kRealism, kTiltMaxDeg);
 }
 
 TEST(SpinLanding, QuadXInWindAndGusts) {
-  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false, kAll);
+  expect_landings(kQuadX, "spin_landing_gusts", kReportedAfterS, false, kAll, {}, kRealism,
+                  kTiltMaxDeg);
 }
 
 TEST(SpinLanding, TeamQuadLandsOnEveryMotorReportedAfter100Ms) {
   expect_landings(kTeamQuad, "spin_landing", kReportedAfterS, false, kAll, {}, kRealism,
-                  kStillAirTiltMaxDeg);
+                  kTiltMaxDeg);
 }
 
 TEST(SpinLanding, TeamQuadLandsOnEveryMotorInWindAndGusts) {
-  expect_landings(kTeamQuad, "spin_landing_gusts", kReportedAfterS, false, kAll);
+  expect_landings(kTeamQuad, "spin_landing_gusts", kReportedAfterS, false, kAll, {}, kRealism,
+                  kTiltMaxDeg);
 }
 
 TEST(SpinLanding, QuadXLandsOnEveryMotorFoundByItsOwnDetector) {
   expect_landings(kQuadX, "spin_landing", kReportedAfterS, true, kAll,
-                  {"failure_detection.enabled=true"}, kRealism, kStillAirTiltMaxDeg);
+                  {"failure_detection.enabled=true"}, kRealism, kTiltMaxDeg);
 }
 
 TEST(SpinLanding, TeamQuadLandsOnEveryMotorFoundByItsOwnDetector) {
   expect_landings(kTeamQuad, "spin_landing", kReportedAfterS, true, kAll,
-                  {"failure_detection.enabled=true"}, kRealism, kStillAirTiltMaxDeg);
+                  {"failure_detection.enabled=true"}, kRealism, kTiltMaxDeg);
 }
 
 TEST(SpinLanding, BothQuadsFoundByTheDetectorInWindAndGusts) {
   for (const Vehicle& v : {kQuadX, kTeamQuad})
     expect_landings(v, "spin_landing_gusts", kReportedAfterS, true, kAll,
-                    {"failure_detection.enabled=true"});
+                    {"failure_detection.enabled=true"}, kRealism, kTiltMaxDeg);
 }
 
 TEST(SpinLanding, LandsWithTheVehicleOffItsConfiguration) {
@@ -218,6 +220,8 @@ TEST(SpinLanding, LandsWithTheVehicleOffItsConfiguration) {
     expect_landings(v, "spin_landing", kReportedAfterS, false, kAll, {},
                     off(&ModelError::mass, 1.0 + kModelErrorFactor));
   }
+  expect_landings(kTeamQuad, "spin_landing_gusts", kReportedAfterS, false, kAll, {},
+                  off(&ModelError::mass, 1.0 + kModelErrorFactor));
 }
 
 TEST(SpinLanding, SettlesNearTheRelaxedHoverEquilibrium) {

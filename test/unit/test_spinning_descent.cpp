@@ -194,6 +194,67 @@ TEST_F(SpinningDescentTest, TurnsTheSpinAxisBackUp) {
   EXPECT_GT((c.thrust_n - eq.thrust_n).norm(), 0.1);
 }
 
+// Before the spin is reached the two motors beside the dead one are raised
+// together as far as their range allows: both tilting torques stay what the
+// controller asked, the yaw torque (the spin-up) grows. The raise fades out
+// as the vehicle climbs toward the descent rate, and there is none without a
+// velocity or once the spin is reached.
+TEST_F(SpinningDescentTest, TheSpinUpRaisesTheMotorsBesideTheDeadOneTogether) {
+  constexpr double kTorqueToleranceNm = 1e-9;
+  constexpr double kRangeToleranceN = 1e-9;
+  const SpinningDescentModel& m = config_.motor_loss->model;
+  const double rate = config_.motor_loss->settings.descent_rate_mps;
+  const int failed = 1;
+  const SpinEquilibrium& eq = descent_.equilibrium(failed);
+  // Just taken over: upright, not spinning yet, at hover thrust.
+  const MotorVector hover = MotorVector::Constant(4, 0.35);
+  const auto fly = [&](double velocity_down) {
+    descent_.start(failed, 0, hover);
+    DescentInput in;
+    in.velocity = {0.0, 0.0, velocity_down};
+    const DescentCommand c = descent_.update(in, 2500);
+    EXPECT_FALSE(c.saturated);
+    Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+    for (int j = 0; j < 3; ++j) {
+      torque +=
+          m.torque_per_newton[static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)])] *
+          c.thrust_n[j];
+    }
+    return std::make_pair(c.thrust_n, torque);
+  };
+  const auto [descending, descending_torque] = fly(rate);   // full raise
+  const auto [climbing, climbing_torque] = fly(-rate);      // none
+  const auto [halfway, halfway_torque] = fly(-0.5 * rate);  // half
+  // Raised to the range's edge: a motor at its most or its least.
+  bool at_edge = false;
+  for (int j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+    at_edge = at_edge || descending[j] >= m.max_thrust_n[k] - kRangeToleranceN ||
+              descending[j] <= m.min_thrust_n[k] + kRangeToleranceN;
+  }
+  EXPECT_TRUE(at_edge) << descending.transpose();
+  // The velocity changes the collective, not the torques asked for.
+  EXPECT_NEAR(descending_torque.x(), climbing_torque.x(), kTorqueToleranceNm);
+  EXPECT_NEAR(descending_torque.y(), climbing_torque.y(), kTorqueToleranceNm);
+  EXPECT_NEAR(halfway_torque.x(), climbing_torque.x(), kTorqueToleranceNm);
+  // More thrust and more yaw torque, the more room the climb leaves.
+  EXPECT_GT(descending.sum(), halfway.sum());
+  EXPECT_GT(halfway.sum(), climbing.sum());
+  EXPECT_GT(std::abs(descending_torque.z()), std::abs(halfway_torque.z()));
+  EXPECT_GT(std::abs(halfway_torque.z()), std::abs(climbing_torque.z()));
+  // Without a velocity: no raise (the climb could not be bounded).
+  descent_.start(failed, 0, hover);
+  DescentInput blind;
+  blind.velocity.setConstant(kSpinNaN);
+  blind.throttle = 0.5;
+  const DescentCommand& c = descent_.update(blind, 2500);
+  double full = 0.0;
+  for (double t : m.max_thrust_n) full += t;
+  ASSERT_FALSE(c.saturated);
+  EXPECT_NEAR(c.thrust_n.sum(), blind.throttle * full,
+              kRangeToleranceN);  // the throttle's, no more
+}
+
 TEST_F(SpinningDescentTest, BrakesTheDriftOnlyOnceTheSpinIsReached) {
   // Drifting at 5 m/s: braking tilts the axis by max_tilt (8 degrees, the
   // brake asked is larger than the cap). Not before the spin is up.

@@ -43,6 +43,8 @@ constexpr double kSpinLostShare = 0.3;
 constexpr double kRateLoopLagRad = 3.14159265358979323846 / 4.0;
 constexpr double kLoopSeparation = 2.5;
 constexpr double kThrustWeight = 0.3;
+// Null-direction entries smaller than this are zero (a motor the raise leaves alone).
+constexpr double kNullEpsilon = 1e-12;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -369,6 +371,37 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
   return thrust;
 }
 
+// The spin-up, before the spin is reached: the body has no gyroscopic
+// stiffness yet, and how soon it has it depends on the yaw torque alone,
+// which is largest with the two motors beside the dead one at full thrust.
+// So the thrusts the demands asked for are raised along the one direction
+// that changes neither tilting torque (the torque rows' null direction: the
+// two motors beside the dead one together, for a quad), as far as the
+// motors' ranges allow. Its cost is a climb, bounded: the raise fades out as
+// the vehicle climbs toward descent_rate_mps (as fast up as it will come
+// down), and without a velocity there is none.
+Eigen::Vector3d SpinningDescent::spin_up(const SpinEquilibrium& eq, const Eigen::Vector3d& f,
+                                         const DescentInput& in) const {
+  if (!std::isfinite(in.velocity.z()) || std::abs(in.velocity.z()) >= detail::kMaxSpeedMps ||
+      s_.descent_rate_mps <= 0.0) {
+    return f;
+  }
+  const Eigen::Matrix3d& a = allocation_[static_cast<std::size_t>(eq.failed)];
+  Eigen::Vector3d n = Eigen::Vector3d(a.row(1)).cross(Eigen::Vector3d(a.row(2)));
+  if (a.row(0).dot(n) < 0.0) n = -n;  // the way that raises the thrust
+  double most = std::numeric_limits<double>::infinity();
+  for (Eigen::Index j = 0; j < 3; ++j) {
+    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+    if (n[j] > kNullEpsilon) most = std::min(most, (m_.max_thrust_n[k] - f[j]) / n[j]);
+    if (n[j] < -kNullEpsilon) most = std::min(most, (f[j] - m_.min_thrust_n[k]) / -n[j]);
+  }
+  if (!std::isfinite(most) || most <= 0.0) return f;
+  // NED: velocity.z is negative climbing; at -descent_rate the raise is gone.
+  const double share =
+      std::clamp((in.velocity.z() + s_.descent_rate_mps) / s_.descent_rate_mps, 0.0, 1.0);
+  return f + share * most * n;
+}
+
 const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64_t now_us) {
   if (failed_ < 0 || cmd_.phase != DescentPhase::kDescending) return cmd_;
   const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, detail::kMaxDtS);
@@ -418,6 +451,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   Eigen::Vector3d f = allocate(eq, demand);
   const Eigen::Vector3d got = allocation_[fk] * f;
   cmd_.saturated = (got - demand).cwiseAbs().maxCoeff() > 1e-6;
+  if (!spin_reached_ && !cmd_.saturated) f = spin_up(eq, f, in);
 
   // Landing: no vertical motion for landed_after_s while the velocity loop
   // asks for well under the weight (in the air that much less thrust would
