@@ -106,9 +106,6 @@ def scenario_order(s):
     return (len(base), modes.index(parts[-1]), int(parts[1][1:]), s)
 
 
-KEPT_FROM = "\n## Detected failures"
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("results")
@@ -227,20 +224,8 @@ def main():
             fig.savefig(path, dpi=80)
             plt.close(fig)
             out += [f"![{v} attitude error by strategy]({path})", ""]
-    # The sections other tools write (tools/detection_table.py,
-    # tools/spin_landing_table.py, the realism page link) follow the
-    # scorecard in the same file: kept as they are.
-    kept = ""
-    if os.path.exists(args.out):
-        previous = open(args.out).read()
-        at = previous.find(KEPT_FROM)
-        if at >= 0:
-            kept = previous[at + 1:]
-    text = "\n".join(out)
-    if kept:
-        text = text.rstrip("\n") + "\n\n" + kept
     with open(args.out, "w") as f:
-        f.write(text)
+        f.write("\n".join(out))
     print(f"{args.out} written ({len(rows)} cells)")
 
 
