@@ -35,7 +35,8 @@
 //     one are raised together (which changes neither tilting torque) as far
 //     as their range allows, so the yaw torque, and with it the spin and the
 //     stiffness it brings, comes sooner; the vehicle may climb, at most as
-//     fast as it will come down;
+//     fast as it will come down, and the raise ends after twice the spin-up
+//     the model gives (spin_up_s) even if the spin falls short;
 //   * landing: the controller says so (the loop then disarms) when the spin
 //     it had reached is lost while the vehicle is still (the ground took
 //     it: nothing in the air can), or once the descent has been flown and
@@ -168,6 +169,8 @@ class SpinningDescent {
   const SpinningDescentSettings& settings() const { return s_; }
   // The gains flown: the settings', lowered to the model's lag (see there).
   double rate_gain() const { return rate_gain_; }
+  // How long the spin-up's raise may last with motor `failed` stopped (s).
+  double spin_up_s(int failed) const { return spin_up_s_[static_cast<std::size_t>(failed)]; }
   double attitude_gain() const { return attitude_gain_; }
 
   // Takes over with motor `failed` (0-based) stopped; `thrust_fraction`:
@@ -195,6 +198,11 @@ class SpinningDescent {
   // Per failed motor: [thrust; tau_x; tau_y] of the working motors per newton, and its inverse.
   std::array<Eigen::Matrix3d, 4> allocation_{};
   std::array<Eigen::Matrix3d, 4> allocation_inverse_{};
+  // Per failed motor: the spin-up's raise (thrusts per unit, changing
+  // neither tilting torque) and how long it may last (s).
+  std::array<Eigen::Vector3d, 4> spin_up_direction_{};
+  std::array<double, 4> spin_up_s_{};
+  double since_start_s_ = 0.0;  // since the take-over
   double thrust_weight_ = 1.0;
   double rate_gain_ = 0.0;
   double attitude_gain_ = 0.0;

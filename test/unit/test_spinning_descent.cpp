@@ -13,8 +13,11 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <limits>
 
 namespace motormix::test {
@@ -242,6 +245,25 @@ TEST_F(SpinningDescentTest, TheSpinUpRaisesTheMotorsBesideTheDeadOneTogether) {
   EXPECT_GT(halfway.sum(), climbing.sum());
   EXPECT_GT(std::abs(descending_torque.z()), std::abs(halfway_torque.z()));
   EXPECT_GT(std::abs(halfway_torque.z()), std::abs(climbing_torque.z()));
+  // The raise ends after twice the spin-up the model gives, reached or not:
+  // a vehicle whose spin falls short of it still comes down.
+  const double allowed = descent_.spin_up_s(failed);
+  std::cout << "spin-up raise for at most " << allowed << " s\n";
+  EXPECT_GT(allowed, 0.5);
+  EXPECT_LT(allowed, 10.0);
+  descent_.start(failed, 0, hover);
+  DescentInput late;
+  late.velocity = {0.0, 0.0, rate};
+  const std::int64_t after_us = static_cast<std::int64_t>(allowed * 1e6) + 2500;
+  std::int64_t now_us = 0;
+  while (now_us < after_us) descent_.update(late, now_us += 2500);
+  double late_sum = 0.0;
+  for (int k = 0; k < 4; ++k) late_sum += descent_.command().thrust_fraction[k];
+  descent_.start(failed, 0, hover);
+  double early_sum = 0.0;
+  descent_.update(late, 2500);
+  for (int k = 0; k < 4; ++k) early_sum += descent_.command().thrust_fraction[k];
+  EXPECT_LT(late_sum, early_sum);
   // Without a velocity: no raise (the climb could not be bounded).
   descent_.start(failed, 0, hover);
   DescentInput blind;

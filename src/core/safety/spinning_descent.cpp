@@ -45,6 +45,9 @@ constexpr double kLoopSeparation = 2.5;
 constexpr double kThrustWeight = 0.3;
 // Null-direction entries smaller than this are zero (a motor the raise leaves alone).
 constexpr double kNullEpsilon = 1e-12;
+// The spin-up's raise lasts at most this many times the spin-up the model
+// gives at the raise's most (see the constructor).
+constexpr double kSpinUpAllowance = 2.0;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -319,6 +322,30 @@ SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
     }
     allocation_[k] = a;
     allocation_inverse_[k] = a.inverse();
+    // The spin-up's direction: the torque rows' null direction, the way
+    // that raises the thrust.
+    Eigen::Vector3d n = Eigen::Vector3d(a.row(1)).cross(Eigen::Vector3d(a.row(2)));
+    if (a.row(0).dot(n) < 0.0) n = -n;
+    spin_up_direction_[k] = n;
+    // How long the spin-up takes at most: the yaw acceleration with the
+    // raised motors at full thrust and the other at its least brings the
+    // body to the spin that counts as reached in this long; the raise is
+    // given twice that (the model can be wrong, a gust can hold the spin
+    // back) and then ends, whatever the spin, so that a vehicle whose spin
+    // falls short of it (lighter or draggier than configured) still comes
+    // down.
+    double yaw = 0.0;
+    for (Eigen::Index j = 0; j < 3; ++j) {
+      const auto motor =
+          static_cast<std::size_t>(equilibria_[k].working[static_cast<std::size_t>(j)]);
+      const double thrust =
+          std::abs(n[j]) > kNullEpsilon ? m_.max_thrust_n[motor] : m_.min_thrust_n[motor];
+      yaw += m_.torque_per_newton[motor].z() * thrust;
+    }
+    const double reach = kSpinReachedShare * equilibria_[k].rates.norm();
+    spin_up_s_[k] = std::abs(yaw) > 0.0 && std::isfinite(reach)
+                        ? kSpinUpAllowance * m_.inertia_kgm2.z() * reach / std::abs(yaw)
+                        : 0.0;
   }
   cmd_.thrust_fraction.setZero(4);
   // Thrust counts for this much of a torque error of its newton times the
@@ -348,6 +375,7 @@ void SpinningDescent::start(int failed, std::int64_t now_us, const MotorVector& 
   velocity_integral_ = 0.0;
   up_force_ = 0.0;
   still_s_ = 0.0;
+  since_start_s_ = 0.0;
   descending_s_ = 0.0;
   descended_ = false;
   spin_reached_ = false;
@@ -371,7 +399,8 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
   return thrust;
 }
 
-// The spin-up, before the spin is reached: the body has no gyroscopic
+// The spin-up, before the spin is reached (and for twice as long at most as
+// the model says it takes): the body has no gyroscopic
 // stiffness yet, and how soon it has it depends on the yaw torque alone,
 // which is largest with the two motors beside the dead one at full thrust.
 // So the thrusts the demands asked for are raised along the one direction
@@ -386,9 +415,9 @@ Eigen::Vector3d SpinningDescent::spin_up(const SpinEquilibrium& eq, const Eigen:
       s_.descent_rate_mps <= 0.0) {
     return f;
   }
-  const Eigen::Matrix3d& a = allocation_[static_cast<std::size_t>(eq.failed)];
-  Eigen::Vector3d n = Eigen::Vector3d(a.row(1)).cross(Eigen::Vector3d(a.row(2)));
-  if (a.row(0).dot(n) < 0.0) n = -n;  // the way that raises the thrust
+  const auto fk = static_cast<std::size_t>(eq.failed);
+  if (since_start_s_ >= spin_up_s_[fk]) return f;
+  const Eigen::Vector3d& n = spin_up_direction_[fk];
   double most = std::numeric_limits<double>::infinity();
   for (Eigen::Index j = 0; j < 3; ++j) {
     const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
@@ -406,6 +435,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   if (failed_ < 0 || cmd_.phase != DescentPhase::kDescending) return cmd_;
   const double dt = std::clamp(static_cast<double>(now_us - last_us_) / 1e6, 0.0, detail::kMaxDtS);
   last_us_ = now_us;
+  since_start_s_ += dt;
   // The loop's checks keep non-finite inputs out; should one arrive anyway,
   // the previous command stands (it is inside the motors' range).
   if (!in.attitude.coeffs().allFinite() || in.attitude.norm() < 0.5 || !in.rates.allFinite()) {
