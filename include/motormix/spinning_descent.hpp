@@ -169,9 +169,9 @@ class SpinningDescent {
   const SpinningDescentSettings& settings() const { return s_; }
   // The gains flown: the settings', lowered to the model's lag (see there).
   double rate_gain() const { return rate_gain_; }
+  double attitude_gain() const { return attitude_gain_; }
   // How long the spin-up's raise may last with motor `failed` stopped (s).
   double spin_up_s(int failed) const { return spin_up_s_[static_cast<std::size_t>(failed)]; }
-  double attitude_gain() const { return attitude_gain_; }
 
   // Takes over with motor `failed` (0-based) stopped; `thrust_fraction`:
   // what each motor was asked for last (for the rotors' momentum).

@@ -5,9 +5,10 @@
 # own detector, ESC telemetry and rates, finds it, as a real stack would
 # without a motor_status publisher), once reported on motor_status 100 ms
 # later; a third time with motors 1 and 2 (opposite) stopping together,
-# found by the detector, landing on the other two; and a fourth with motor 1
+# found by the detector, landing on the other two; a fourth with motor 1
 # throwing its prop (its thrust gone at once, the unloaded motor running
-# fast), found by the detector from its ESC telemetry. The simulated vehicle
+# fast) and a fifth with its prop's tip broken (45 % less thrust, the motor
+# 11 % fast), each found by the detector from its ESC telemetry. The simulated vehicle
 # publishes its attitude, rates and velocity.
 # Each flight passes when the quad did not crash, touched down no faster
 # than 2 m/s, and the mixer logged taking over and disarming on touchdown.
@@ -56,4 +57,6 @@ fly "two opposite motors, found by the detector" 'landing spinning on the other 
   --undetected --no-scenario-failures --fail 1@8 --fail 2@8
 fly "a thrown prop, found by the detector" 'landing spinning on the other three' \
   --undetected --no-scenario-failures --fail 1@8:prop_lost
+fly "a broken prop tip, found by the detector" 'landing spinning on the other three' \
+  --undetected --no-scenario-failures --fail 1@8:prop_damaged
 exit $failed

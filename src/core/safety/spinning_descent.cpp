@@ -399,8 +399,7 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
   return thrust;
 }
 
-// The spin-up, before the spin is reached (and for twice as long at most as
-// the model says it takes): the body has no gyroscopic
+// The spin-up, before the spin is reached: the body has no gyroscopic
 // stiffness yet, and how soon it has it depends on the yaw torque alone,
 // which is largest with the two motors beside the dead one at full thrust.
 // So the thrusts the demands asked for are raised along the one direction
@@ -408,7 +407,8 @@ double SpinningDescent::collective(const DescentInput& in, const Eigen::Vector3d
 // two motors beside the dead one together, for a quad), as far as the
 // motors' ranges allow. Its cost is a climb, bounded: the raise fades out as
 // the vehicle climbs toward descent_rate_mps (as fast up as it will come
-// down), and without a velocity there is none.
+// down), there is none without a velocity, and it ends after spin_up_s_
+// (twice the spin-up the model gives) whatever the spin.
 Eigen::Vector3d SpinningDescent::spin_up(const SpinEquilibrium& eq, const Eigen::Vector3d& f,
                                          const DescentInput& in) const {
   if (!std::isfinite(in.velocity.z()) || std::abs(in.velocity.z()) >= detail::kMaxSpeedMps ||
