@@ -13,8 +13,6 @@
 
 #include <gtest/gtest.h>
 
-#include <iostream>
-
 #include <algorithm>
 #include <cmath>
 #include <iostream>
