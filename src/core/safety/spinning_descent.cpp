@@ -1,23 +1,17 @@
 #include <motormix/spinning_descent.hpp>
 
 #include "descent_collective.hpp"
+#include "spin_dynamics.hpp"
 
 #include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 namespace motormix {
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-constexpr int kNewtonIterations = 100;
-constexpr double kNewtonTolerance = 1e-10;
-// Largest share of a motor's thrust the equilibrium may use: the rest is
-// what the controller has to tilt the spin axis with.
-constexpr double kEquilibriumHeadroom = 0.92;
 // Below this vertical speed (fraction of the descent rate) the vehicle is
 // not moving; landed when that lasts while the thrust asked for is below
 // this share of the weight.
@@ -49,11 +43,6 @@ constexpr double kNullEpsilon = 1e-12;
 // gives at the raise's most (see the constructor).
 constexpr double kSpinUpAllowance = 2.0;
 
-using Vector6d = Eigen::Matrix<double, 6, 1>;
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
-
-Eigen::Vector2d planar(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
-
 // The rate at which a first-order lag T and a delay d cost kRateLoopLagRad
 // of phase: atan(w T) + w d = kRateLoopLagRad, increasing in w (bisection).
 double lag_limited_gain(double lag_s, double delay_s) {
@@ -65,178 +54,7 @@ double lag_limited_gain(double lag_s, double delay_s) {
   return lo;
 }
 
-struct Layout {
-  std::array<int, 3> working{};
-  int opposite = 0;                 // index into working: the motor across from the dead one
-  std::array<int, 2> neighbours{};  // indices into working: the two beside it
-};
-
-Layout layout(const SpinningDescentModel& m, int failed) {
-  Layout l;
-  int n = 0;
-  for (int k = 0; k < 4; ++k) {
-    if (k != failed) l.working[static_cast<std::size_t>(n++)] = k;
-  }
-  // The torque per newton across the thrust axis is the arm turned by 90
-  // degrees, so distances between those are distances between the rotors.
-  const Eigen::Vector2d dead = planar(m.torque_per_newton[static_cast<std::size_t>(failed)]);
-  double far = -1.0;
-  for (int j = 0; j < 3; ++j) {
-    const auto k = static_cast<std::size_t>(l.working[static_cast<std::size_t>(j)]);
-    const double d = (planar(m.torque_per_newton[k]) - dead).norm();
-    if (d > far) {
-      far = d;
-      l.opposite = j;
-    }
-  }
-  int b = 0;
-  for (int j = 0; j < 3; ++j) {
-    if (j != l.opposite) l.neighbours[static_cast<std::size_t>(b++)] = j;
-  }
-  return l;
-}
-
-// Force and torque of the working motors' thrusts f (body).
-Eigen::Vector3d force_of(const SpinningDescentModel& m, const Layout& l, const Eigen::Vector3d& f) {
-  Eigen::Vector3d F = Eigen::Vector3d::Zero();
-  for (std::size_t j = 0; j < 3; ++j)
-    F += m.axis[static_cast<std::size_t>(l.working[j])] * f[static_cast<Eigen::Index>(j)];
-  return F;
-}
-
-Eigen::Vector3d torque_of(const SpinningDescentModel& m, const Layout& l,
-                          const Eigen::Vector3d& f) {
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  for (std::size_t j = 0; j < 3; ++j)
-    t += m.torque_per_newton[static_cast<std::size_t>(l.working[j])] *
-         f[static_cast<Eigen::Index>(j)];
-  return t;
-}
-
-// The rotors' angular momentum with the working motors at thrusts f.
-Eigen::Vector3d rotor_momentum(const SpinningDescentModel& m, const std::array<int, 3>& working,
-                               const Eigen::Vector3d& f) {
-  Eigen::Vector3d h = Eigen::Vector3d::Zero();
-  if (m.rotor_inertia_kgm2 <= 0.0) return h;
-  for (std::size_t j = 0; j < 3; ++j) {
-    const auto k = static_cast<std::size_t>(working[j]);
-    const double share = std::max(f[static_cast<Eigen::Index>(j)], 0.0) / m.max_thrust_n[k];
-    h += m.spin[k] * m.rotor_inertia_kgm2 * m.max_rotor_speed_rad_s * std::sqrt(share) * m.axis[k];
-  }
-  return h;
-}
-
-// What the rotors must supply to hold body rates w: w x (Iw + h) + drag.
-Eigen::Vector3d holding_torque(const SpinningDescentModel& m, const Eigen::Vector3d& w,
-                               const Eigen::Vector3d& h) {
-  return w.cross(m.inertia_kgm2.cwiseProduct(w) + h) + m.rotational_drag * w;
-}
-
-// The spin axis, pointing the way the thrust pushes.
-Eigen::Vector3d up_axis(const Eigen::Vector3d& w, const Eigen::Vector3d& force) {
-  const double norm = w.norm();
-  if (norm <= 0.0) return -Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d n = w / norm;
-  return n.dot(force) >= 0.0 ? n : Eigen::Vector3d(-n);
-}
-
-constexpr int kMomentumSteps = 8;
-
-Vector6d residual(const SpinningDescentModel& m, const Layout& l, double spin, const Vector6d& x) {
-  const Eigen::Vector3d f = x.head<3>();
-  const Eigen::Vector3d w = x.tail<3>();
-  const Eigen::Vector3d F = force_of(m, l, f);
-  Vector6d r;
-  r.head<3>() = torque_of(m, l, f) - holding_torque(m, w, rotor_momentum(m, l.working, f));
-  r[3] = (up_axis(w, F).dot(F) - m.mass_kg * kStandardGravity) / (m.mass_kg * kStandardGravity);
-  r[4] = (w.norm() - spin) / spin;
-  r[5] = (f[l.neighbours[0]] - f[l.neighbours[1]]) / (m.mass_kg * kStandardGravity);
-  return r;
-}
-
-// Newton's method with a halving line search from x; returns the last
-// residual's norm.
-double newton(const SpinningDescentModel& m, const Layout& l, double spin_rate, Vector6d& x) {
-  Vector6d r = residual(m, l, spin_rate, x);
-  for (int it = 0; it < kNewtonIterations && r.norm() > kNewtonTolerance; ++it) {
-    Matrix6d jac;
-    for (int c = 0; c < 6; ++c) {
-      Vector6d xh = x;
-      const double h = 1e-7 * std::max(1.0, std::abs(x[c]));
-      xh[c] += h;
-      jac.col(c) = (residual(m, l, spin_rate, xh) - r) / h;
-    }
-    const Vector6d step = jac.fullPivLu().solve(-r);
-    double scale = 1.0;
-    Vector6d next = x + step;
-    Vector6d rn = residual(m, l, spin_rate, next);
-    for (int half = 0; half < 30 && !(rn.norm() < r.norm()); ++half) {
-      scale /= 2.0;
-      next = x + scale * step;
-      rn = residual(m, l, spin_rate, next);
-    }
-    if (!(rn.norm() < r.norm())) break;
-    x = next;
-    r = rn;
-  }
-  return r.norm();
-}
-
 }  // namespace
-
-SpinEquilibrium solve_spin_equilibrium(const SpinningDescentModel& m, int failed,
-                                       double spin_rate) {
-  SpinEquilibrium eq;
-  eq.failed = failed;
-  const Layout l = layout(m, failed);
-  eq.working = l.working;
-  const double weight = m.mass_kg * kStandardGravity;
-  // Start level, spinning the way the two neighbours' drag turns the body.
-  Vector6d x;
-  x.head<3>().setConstant(weight / 3.0);
-  double yaw = 0.0;
-  for (int b : l.neighbours)
-    yaw +=
-        m.torque_per_newton[static_cast<std::size_t>(l.working[static_cast<std::size_t>(b)])].z();
-  x.tail<3>() = Eigen::Vector3d(0.0, 0.0, yaw >= 0.0 ? spin_rate : -spin_rate);
-  // The rotors' momentum moves the solution far from that start: solve
-  // without it first, then add it in steps, each starting from the last
-  // solution (continuation).
-  SpinningDescentModel stepped = m;
-  for (int k = 0; k <= kMomentumSteps; ++k) {
-    stepped.rotor_inertia_kgm2 = m.rotor_inertia_kgm2 * k / kMomentumSteps;
-    newton(stepped, l, spin_rate, x);
-    if (m.rotor_inertia_kgm2 <= 0.0) break;
-  }
-  const Vector6d r = residual(m, l, spin_rate, x);
-  std::ostringstream why;
-  if (!(r.norm() <= 1e-8)) {
-    why << "no relaxed hover at " << spin_rate << " rad/s with motor " << failed + 1
-        << " stopped (the equations did not converge)";
-    eq.why = why.str();
-    return eq;
-  }
-  eq.thrust_n = x.head<3>();
-  eq.rates = x.tail<3>();
-  const Eigen::Vector3d F = force_of(m, l, eq.thrust_n);
-  eq.up = up_axis(eq.rates, F);
-  eq.axis_tilt_deg = std::acos(std::clamp(eq.up.dot(F.normalized()), -1.0, 1.0)) * kDegPerRad;
-  for (std::size_t j = 0; j < 3; ++j) {
-    const auto k = static_cast<std::size_t>(l.working[j]);
-    const double f = eq.thrust_n[static_cast<Eigen::Index>(j)];
-    if (f > kEquilibriumHeadroom * m.max_thrust_n[k] || f < m.min_thrust_n[k]) {
-      why.precision(3);
-      why << "with motor " << failed + 1 << " stopped, spinning at " << spin_rate
-          << " rad/s needs motor " << k + 1 << " at " << f << " N, outside " << m.min_thrust_n[k]
-          << ".." << kEquilibriumHeadroom * m.max_thrust_n[k] << " N (its idle to "
-          << kEquilibriumHeadroom * 100 << " % of its thrust)";
-      eq.why = why.str();
-      return eq;
-    }
-  }
-  eq.found = true;
-  return eq;
-}
 
 Eigen::Vector3d SpinningDescent::allocate(const SpinEquilibrium& eq,
                                           const Eigen::Vector3d& demand) const {
@@ -293,15 +111,6 @@ Eigen::Vector3d SpinningDescent::allocate(const SpinEquilibrium& eq,
   return best;
 }
 
-SpinEquilibria solve_spin_equilibria(const SpinningDescentModel& model, double spin_rate_rad_s) {
-  SpinEquilibria equilibria;
-  for (int failed = 0; failed < 4; ++failed) {
-    equilibria[static_cast<std::size_t>(failed)] =
-        solve_spin_equilibrium(model, failed, spin_rate_rad_s);
-  }
-  return equilibria;
-}
-
 SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
                                  const SpinningDescentSettings& settings)
     : SpinningDescent(model, settings, solve_spin_equilibria(model, settings.spin_rate_rad_s)) {}
@@ -351,7 +160,7 @@ SpinningDescent::SpinningDescent(const SpinningDescentModel& model,
   // Thrust counts for this much of a torque error of its newton times the
   // mean arm: height can be lost for a moment, the attitude cannot.
   double arm = 0.0;
-  for (const Eigen::Vector3d& t : m_.torque_per_newton) arm += planar(t).norm() / 4.0;
+  for (const Eigen::Vector3d& t : m_.torque_per_newton) arm += detail::planar(t).norm() / 4.0;
   thrust_weight_ = kThrustWeight * arm;
   // A rate loop faster than its lag allows rings: with a 40 ms motor lag and
   // the 5.6 ms of a 40 Hz gyro filter, 30/s leaves 30 degrees of phase and
@@ -457,7 +266,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   if (!spin_reached_) braking.max_tilt_deg = 0.0;
   const Eigen::Vector3d desired = detail::wanted_up_body(braking, in, rot);
   const Eigen::Vector3d& axis = eq.up;
-  cmd_.axis_error_deg = std::acos(std::clamp(axis.dot(desired), -1.0, 1.0)) * kDegPerRad;
+  cmd_.axis_error_deg = std::acos(std::clamp(axis.dot(desired), -1.0, 1.0)) * detail::kDegPerRad;
 
   // Reduced attitude: rates across the axis turn it toward `desired`; the
   // rate about it is whatever it is.
@@ -469,7 +278,8 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   // lag, (1 + T s) for a vector turning at -spin about the axis.
   const double spin = w.dot(axis);
   feedback -= m_.time_constant_s * spin * axis.cross(feedback);
-  const Eigen::Vector3d hold = holding_torque(m_, w, rotor_momentum(m_, eq.working, lagged_n_));
+  const Eigen::Vector3d hold =
+      detail::holding_torque(m_, w, detail::rotor_momentum(m_, eq.working, lagged_n_));
 
   const Eigen::Vector3d up_body = rot.transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
   const double thrust = collective(in, up_body, dt);

@@ -1,6 +1,7 @@
 #include <motormix/two_rotor_descent.hpp>
 
 #include "descent_collective.hpp"
+#include "spin_dynamics.hpp"
 
 #include <Eigen/LU>
 
@@ -12,7 +13,8 @@ namespace motormix {
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+using detail::kDegPerRad;
+using detail::planar;
 // The two rotors left must push through the centre of mass from opposite
 // sides: their arms within this angle of opposite.
 constexpr double kOppositeToleranceDeg = 15.0;
@@ -51,8 +53,6 @@ using StateMatrix = Eigen::Matrix<double, TwoRotorDescent::kStates, TwoRotorDesc
 using InputVector = Eigen::Matrix<double, TwoRotorDescent::kStates, 1>;
 constexpr int kAugmented = TwoRotorDescent::kStates + 1;
 using AugmentedMatrix = Eigen::Matrix<double, kAugmented, kAugmented>;
-
-Eigen::Vector2d planar(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
 
 constexpr std::array<std::array<int, 2>, 6> kPairs{
     {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
