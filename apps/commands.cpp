@@ -106,8 +106,9 @@ int output(const OutputCommand& cmd) {
     // The key first: a configuration whose key cannot be read is not valid.
     if (!check_security(*config, "output")) return kExitUsage;
     const config::Hardware& hw = config->hardware;
-    std::cout << "hardware: " << config::to_string(hw.driver) << ", " << config->motors()
-              << " motors at " << hw.pulse_rate_hz
+    std::cout << "hardware: " << config::to_string(hw.driver) << ", "
+              << config::to_string(hw.protocol) << (hw.bidirectional ? " bidirectional" : "")
+              << ", " << config->motors() << " motors at " << hw.pulse_rate_hz
               << " Hz, disarmed when motor_pwm_t is older than " << hw.motor_pwm_timeout_s * 1e3
               << " ms";
     if (hw.driver == config::HardwareDriver::kSerial) {

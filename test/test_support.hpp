@@ -10,6 +10,8 @@
 #include <motormix/config/load_config.hpp>
 
 #include <cstdint>
+#include <cstdio>
+#include <random>
 #include <string>
 
 namespace motormix::test {
@@ -46,5 +48,26 @@ inline bool in_sim_grid(int motor, int motors) {
   return !reduced_sim_grid() || motor == 0 || motor == motors - 1;
 }
 inline int sim_grid_seeds(int full) { return reduced_sim_grid() ? 1 : full; }
+
+// The first seed of a closed-loop campaign: drawn fresh on every run, so that
+// a campaign never settles on seeds it was tuned on, and printed once so that
+// a failure can be replayed with MOTORMIX_SIM_SEED=N (which also pins it).
+// Campaigns take seeds base, base + 1, ... (up to 10^6 beyond it).
+inline std::uint64_t campaign_seed_base() {
+  static const std::uint64_t base = [] {
+    std::uint64_t b = 0;
+    if (const char* v = std::getenv("MOTORMIX_SIM_SEED"); v != nullptr && *v != '\0') {
+      b = std::strtoull(v, nullptr, 10);
+    } else {
+      std::random_device device;
+      b = 1'000'000 + (static_cast<std::uint64_t>(device()) % 1'000'000'000ULL);
+    }
+    std::printf("closed-loop campaign seeds from %llu (replay: MOTORMIX_SIM_SEED=%llu)\n",
+                static_cast<unsigned long long>(b), static_cast<unsigned long long>(b));
+    std::fflush(stdout);
+    return b;
+  }();
+  return base;
+}
 
 }  // namespace motormix::test

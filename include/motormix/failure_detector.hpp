@@ -8,6 +8,9 @@
 //   current as thrust^1.5; the scale (kv, pack voltage, prop) is not needed:
 //   each motor's ratio is compared with the median ratio of the motors
 //   reporting, so a sagging battery moves them all and triggers nothing.
+//   A motor following its command through the configured time constants is
+//   never too slow, whether the lag acts on its thrust or on its speed (as
+//   in most simulators: its thrust then falls twice as fast).
 //   One ESC going silent while the others keep reporting is a failure too,
 //   but only where stopping that motor costs nothing the vehicle needs
 //   (silence_declares: six rotors or more, which keep every axis without
@@ -57,6 +60,11 @@
 
 namespace motormix {
 
+// An ESC is silent after this many of its own reporting intervals without a
+// reading (and at least telemetry_timeout_s): with 3 % of frames lost, six
+// in a row are lost about once in a billion intervals.
+inline constexpr double kSilentIntervals = 6.0;
+
 enum class DetectionSource : std::uint8_t {
   kNone = 0,
   kTelemetry = 1,        // rpm or current implausible for the command
@@ -95,7 +103,12 @@ struct FailureDetectorSettings {
   double min_motor_thrust = 0.08;
 
   // Telemetry.
-  double telemetry_timeout_s = 0.1;   // a reading older than this is stale (silent)
+  // A reading older than this is not judged. An ESC is silent once its
+  // last reading is older than this and than kSilentIntervals of its own
+  // reporting interval (learned from its readings): an ESC asked in turn
+  // with seven others reports a few times a second, and its pauses are no
+  // silence.
+  double telemetry_timeout_s = 0.1;
   double telemetry_persist_s = 0.01;  // a suspicion held this long is declared
   // How late a reading may arrive after its ESC measured it (serial
   // telemetry's frame, the ESC's averaging, the request round-robin): a
@@ -205,8 +218,11 @@ class FailureDetector {
   struct EscState {
     double rpm = 0.0, current = 0.0;
     std::int64_t received_us = 0;
+    double interval_s = 0.0;  // its reporting interval, learned (0: not yet)
     bool any = false;
   };
+  // Whether motor i's ESC has gone silent by now_us (see telemetry_timeout_s).
+  bool silent(std::size_t i, std::int64_t now_us) const;
 
   FailureDetectorSettings s_;
   Detection detection_;
@@ -216,6 +232,12 @@ class FailureDetector {
   // telemetry's latency window.
   static constexpr int kLagHistory = 64;
   std::array<std::array<double, kMaxMotors>, kLagHistory> lag_history_{};
+  // Each motor's speed fraction (the square root of its thrust fraction)
+  // through the same lag, and over the last cycles the lesser of the two
+  // lags' thrusts: a motor slowing (or speeding up) as either lag has it
+  // follows its command, and is not too slow.
+  std::array<double, kMaxMotors> speed_lagged_{};
+  std::array<std::array<double, kMaxMotors>, kLagHistory> lag_low_history_{};
   std::array<std::int64_t, kLagHistory> lag_history_us_{};
   int lag_head_ = 0, lag_count_ = 0;
   // Each rotor's speed (rad/s) from lagged_ at the previous update.

@@ -2,6 +2,8 @@
 
 #include "failure_detection_reader.hpp"
 
+#include <motormix/config/hover_point.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -19,6 +21,17 @@ constexpr int kReallocatingRotors = 6;
 // Default smallest rates residual judged, as a fraction of the smallest
 // torque one motor gives at hover: gusts and model error stay below it.
 constexpr double kMinResidualOfHoverTorque = 0.3;
+// The gates that must be open in hover default to fractions of it: the
+// setpoint throttle (min_throttle) and each motor's thrust fraction
+// (min_motor_thrust). Half the hover throttle is on the ground or climbing
+// off it; a sixth of a motor's hover thrust (0.08 on a vehicle hovering at
+// half thrust) is where its rpm, 40 % of its hover rpm, still stands well
+// above the ESC's idle noise. Without a vehicle that hovers, the fixed
+// defaults (a quad hovering near half throttle).
+constexpr double kMinThrottleOfHover = 0.5;
+constexpr double kMinMotorThrustOfHover = 0.16;
+constexpr double kMinThrottleFallback = 0.25;
+constexpr double kMinMotorThrustFallback = 0.08;
 
 std::uint8_t bit(DetectorSources s) { return static_cast<std::uint8_t>(s); }
 
@@ -100,7 +113,22 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   FailureDetectorSettings& s = fd.detector;
   s.motors = config.motors();
   s.sources = read_sources(section);
-  fd.min_throttle = section.number("min_throttle", 0.25, 0.0, 1.0);
+  const HoverPoint hover = hover_point(config);
+  fd.min_throttle = section.number(
+      "min_throttle", hover.known ? kMinThrottleOfHover * hover.throttle : kMinThrottleFallback,
+      0.0, 1.0);
+  // A gate the hover stays below would keep the detector off for the whole
+  // flight: refused, with the hover it must stay under.
+  const auto below_hover = [&](MapReader& where, const char* key, double value, double at_hover,
+                               const char* what) {
+    if (!enabled || !hover.known || value < at_hover) return;
+    std::ostringstream found, allowed;
+    found << value;
+    allowed << "below " << at_hover << ", the " << what
+            << " at which the `vehicle:` section hovers (the detector judges nothing below it)";
+    fail(where.path_of(key), found.str(), allowed.str());
+  };
+  below_hover(section, "min_throttle", fd.min_throttle, hover.throttle, "setpoint throttle");
   fd.motor_poles = static_cast<int>(section.number("motor_poles", 14, 2, 100));
   if (fd.motor_poles % 2 != 0) {
     fail(section.path_of("motor_poles"), std::to_string(fd.motor_poles),
@@ -122,7 +150,11 @@ void read_failure_detection(MapReader section, bool present, Config& config) {
   // axis: six rotors or more. A quad gives up yaw and altitude for a motor
   // it stops, so a dead wire there must never look like a dead motor.
   s.silence_declares = s.motors >= kReallocatingRotors;
-  s.min_motor_thrust = section.number("min_motor_thrust", 0.08, 0.0, 0.9);
+  s.min_motor_thrust = section.number(
+      "min_motor_thrust",
+      hover.known ? kMinMotorThrustOfHover * hover.thrust : kMinMotorThrustFallback, 0.0, 0.9);
+  below_hover(section, "min_motor_thrust", s.min_motor_thrust, hover.thrust,
+              "thrust fraction of each motor");
   telemetry.finish();
 
   MapReader rates = section.map("rates");

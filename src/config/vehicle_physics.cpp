@@ -7,6 +7,7 @@
 #include "config/yaml_reader.hpp"
 #include "section_readers.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -217,6 +218,14 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
     }
     const std::string rotor_path = vehicle.path_of("rotors");
     const int n = static_cast<int>(rotors.size());
+    // Whether the weight and the rotors' thrust are the configuration's own
+    // (not defaults from the geometry): what hovers where is then known.
+    bool thrust_given = vehicle.has("max_thrust_n");
+    if (!thrust_given && !entries.empty()) {
+      thrust_given = std::all_of(entries.begin(), entries.end(),
+                                 [](const RotorEntry& e) { return e.max_thrust_n.has_value(); });
+    }
+    v.weight_and_thrust_given = vehicle.has("mass_kg") && thrust_given;
     v.mass_kg = vehicle.number("mass_kg", kMassPerRotorKg * std::max(n, 2), 0.01, 1e4);
     const double weight = v.mass_kg * kGravity;
     const double thrust =
@@ -252,6 +261,7 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
   v.time_constant_up_s = vehicle.number("time_constant_up_s", v.time_constant_up_s, 1e-4, 5.0);
   v.time_constant_down_s =
       vehicle.number("time_constant_down_s", v.time_constant_down_s, 1e-4, 5.0);
+  v.motor_lag = vehicle.choice("motor_lag", MotorLag::kThrust, kMotorLagNames);
   if (!v.wheeled) {
     v.prop_diameter_m =
         vehicle.number("prop_diameter_m", default_prop_diameter(v.rotors), 0.01, 10.0);

@@ -142,17 +142,28 @@ Rejection ControlLoop::on_esc_telemetry(const EscTelemetrySample& sample, std::i
                                         std::int64_t wall_us) {
   if (!reads_esc_telemetry()) return Rejection::kNone;
   if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
-  const Rejection rejection = check_esc_telemetry(sample, mixer_.motors(), esc_last_utime_);
-  count(rejection);
-  if (rejection != Rejection::kNone) return rejection;
+  const EscTelemetryVerdict verdict = check_esc_telemetry(sample, mixer_.motors(), esc_last_utime_);
+  if (verdict.message != Rejection::kNone) {
+    count(verdict.message);
+    return verdict.message;
+  }
+  // Each refused reading is counted under its reason; the others are read.
+  Rejection first_refusal = Rejection::kNone;
+  for (int i = 0; i < sample.count; ++i) {
+    const Rejection r = verdict.reading[static_cast<std::size_t>(i)];
+    count(r);
+    if (first_refusal == Rejection::kNone) first_refusal = r;
+  }
+  if (verdict.taken == 0) return first_refusal;
   ++counters_.esc_telemetry_received;
   esc_received_us_ = now_us;
   for (int i = 0; i < sample.count; ++i) {
+    if (((verdict.taken >> i) & 1U) == 0) continue;
     const int motor = sample.readings[static_cast<std::size_t>(i)].motor;
     esc_last_utime_[static_cast<std::size_t>(motor - 1)] = sample.utime;
   }
-  detection_->on_telemetry(sample, now_us);
-  return rejection;
+  detection_->on_telemetry(sample, verdict.taken, now_us);
+  return Rejection::kNone;
 }
 
 Rejection ControlLoop::on_attitude(const AttitudeSample& sample, std::int64_t now_us,

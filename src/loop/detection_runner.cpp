@@ -23,8 +23,10 @@ DetectionRunner::DetectionRunner(const config::Config& config)
   thrust_.setZero(config.motors());
 }
 
-void DetectionRunner::on_telemetry(const EscTelemetrySample& sample, std::int64_t now_us) {
+void DetectionRunner::on_telemetry(const EscTelemetrySample& sample, std::uint32_t taken,
+                                   std::int64_t now_us) {
   for (int i = 0; i < sample.count; ++i) {
+    if (((taken >> i) & 1U) == 0) continue;
     const EscReading& r = sample.readings[static_cast<std::size_t>(i)];
     const double rpm = std::isfinite(r.rpm) ? r.rpm : r.erpm / pole_pairs_;  // NaN stays NaN
     detector_.on_telemetry(r.motor - 1, rpm, r.current_a, now_us);

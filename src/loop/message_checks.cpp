@@ -68,34 +68,42 @@ constexpr double kUnitTolerance = 0.01;
 
 }  // namespace
 
-Rejection check_esc_telemetry(const EscTelemetrySample& t, int motors,
-                              const std::array<std::int64_t, kMaxEscReadings>& last_utime) {
-  if (t.count < 1 || t.count > kMaxEscReadings || t.count > motors) return Rejection::kWrongSize;
-  std::uint32_t seen = 0;
-  Rejection order = Rejection::kNone;
+EscTelemetryVerdict check_esc_telemetry(
+    const EscTelemetrySample& t, int motors,
+    const std::array<std::int64_t, kMaxEscReadings>& last_utime) {
+  EscTelemetryVerdict v;
+  if (t.count < 1 || t.count > kMaxEscReadings) {
+    v.message = Rejection::kWrongSize;
+    return v;
+  }
+  const std::pair<double, double> ranges[] = {{0.0, kMaxRpm},
+                                              {0.0, kMaxRpm},
+                                              {kMinCurrentA, kMaxCurrentA},
+                                              {0.0, kMaxVoltageV},
+                                              {kMinTemperatureC, kMaxTemperatureC},
+                                              {0.0, kMaxConsumptionMah}};
   for (int i = 0; i < t.count; ++i) {
     const EscReading& r = t.readings[static_cast<std::size_t>(i)];
-    if (r.motor < 1 || r.motor > motors || ((seen >> r.motor) & 1U) != 0) {
-      return Rejection::kOutOfRange;  // no such motor, or named twice
+    Rejection& verdict = v.reading[static_cast<std::size_t>(i)];
+    if (r.motor < 1 || r.motor > motors) {
+      verdict = Rejection::kOutOfRange;  // no such motor
+    } else {
+      const double values[] = {r.rpm,       r.erpm,          r.current_a,
+                               r.voltage_v, r.temperature_c, r.consumption_mah};
+      for (std::size_t k = 0; k < std::size(values) && verdict == Rejection::kNone; ++k) {
+        verdict = check_optional(values[k], ranges[k].first, ranges[k].second);
+      }
+      if (verdict == Rejection::kNone) {
+        verdict = check_order(t.utime, last_utime[static_cast<std::size_t>(r.motor - 1)]);
+      }
     }
-    seen |= 1U << r.motor;
-    const std::pair<double, double> ranges[] = {{0.0, kMaxRpm},
-                                                {0.0, kMaxRpm},
-                                                {kMinCurrentA, kMaxCurrentA},
-                                                {0.0, kMaxVoltageV},
-                                                {kMinTemperatureC, kMaxTemperatureC},
-                                                {0.0, kMaxConsumptionMah}};
-    const double values[] = {r.rpm,       r.erpm,          r.current_a,
-                             r.voltage_v, r.temperature_c, r.consumption_mah};
-    for (std::size_t k = 0; k < std::size(values); ++k) {
-      const Rejection field = check_optional(values[k], ranges[k].first, ranges[k].second);
-      if (field != Rejection::kNone) return field;
-    }
-    if (order == Rejection::kNone) {
-      order = check_order(t.utime, last_utime[static_cast<std::size_t>(r.motor - 1)]);
+    if (verdict == Rejection::kNone) {
+      v.taken |= 1U << i;
+    } else {
+      ++v.refused;
     }
   }
-  return order;
+  return v;
 }
 
 namespace {

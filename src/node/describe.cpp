@@ -1,5 +1,6 @@
 #include "node/describe.hpp"
 
+#include <motormix/config/hover_point.hpp>
 #include <motormix/config/security.hpp>
 
 #include <sstream>
@@ -31,6 +32,16 @@ std::vector<std::string> describe_run(const config::Config& c) {
     if (uses(DetectorSources::kTelemetry)) s << " telemetry (" << c.channels.esc_telemetry << ")";
     if (uses(DetectorSources::kRates)) s << " rates (" << c.channels.attitude << ")";
     if (uses(DetectorSources::kOutputs)) s << " outputs";
+    // The gates, beside the hover they are fractions of: a reader sees at
+    // once whether detection runs in hover.
+    const config::HoverPoint hover = config::hover_point(c);
+    s << "; judges from throttle " << c.failure_detection->min_throttle << " and motor thrust "
+      << d.min_motor_thrust;
+    if (hover.known) {
+      s << " (hover: throttle " << hover.throttle << ", motor thrust " << hover.thrust << ")";
+    } else {
+      s << " (fixed defaults: no `vehicle:` mass and thrust to find the hover)";
+    }
     lines.push_back(s.str());
   }
   if (!c.motor_loss_summary().empty()) lines.push_back(c.motor_loss_summary());

@@ -80,10 +80,18 @@ const loop::EscTelemetrySample& EscTelemetryModel::sample(double t, std::int64_t
         ++esc.size;
       }
     }
-    // ...and what has arrived by now is read.
-    while (esc.size > 0 && due(t, esc.queue[esc.head].arrives_s) &&
-           sample_.count < loop::kMaxEscReadings) {
-      sample_.readings[static_cast<std::size_t>(sample_.count++)] = esc.queue[esc.head].reading;
+    // ...and what has arrived by now is read. Each reading is published as
+    // it comes, as motormix output does (one message per KISS frame, one
+    // reading per motor per bidirectional DShot frame): within one step a
+    // newer reading of the same ESC supersedes the older, so no message
+    // names a motor twice.
+    int slot = -1;
+    while (esc.size > 0 && due(t, esc.queue[esc.head].arrives_s)) {
+      if (slot < 0) {
+        if (sample_.count >= loop::kMaxEscReadings) break;
+        slot = sample_.count++;
+      }
+      sample_.readings[static_cast<std::size_t>(slot)] = esc.queue[esc.head].reading;
       esc.head = (esc.head + 1) % kInFlight;
       --esc.size;
     }

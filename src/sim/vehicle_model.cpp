@@ -197,13 +197,23 @@ void VehicleModel::step(const MotorVector& outputs, const DirectionVector& direc
     freewheel_[k] = !p_.wheeled && health.drive[i] <= 0.0 && p_.rotor_inertia_kgm2 > 0.0;
     if (freewheel_[k]) {
       speed_[k] = freewheel(i, dt);
-    } else if (health.lag.size() > i && health.lag[i] != 1.0) {
-      // A rotor that lost its prop: only the bell to turn.
-      const double f = health.lag[i];
-      speed_[k] = lag(speed_[k], target, 1.0 - std::exp(-dt / (f * p_.time_constant_up_s)),
-                      1.0 - std::exp(-dt / (f * p_.time_constant_down_s)));
     } else {
-      speed_[k] = lag(speed_[k], target, alpha_up_, alpha_down_);
+      double up = alpha_up_, down = alpha_down_;
+      if (health.lag.size() > i && health.lag[i] != 1.0) {
+        // A rotor that lost its prop: only the bell to turn.
+        const double f = health.lag[i];
+        up = 1.0 - std::exp(-dt / (f * p_.time_constant_up_s));
+        down = 1.0 - std::exp(-dt / (f * p_.time_constant_down_s));
+      }
+      if (p_.motor_lag == config::MotorLag::kSpeed && !p_.wheeled) {
+        // The lag on the rotor's speed, the square root of the thrust
+        // fraction (signed: a reversed rotor's is negative).
+        const auto root = [](double x) { return std::copysign(std::sqrt(std::abs(x)), x); };
+        const double w = lag(root(speed_[k]), root(target), up, down);
+        speed_[k] = std::copysign(w * w, w);
+      } else {
+        speed_[k] = lag(speed_[k], target, up, down);
+      }
     }
     // Electrical power grows with thrust^1.5 (momentum theory); a wheel
     // motor's current with its speed.

@@ -87,6 +87,13 @@ hardware: {driver: serial, serial: {device: /dev/ttyUSB0}, protocol: dshot600}
     R"(geometry: {preset: quad_x}
 hardware: {driver: serial, serial: {device: /dev/ttyUSB0}, protocol: dshot300, bidirectional: true}
 )",
+    // A KISS telemetry wire (no bundled configuration has one: docs/wiring-it-to-motors.md).
+    R"(geometry: {preset: quad_x}
+hardware:
+  driver: serial
+  serial: {device: /dev/ttyUSB0}
+  telemetry: [{device: /dev/ttyAMA1, motor: 1, baud: 115200}]
+)",
 };
 
 std::string unit_of(const std::string& path) {

@@ -7,6 +7,8 @@
 #include "node/messages.hpp"
 #include "test_support.hpp"
 
+#include <motormix/config/hover_point.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -205,14 +207,10 @@ TEST_F(DetectionLoopTest, RejectsMalformedTelemetryAndCountsIt) {
   EscTelemetrySample bad = s;
   bad.count = 0;
   check(bad, Rejection::kWrongSize);
-  bad.count = 7;  // more readings than motors
+  bad.count = loop::kMaxEscReadings + 1;  // more than the message type holds
   check(bad, Rejection::kWrongSize);
   bad = s;
   bad.readings[0].motor = 7;
-  check(bad, Rejection::kOutOfRange);
-  bad = s;
-  bad.count = 2;
-  bad.readings[1] = bad.readings[0];  // the same motor twice
   check(bad, Rejection::kOutOfRange);
   bad = s;
   bad.readings[0].rpm = kInf;
@@ -234,10 +232,43 @@ TEST_F(DetectionLoopTest, RejectsMalformedTelemetryAndCountsIt) {
   const loop::Counters& c = loop_.counters();
   EXPECT_EQ(c.esc_telemetry_received, 2);
   EXPECT_EQ(c.rejected_size, 2);
-  EXPECT_EQ(c.rejected_range, 4);
+  EXPECT_EQ(c.rejected_range, 3);
   EXPECT_EQ(c.rejected_nonfinite, 1);
   EXPECT_EQ(c.rejected_out_of_order, 1);
   EXPECT_EQ(c.rejected_future, 1);
+}
+
+// A bad reading costs that reading alone: the other ESCs in the same
+// message are read (a publisher batching every ESC must not lose all of
+// them to one). Batches are taken as sent: two readings of one motor (a
+// fast ESC between two publications), more readings than motors.
+TEST_F(DetectionLoopTest, ABadReadingCostsThatReadingAlone) {
+  EscTelemetrySample batch;
+  batch.utime = utime_;
+  const auto add = [&](int motor, double rpm) {
+    batch.readings[static_cast<std::size_t>(batch.count++)] = {motor, rpm,  kNaN, 10.0,
+                                                               16.0,  40.0, kNaN};
+  };
+  for (int m = 1; m <= 6; ++m) add(m, 9000.0);
+  add(9, 9000.0);  // no such motor
+  add(2, kInf);    // a broken encoder
+  add(3, 9100.0);  // motor 3 again: batched, taken
+  add(4, 9050.0);  // and motor 4: eight motors' worth on a hexa
+  EXPECT_EQ(loop_.on_esc_telemetry(batch, 0, kWall), Rejection::kNone);
+  const loop::Counters& c = loop_.counters();
+  EXPECT_EQ(c.esc_telemetry_received, 1);
+  EXPECT_EQ(c.rejected_range, 1);
+  EXPECT_EQ(c.rejected_nonfinite, 1);
+  EXPECT_EQ(c.rejected(), 2);
+  // Every motor was read: none is silent when the loop runs on.
+  const auto& r = loop_.cycle(50'000);
+  EXPECT_EQ(r.detection.telemetry_silent, 0U);
+  EXPECT_GE(r.esc_telemetry_age_ms, 0.0);
+
+  // A message of nothing but bad readings is refused, with the first reason.
+  EscTelemetrySample all_bad = one_reading(utime_ + 1, 8, 1.0);
+  EXPECT_EQ(loop_.on_esc_telemetry(all_bad, 60'000, kWall), Rejection::kOutOfRange);
+  EXPECT_EQ(c.esc_telemetry_received, 1);
 }
 
 TEST(DetectionLoop, AttitudeIsReadOnlyForTheRatesSourceAndChecked) {
@@ -364,6 +395,51 @@ TEST(DetectionConfig, ASlowLoopLoadsWithOrWithoutDetection) {
       config::load_config_file(source_path("config/hexa_x.yaml"),
                                {"loop_rate_hz=50", "failure_detection.rates.filter_hz=20"}),
       config::ConfigError);  // above a quarter of the loop rate
+}
+
+// The gates follow the vehicle the `vehicle:` section describes: a quad X
+// of 1 kg with 24.5 N rotors (thrust/weight 10) hovers on a tenth of its
+// thrust, below the fixed 0.25 and 0.08; its defaults are half its hover
+// throttle and 0.16 of its hover thrust, and a gate at or above its hover is
+// refused with the hover named. Without mass and thrust (a preset's derived
+// vehicle) the fixed defaults hold.
+TEST(DetectionConfig, GatesDefaultToFractionsOfTheVehiclesHover) {
+  const std::vector<std::string> light = {"failure_detection.enabled=true", "vehicle.mass_kg=1",
+                                          "vehicle.max_thrust_n=24.5"};
+  const config::Config c = config::load_config_file(source_path("config/quad_x.yaml"), light);
+  const config::HoverPoint hover = config::hover_point(c);
+  ASSERT_TRUE(hover.known);
+  constexpr double kGravity = 9.80665;
+  EXPECT_NEAR(hover.thrust, 1.0 * kGravity / (4 * 24.5), kExact);
+  // The throttle that gives it, worked by hand through quad_x.yaml's output
+  // stage (thrust_model_factor 0.3 inverts the curve, then idle 0.05 lifts
+  // the bottom) and the ESC's curve 0.3 x^2 + 0.7 x.
+  const double linear = (-0.7 + std::sqrt(0.49 + 1.2 * hover.throttle)) / 0.6;
+  const double x = 0.05 + 0.95 * linear;
+  EXPECT_NEAR(0.3 * x * x + 0.7 * x, hover.thrust, 1e-6);
+  EXPECT_NEAR(c.failure_detection->min_throttle, 0.5 * hover.throttle, kExact);
+  EXPECT_NEAR(c.failure_detection->detector.min_motor_thrust, 0.16 * hover.thrust, kExact);
+  // What the detector is given is what the loop gates on.
+  for (const char* key :
+       {"failure_detection.min_throttle=0.2", "failure_detection.min_motor_thrust=0.15"}) {
+    std::vector<std::string> set = light;
+    set.emplace_back(key);
+    try {
+      config::load_config_file(source_path("config/quad_x.yaml"), set);
+      ADD_FAILURE() << key << " accepted above the hover";
+    } catch (const config::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(std::string(key).substr(0, std::string(key).find('='))),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("hovers"), std::string::npos) << what;
+    }
+  }
+  const config::Config preset = config::load_config_file(source_path("config/quad_x.yaml"),
+                                                         {"failure_detection.enabled=true"});
+  EXPECT_FALSE(config::hover_point(preset).known);
+  EXPECT_EQ(preset.failure_detection->min_throttle, 0.25);
+  EXPECT_EQ(preset.failure_detection->detector.min_motor_thrust, 0.08);
 }
 
 TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {

@@ -90,6 +90,46 @@ TEST(FailureDetector, TelemetryNamesTheMotorThatLostItsProp) {
   EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
 }
 
+// Motors whose lag acts on the rotor's speed, not its thrust (RotorPy, PX4's
+// SIH, Gazebo): 50 ms both ways, as PX4's SIH quad X. Motor kThrown of a
+// quad X loses its prop and, as those simulators play it, keeps following
+// its command; the controller drives it to full and the motor across from
+// it (kAcross) to zero, which then slows exactly as configured, its thrust
+// falling twice as fast as its speed. That motor follows its command: it
+// must never be declared. Returns what was declared within a second.
+MotorMask speed_lag_quad_after_a_thrown_prop(std::uint8_t sources) {
+  constexpr double kTau = 0.05;
+  constexpr int kThrown = 0, kAcross = 1;  // quad X: m1 front right, m2 rear left
+  FailureDetectorSettings s;
+  s.motors = 4;
+  s.sources = sources;
+  s.time_constant_up_s = s.time_constant_down_s = kTau;
+  FailureDetector d(s);
+  MotorVector command = hover(4);
+  std::array<double, 4> speed{};  // fraction of full speed, lagged
+  for (int i = 0; i < 4; ++i) speed[static_cast<std::size_t>(i)] = std::sqrt(kHover);
+  const std::int64_t fail_at = 500'000;
+  const double alpha = 1.0 - std::exp(-kCycleUs / 1e6 / kTau);
+  for (std::int64_t t = 0; t < 1'500'000; t += kCycleUs) {
+    if (t >= fail_at) {
+      command[kThrown] = 1.0;
+      command[kAcross] = 0.0;
+    }
+    for (int i = 0; i < 4; ++i) {
+      auto& w = speed[static_cast<std::size_t>(i)];
+      w += (std::sqrt(command[i]) - w) * alpha;
+      d.on_telemetry(i, kFullRpm * w, NAN, t);
+    }
+    d.update(command, 0, true, t);
+  }
+  return d.detection().failed & (MotorMask{1} << kAcross);
+}
+
+TEST(FailureDetector, AMotorSlowingAsItsSpeedLagHasItIsNotDeclared) {
+  EXPECT_EQ(speed_lag_quad_after_a_thrown_prop(bits(DetectorSources::kTelemetry)), 0U)
+      << "the motor across from a thrown prop, slowing as commanded, was declared";
+}
+
 // Every motor stepping from 0.15 of full thrust to 0.9 and back, each
 // following with the motor lag; one ESC's readings arrive `late_us` after
 // they were measured (a slow telemetry line). Returns what was declared.
@@ -182,9 +222,12 @@ TEST(FailureDetector, ALateReadingOfAMotorFollowingItsCommandIsNeitherSlowNorFas
   FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
   s.telemetry_persist_s = 0.0;  // about the window, not the persistence
   EXPECT_EQ(late_esc_through_steps(s, 17'500), 0U);
-  // Judged as if on time, the same readings declare it: the window matters.
+  // Readings 22.5 ms late: within the 20 ms window (and the speed lag's
+  // lower thrust), nothing; judged as if on time, they declare it (too slow
+  // while it speeds up): the window matters.
+  EXPECT_EQ(late_esc_through_steps(s, 22'500), 0U);
   s.telemetry_latency_s = 0.0;
-  EXPECT_EQ(late_esc_through_steps(s, 17'500), MotorMask{1} << 3);
+  EXPECT_EQ(late_esc_through_steps(s, 22'500), MotorMask{1} << 3);
 }
 
 TEST(FailureDetector, OneBadReadingIsNotAFailure) {
@@ -260,6 +303,41 @@ TEST(FailureDetector, ASilentEscIsAFailureOnlyWhereStoppingItCostsNothingAndWith
       }
     }
   }
+}
+
+// Silence is judged against each ESC's own reporting interval: an ESC asked
+// in turn with others (here one reading every 150 ms, kSlowPeriodUs) is
+// never silent between its readings, and is once it stops; a fast ESC is
+// silent after telemetry_timeout_s, no sooner.
+TEST(FailureDetector, SilenceIsJudgedAgainstEachEscsOwnInterval) {
+  constexpr std::int64_t kSlowPeriodUs = 150'000;  // longer than telemetry_timeout_s
+  constexpr std::int64_t kStopUs = 2'000'000;
+  FailureDetectorSettings settings = hexa(bits(DetectorSources::kTelemetry));
+  ASSERT_LT(settings.telemetry_timeout_s * 1e6, kSlowPeriodUs);
+  FailureDetector d(settings);
+  std::int64_t silent_at = -1, last_reading = 0;
+  for (std::int64_t t = 0; t < 4'000'000; t += kCycleUs) {
+    for (int i = 0; i < 6; ++i) {
+      const bool slow = i == 2;
+      if (slow && (t % kSlowPeriodUs != 0 || t >= kStopUs)) continue;
+      if (slow) last_reading = t;
+      d.on_telemetry(i, kFullRpm * std::sqrt(kHover), NAN, t);
+    }
+    d.update(hover(6), 0, true, t);
+    const bool flagged = (d.detection().telemetry_silent >> 2 & 1U) != 0;
+    if (t < kStopUs + kSlowPeriodUs) {
+      ASSERT_FALSE(flagged) << "a slow ESC between its readings, t = " << t;
+      ASSERT_EQ(d.detection().failed, 0U) << "t = " << t;
+    } else if (flagged && silent_at < 0) {
+      silent_at = t;
+    }
+  }
+  // Silent after kSilentIntervals of its own interval (150 ms each), not
+  // after the 100 ms timeout; then declared (silence_declares, a hexa).
+  const double after_s = static_cast<double>(silent_at - last_reading) / 1e6;
+  EXPECT_NEAR(after_s, kSilentIntervals * kSlowPeriodUs / 1e6, 0.02);
+  EXPECT_EQ(d.detection().failed, MotorMask{1} << 2);
+  EXPECT_EQ(d.detection().source, DetectionSource::kTelemetrySilent);
 }
 
 // The body's rates under the rotors' torque plus `external`, integrated at

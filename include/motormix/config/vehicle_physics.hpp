@@ -8,10 +8,12 @@
 //
 // Units are SI throughout; frames are the geometry's (body FRD).
 
+#include <motormix/enum_names.hpp>
 #include <motormix/geometry.hpp>
 
 #include <Eigen/Geometry>  // cross products
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -72,14 +74,26 @@ inline double rotor_inertia_for(double prop_diameter_m) {
   return kTenInchKgm2 * r * r * r * r;
 }
 
+// What the motors' first-order lag acts on: the thrust (motormix sim's
+// default, fitted to step responses of thrust), or the rotor's speed, as
+// RotorPy, PX4's SIH and Gazebo model it (the thrust, the speed squared,
+// then falls twice as fast as the speed).
+enum class MotorLag : std::uint8_t { kThrust, kSpeed };
+inline constexpr EnumName<MotorLag> kMotorLagNames[] = {
+    {MotorLag::kThrust, "thrust"},
+    {MotorLag::kSpeed, "speed"},
+};
+inline const char* to_string(MotorLag value) { return name_in(kMotorLagNames, value); }
+
 struct VehiclePhysics {
   bool wheeled = false;
   double mass_kg = 0.0;
   Eigen::Vector3d inertia_kgm2 = Eigen::Vector3d::Zero();  // principal, about x, y, z (FRD)
   std::vector<RotorPhysics> rotors;                        // aircraft, in output order
   WheelPhysics wheels;                                     // ground vehicles
-  double time_constant_up_s = 0.03;    // first-order motor lag while speeding up
-  double time_constant_down_s = 0.05;  // and while slowing down
+  double time_constant_up_s = 0.03;        // first-order motor lag while speeding up
+  double time_constant_down_s = 0.05;      // and while slowing down
+  MotorLag motor_lag = MotorLag::kThrust;  // what the lag acts on (motormix sim)
   // The driver's physical input range, per motor in output order, in the
   // output unit: thrust (or wheel speed) is zero at esc_min and full at
   // esc_max. Defaults to the output stage's range, as after an ESC
@@ -108,6 +122,9 @@ struct VehiclePhysics {
   bool ground_effect = true;
   ImuPhysics imu;
   BatteryPhysics battery;
+  // Whether the section gives the mass and every rotor's thrust (not the
+  // defaults derived from the geometry): where it hovers is then known.
+  bool weight_and_thrust_given = false;
   // Empty when the physics is complete; otherwise why the vehicle cannot be
   // simulated (e.g. a mixing table with no `vehicle.rotors`).
   std::string incomplete;

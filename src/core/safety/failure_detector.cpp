@@ -26,6 +26,12 @@ constexpr double kSteadyShare = 0.9;
 // current offset and noise (a few tenths of an ampere) to weigh its prop.
 constexpr double kLoadMinThrust = 0.25;
 
+// The reporting interval's running mean: its gain per reading, how many
+// times the mean one gap may count, and the largest first gap taken.
+constexpr double kIntervalGain = 0.1;
+constexpr double kMaxGapShare = 3.0;
+constexpr double kMaxIntervalS = 1.0;
+
 // Median of the first n values (n >= 1) of a scratch array (reordered).
 double median(std::array<double, kMaxMotors>& v, int n) {
   const auto mid = v.begin() + n / 2;
@@ -52,6 +58,7 @@ FailureDetector::FailureDetector(const FailureDetectorSettings& settings) : s_(s
 void FailureDetector::reset() {
   detection_ = Detection{};
   lagged_.setZero(s_.motors);
+  speed_lagged_.fill(0.0);
   lag_count_ = 0;
   rotor_speed_.fill(0.0);
   output_filtered_.setZero(s_.motors);
@@ -75,6 +82,19 @@ void FailureDetector::reset() {
 void FailureDetector::on_telemetry(int motor, double rpm, double current_a, std::int64_t now_us) {
   if (motor < 0 || motor >= s_.motors) return;
   EscState& e = esc_[static_cast<std::size_t>(motor)];
+  // Its reporting interval: a running mean of the gaps between its readings
+  // (several in one message make no gap), each gap counted at most
+  // kMaxGapShare times the mean so that one long pause (a lost stretch, a
+  // silence that ended) does not teach it. The first gap is taken as it is,
+  // up to kMaxIntervalS.
+  if (e.any && now_us > e.received_us) {
+    const double gap = static_cast<double>(now_us - e.received_us) / 1e6;
+    e.interval_s =
+        e.interval_s > 0.0
+            ? e.interval_s +
+                  kIntervalGain * (std::min(gap, kMaxGapShare * e.interval_s) - e.interval_s)
+            : std::min(gap, kMaxIntervalS);
+  }
   e.rpm = rpm;
   e.current = current_a;
   e.received_us = now_us;
@@ -96,6 +116,15 @@ void FailureDetector::on_rates(const Eigen::Vector3d& rates, std::int64_t sample
   }
   rates_received_us_ = now_us;
   rates_any_ = true;
+}
+
+bool FailureDetector::silent(std::size_t i, std::int64_t now_us) const {
+  const EscState& e = esc_[i];
+  // Not before its interval is known (a second reading): an ESC asked in
+  // turn with others may not have had its next turn yet.
+  if (!e.any || e.interval_s <= 0.0) return false;
+  const double quiet_s = std::max(s_.telemetry_timeout_s, kSilentIntervals * e.interval_s);
+  return static_cast<double>(now_us - e.received_us) > quiet_s * 1e6;
 }
 
 bool FailureDetector::accumulate(double& suspicion, bool evidence, double dt, double persist) {
@@ -158,6 +187,12 @@ const Detection& FailureDetector::update(const MotorVector& thrust, MotorMask ex
   for (int i = 0; i < n; ++i) {
     const double target = has(excluded, i) ? 0.0 : std::clamp(thrust[i], 0.0, 1.0);
     lagged_[i] += (target - lagged_[i]) * (target > lagged_[i] ? up : down);
+    // The same lag on the rotor's speed instead of its thrust (how most
+    // simulators and many motors have it): its thrust, the speed squared,
+    // is never above the thrust lag's from a steady start.
+    double& speed = speed_lagged_[static_cast<std::size_t>(i)];
+    const double target_speed = std::sqrt(target);
+    speed += (target_speed - speed) * (target_speed > speed ? up : down);
   }
   // The rotors' momentum, and the reaction torque of its change since the
   // last update (the rotor speeds follow the lagged thrusts as their square
@@ -174,8 +209,12 @@ const Detection& FailureDetector::update(const MotorVector& thrust, MotorMask ex
   }
   lag_head_ = (lag_head_ + 1) % kLagHistory;
   lag_count_ = std::min(lag_count_ + 1, kLagHistory);
-  for (int i = 0; i < n; ++i)
-    lag_history_[static_cast<std::size_t>(lag_head_)][static_cast<std::size_t>(i)] = lagged_[i];
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const auto slot = static_cast<std::size_t>(lag_head_);
+    lag_history_[slot][k] = lagged_[i];
+    lag_low_history_[slot][k] = std::min(lagged_[i], speed_lagged_[k] * speed_lagged_[k]);
+  }
   lag_history_us_[static_cast<std::size_t>(lag_head_)] = now_us;
 
   if (uses(DetectorSources::kTelemetry)) judge_telemetry(excluded, allowed, dt, now_us);
@@ -198,12 +237,13 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   };
   const auto window = [&](std::size_t k, std::int64_t received_us) {
     const double now = lagged_[static_cast<Eigen::Index>(k)];
-    Window w{now, now, now};
+    const double low_now = std::min(now, speed_lagged_[k] * speed_lagged_[k]);
+    Window w{low_now, now, now};
     const std::int64_t mid_us = received_us - latency_us / 2;
     for (int back = 1; back < lag_count_; ++back) {
       const auto slot = static_cast<std::size_t>((lag_head_ - back + kLagHistory) % kLagHistory);
       if (lag_history_us_[slot] < received_us - latency_us) break;
-      w.least = std::min(w.least, lag_history_[slot][k]);
+      w.least = std::min(w.least, lag_low_history_[slot][k]);
       w.most = std::max(w.most, lag_history_[slot][k]);
       if (lag_history_us_[slot] >= mid_us) w.mid = lag_history_[slot][k];
     }
@@ -223,8 +263,10 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const EscState& e = esc_[k];
-    if (!e.any || now_us - e.received_us > timeout_us) continue;
+    if (!e.any || silent(k, now_us)) continue;
     ++fresh;
+    // Too old to judge (a slow ESC between two of its readings).
+    if (now_us - e.received_us > timeout_us) continue;
     if (has(excluded, i) || lagged_[i] < s_.min_motor_thrust) continue;
     // Below min_motor_thrust at any time its reading can come from, it is
     // not judged (near idle, rpm says little).
@@ -290,9 +332,8 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   for (int i = 0; i < s_.motors; ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (has(excluded, i)) continue;
-    const EscState& e = esc_[k];
     // Silent: it reported before, it no longer does, and most others do.
-    const bool silent = e.any && now_us - e.received_us > timeout_us && 2 * fresh >= s_.motors;
+    const bool silent = this->silent(k, now_us) && 2 * fresh >= s_.motors;
     if (silent) detection_.telemetry_silent |= MotorMask{1} << i;
     // Too slow for its command (stopped, desynced), or too fast: a prop
     // thrown or broken unloads the motor, which then outruns its command.

@@ -28,7 +28,8 @@ class DetectionRunner {
   bool uses_rates() const { return detector_.uses(DetectorSources::kRates); }
   double min_throttle() const { return min_throttle_; }
 
-  void on_telemetry(const EscTelemetrySample& sample, std::int64_t now_us);
+  // The readings whose bit is set in `taken` (check_esc_telemetry's verdict).
+  void on_telemetry(const EscTelemetrySample& sample, std::uint32_t taken, std::int64_t now_us);
   void on_attitude(const AttitudeSample& sample, std::int64_t now_us);
 
   // outputs: the output-stage values the motors are running on (the

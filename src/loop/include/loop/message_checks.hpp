@@ -1,6 +1,8 @@
 #pragma once
 // Acceptance rules for input messages. A message is either accepted whole or
-// rejected with one reason, which the control loop counts.
+// rejected with one reason, which the control loop counts; the one
+// exception is esc_telemetry, whose readings are judged one by one (a bad
+// reading costs that reading, not the other ESCs' in the same message).
 
 #include <motormix/enum_names.hpp>
 #include "loop/input_samples.hpp"
@@ -41,10 +43,25 @@ Rejection check_pid(const PidSample& p, std::int64_t last_utime);
 Rejection check_motor_status(const MotorStatusSample& m, int motors, std::int64_t last_utime);
 // Only the order: the voltage's plausibility is the battery compensation's.
 Rejection check_battery(const BatterySample& b, std::int64_t last_utime);
-// Order per motor: ESCs report at their own rates, possibly through several
-// publishers. last_utime[i]: the last accepted reading of motor i (kNever if none).
-Rejection check_esc_telemetry(const EscTelemetrySample& t, int motors,
-                              const std::array<std::int64_t, kMaxEscReadings>& last_utime);
+// What check_esc_telemetry says of one message: `message` is kWrongSize
+// when its count is outside 1..kMaxEscReadings (nothing in it is read);
+// otherwise each reading has its own verdict, and `taken` has bit i set for
+// each reading i accepted.
+struct EscTelemetryVerdict {
+  Rejection message = Rejection::kNone;
+  std::array<Rejection, kMaxEscReadings> reading{};
+  std::uint32_t taken = 0;
+  int refused = 0;  // readings refused (message accepted)
+};
+// Each reading alone: a motor the mixer has, fields in their documented
+// ranges, and in order for that motor (ESCs report at their own rates,
+// possibly through several publishers; last_utime[i]: the last accepted
+// reading of motor i, kNever if none). A publisher may batch: several
+// readings of one motor in one message are taken in order (the last is the
+// newest), and a message may hold more readings than there are motors.
+EscTelemetryVerdict check_esc_telemetry(
+    const EscTelemetrySample& t, int motors,
+    const std::array<std::int64_t, kMaxEscReadings>& last_utime);
 // Largest body rate accepted: twice the 2000 deg/s range of common gyros.
 inline constexpr double kMaxBodyRateRadS = 70.0;
 // The largest velocity component an attitude message may carry (m/s).
