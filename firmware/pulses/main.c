@@ -91,6 +91,10 @@ static uint8_t g_dshot_armed; /* channels armed by the last PULSES frame */
 static uint8_t g_dshot_ports[16], g_dshot_high, g_dshot_low;
 static uint8_t g_dshot_dirty; /* the frame's port values are to be made again */
 static uint8_t g_cmd, g_cmd_channels, g_cmd_left;
+/* KISS telemetry: the channel (+1; 0 none) whose next frame asks its ESC,
+ * and whether the frame prepared last carries that request (the frames
+ * after it are made again without). */
+static uint8_t g_tlm_ask, g_tlm_in_frame;
 static uint32_t g_next_frame;
 static uint8_t g_dshot_pins; /* port D bits of the DShot channels */
 /* Replies: the last frame's are yet to be decoded, the readings waiting to
@@ -218,6 +222,7 @@ static void apply_config(const mm_link_config* c) {
     /* Frames of motor stop from the next one on; no pulse interrupt. */
     g_dshot_armed = 0;
     g_cmd_left = 0;
+    g_tlm_ask = 0;
     g_link_ok = 0;
     g_out_armed = 0;
     for (uint8_t k = 0; k < FRAME_BUFFERS; ++k) g_frame_armed[k] = 0;
@@ -308,14 +313,19 @@ static void dshot_prepare(void) {
   const uint8_t all = g_dshot_pins;
   const uint8_t armed = g_link_ok ? g_dshot_armed : 0u;
   uint8_t pin = 4u; /* D2 */
+  /* Taken once the frame is sent (a newer PULSES frame may make this one
+   * again first). */
+  const uint8_t ask = g_tlm_ask;
+  g_tlm_in_frame = ask;
   for (uint8_t k = 0; k < g_config.count; ++k, pin = (uint8_t)(pin << 1)) {
     uint16_t packet;
+    const uint8_t asked = (uint8_t)(ask == (uint8_t)(k + 1u));
     if ((armed >> k) & 1u) {
-      packet = dshot_packet(g_dshot_throttle[k], 0);
+      packet = dshot_packet(g_dshot_throttle[k], asked);
     } else if (g_cmd_left && ((g_cmd_channels >> k) & 1u)) {
       packet = dshot_packet(g_cmd, 1); /* ESCs take commands with the bit set */
     } else {
-      packet = dshot_packet(0, 0);
+      packet = dshot_packet(0, asked); /* motor stop; telemetry on the ground too */
     }
     uint8_t* p = ports;
     for (uint8_t i = 16u; i != 0u; --i, ++p, packet = (uint16_t)(packet << 1))
@@ -357,6 +367,11 @@ static void dshot_send(void) {
   ++g_frame_count;
   ++g_periods; /* the watchdog's sign of life, as a pulse period is */
   if (g_cmd_left && --g_cmd_left == 0u) g_dshot_dirty = 1;
+  if (g_tlm_in_frame) { /* asked once: the next frame without */
+    g_tlm_ask = 0;
+    g_tlm_in_frame = 0;
+    g_dshot_dirty = 1;
+  }
 }
 
 /* Every channel's reply of the last frame, as one reading in the batch for
@@ -422,6 +437,7 @@ static void take_pulses(const mm_link_pulses* p, uint32_t now) {
                      steps((uint32_t)(t - lo) * DSHOT_THROTTLE_STEPS + span / 2u, (uint16_t)span));
     }
     g_dshot_armed = p->armed;
+    if (p->telemetry != 0u) g_tlm_ask = p->telemetry;
     if (p->armed) g_cmd_left = 0; /* arming ends a special command */
     g_dshot_dirty = 1;
     taken(p->sequence, now);

@@ -167,6 +167,17 @@ void read_hardware(MapReader section, Config& config) {
       entry.finish();
       hw.telemetry.push_back(port);
     }
+    // A KISS / BLHeli_32 ESC sends its telemetry frame only when a DShot
+    // frame's telemetry bit asks for one: with servo PWM nothing asks, and
+    // the wire would never hear a byte.
+    if (!hw.telemetry.empty() && !dshot) {
+      fail(path,
+           std::to_string(hw.telemetry.size()) + " KISS telemetry wire(s) with protocol " +
+               to_string(hw.protocol),
+           "a DShot protocol (dshot150, dshot300 or dshot600 with driver serial): a KISS ESC "
+           "answers only a DShot frame whose telemetry bit asks, and servo PWM cannot ask "
+           "(docs/wiring-it-to-motors.md)");
+    }
   }
   section.finish();
 

@@ -187,8 +187,11 @@ size_t mm_link_encode_pulses(const mm_link_pulses* p, uint8_t* out) {
   put32(b + 1, p->session);
   put32(b + 5, p->sequence);
   if ((p->armed >> p->count) != 0u) return 0; /* a channel beyond the count */
+  if (p->telemetry > p->count) return 0;      /* a request beyond the count */
   b[9] = p->armed;
-  b[10] = p->count;
+  b[10] = p->telemetry != 0u
+              ? (uint8_t)(p->count | MM_LINK_TELEMETRY_REQUEST | ((p->telemetry - 1u) << 4))
+              : p->count;
   for (uint8_t i = 0; i < p->count; ++i) put16(b + 11 + 2 * i, p->pulse_hus[i]);
   return frame(out, (uint8_t)MM_LINK_PULSES_BODY(p->count));
 }
@@ -243,9 +246,12 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
   const uint8_t* b = p->body;
   const uint8_t type = b[0];
   if (type == MM_LINK_PULSES) {
-    const uint8_t count = b[10];
+    const uint8_t count = (uint8_t)(b[10] & 0x0Fu);
+    const uint8_t asked = (uint8_t)((b[10] >> 4) & 0x07u);
+    const uint8_t request = (b[10] & MM_LINK_TELEMETRY_REQUEST) != 0u ? (uint8_t)(asked + 1u) : 0u;
     if (count < 1u || count > MM_LINK_MAX_CHANNELS || p->length != MM_LINK_PULSES_BODY(count) ||
-        (count < 8u && (b[9] >> count) != 0u)) {
+        (count < 8u && (b[9] >> count) != 0u) || request > count ||
+        (request == 0u && asked != 0u)) {
       ++p->malformed;
       return 0;
     }
@@ -254,6 +260,7 @@ static uint8_t decode(mm_link_parser* p, mm_link_frame* f) {
     out->sequence = get32(b + 5);
     out->armed = b[9];
     out->count = count;
+    out->telemetry = request;
     for (uint8_t i = 0; i < count; ++i) out->pulse_hus[i] = get16(b + 11 + 2 * i);
   } else if (type == MM_LINK_CONFIG) {
     const uint8_t count = b[17];

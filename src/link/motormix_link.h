@@ -9,8 +9,9 @@
  * 10^5 corrupted frames, and a 16-bit check lets one random frame in 65536
  * through. Multi-byte fields are little-endian.
  *
- * Link version 4 (MM_LINK_VERSION, in every REPORT; 3 added the protocol
- * to CONFIG and the COMMAND frame, 4 bidirectional DShot and TELEMETRY).
+ * Link version 5 (MM_LINK_VERSION, in every REPORT; 3 added the protocol
+ * to CONFIG and the COMMAND frame, 4 bidirectional DShot and TELEMETRY, 5
+ * the telemetry request in PULSES).
  * Sessions: the chip
  * names a session in its reports, a 32-bit number that never repeats (its
  * EEPROM keeps the highest base used across resets) and that it moves on
@@ -39,7 +40,10 @@
  *     require. Taken only while every output is disarmed; an armed PULSES
  *     frame ends it.
  *   MM_LINK_PULSES: armed channels (a bit per channel, none beyond the
- *     count), count (must equal the configured count), then count pulse
+ *     count), count (must equal the configured count; its low nibble: with
+ *     bit 7 set, bits 4..6 name the channel whose ESC is asked for its KISS
+ *     telemetry: DShot only, the telemetry bit in that channel's next frame
+ *     alone, the frames after it without), then count pulse
  *     widths in half microseconds (the firmware's timer resolution: a width
  *     of 1234.3 us goes as 2469 and comes out as 1234.5). A channel whose
  *     bit is clear gets its disarmed pulse, whatever its width says; an
@@ -74,7 +78,7 @@ extern "C" {
 #define MM_LINK_CONFIG 0x03u
 #define MM_LINK_COMMAND 0x04u
 #define MM_LINK_TELEMETRY 0x05u
-#define MM_LINK_VERSION 4u
+#define MM_LINK_VERSION 5u
 /* CONFIG's protocol */
 #define MM_LINK_PROTOCOL_PWM 0u
 #define MM_LINK_PROTOCOL_DSHOT150 1u
@@ -93,6 +97,8 @@ extern "C" {
 #define MM_LINK_PROTOCOL_SPEED_MASK 0x0Fu
 #define MM_LINK_MAX_BIDIR_CHANNELS 4u
 #define MM_LINK_MIN_BIDIR_PERIOD_US 1000u
+/* PULSES' count byte: the telemetry request's flag (its channel in bits 4..6) */
+#define MM_LINK_TELEMETRY_REQUEST 0x80u
 /* TELEMETRY: up to this many frames' replies in one */
 #define MM_LINK_TELEMETRY_MAX_READINGS 5u
 
@@ -151,6 +157,10 @@ typedef struct {
   uint8_t armed; /* bit i: channel i armed */
   uint8_t count;
   uint16_t pulse_hus[MM_LINK_MAX_CHANNELS]; /* half microseconds: 3000 is 1500 us */
+  /* 0: no request; c + 1: ask channel c's ESC for its KISS telemetry (the
+   * telemetry bit in its next DShot frame; c below count). Zero by default
+   * so that a frame built without it asks nothing. */
+  uint8_t telemetry;
 } mm_link_pulses;
 
 /* The eRPM replies of consecutive DShot frames, as the chip decoded them:

@@ -25,4 +25,18 @@ bool fill_erpm_message(const PulseDriver::ErpmReading& reading, std::int64_t uti
   return msg.count > 0;
 }
 
+void fill_kiss_message(int motor, const KissReading& r, std::int64_t utime,
+                       motormix::esc_telemetry_t& msg) {
+  msg = motormix::esc_telemetry_t{};
+  msg.utime = utime;
+  msg.count = 1;
+  msg.motor = {static_cast<std::int8_t>(motor + 1)};
+  msg.rpm = {std::numeric_limits<float>::quiet_NaN()};
+  msg.erpm = {static_cast<float>(r.erpm)};
+  msg.current_a = {static_cast<float>(r.current_a)};
+  msg.voltage_v = {static_cast<float>(r.voltage_v)};
+  msg.temperature_c = {static_cast<float>(r.temperature_c)};
+  msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
+}
+
 }  // namespace motormix::output

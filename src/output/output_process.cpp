@@ -2,10 +2,10 @@
 
 #include "output/erpm_telemetry.hpp"
 #include "output/esc_command_check.hpp"
-#include "output/kiss_telemetry.hpp"
 #include "output/output_gate.hpp"
 #include "output/pulse_drivers.hpp"
 #include "output/serial_port.hpp"
+#include "output/telemetry_requests.hpp"
 
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
@@ -75,7 +75,21 @@ class OutputNode {
         gate_(ranges_of(config), config.hardware.motor_pwm_timeout_s,
               BringupLimits{config.motor_test.enabled, config.motor_test.max_throttle,
                             config.motor_test.max_seconds}),
-        values_(static_cast<std::size_t>(config.motors())) {}
+        values_(static_cast<std::size_t>(config.motors())),
+        requests_(wired_motors(config.hardware), kKissAnswerWindowS) {}
+
+  // KISS telemetry: the request that went is noted, and the next wire asked
+  // for in the frames to come (one request open on the driver at a time).
+  void telemetry_turn() {
+    if (driver_ == nullptr || requests_.empty()) return;
+    double at_s = 0.0;
+    const int asked = driver_->take_asked(at_s);
+    if (asked >= 0) {
+      requests_.asked(asked, at_s);
+      ask_open_ = false;
+    }
+    if (!ask_open_) ask_open_ = driver_->ask_telemetry(requests_.next());
+  }
 
   void subscribe() {
     lcm_.subscribe(config_.channels.motor_pwm, &OutputNode::on_motor_pwm, this)
@@ -86,6 +100,7 @@ class OutputNode {
 
   // Decides and writes when something changed or the hardware is due.
   void step(double now, bool message) {
+    telemetry_turn();
     const GateState state = gate_.decide(now, values_.data());
     if (message || state != state_ || now - last_write_s_ >= kKeepAliveS) {
       // No device (lost, being reopened): nothing to write, the chip has
@@ -108,6 +123,7 @@ class OutputNode {
   void set_driver(PulseDriver* driver) {
     if (driver != nullptr && driver_ == nullptr) ++reopened_;
     driver_ = driver;
+    ask_open_ = false;  // a new driver has no request of the old one's
     if (driver_ == nullptr) written_armed_ = 0;
   }
 
@@ -139,6 +155,11 @@ class OutputNode {
            << " unsigned taken, refused " << sc.rejected_unsigned << " unsigned, "
            << sc.rejected_bad_signature << " bad, " << sc.rejected_replayed << " replayed, "
            << sc.rejected_stale + sc.rejected_other << " stale; ";
+    }
+    if (!requests_.empty()) {
+      const TelemetryRequests::Counts& t = requests_.counts();
+      log_ << "KISS telemetry: " << t.asked << " asked, " << t.answered << " answered, "
+           << t.unanswered << " unanswered, " << t.unasked << " unasked; ";
     }
     log_ << write_failures_ << " hardware writes failed; "
          << (driver_ != nullptr ? driver_->describe() : std::string("device lost, reopening"))
@@ -214,17 +235,14 @@ class OutputNode {
     ++telemetry_frames_;
   }
 
-  void publish_telemetry(const TelemetryWire& wire, const KissReading& r) {
-    motormix::esc_telemetry_t msg{};
-    msg.utime = wall_us();
-    msg.count = 1;
-    msg.motor = {static_cast<std::int8_t>(wire.port.motor + 1)};
-    msg.rpm = {std::numeric_limits<float>::quiet_NaN()};  // the frame carries eRPM only
-    msg.erpm = {static_cast<float>(r.erpm)};
-    msg.current_a = {static_cast<float>(r.current_a)};
-    msg.voltage_v = {static_cast<float>(r.voltage_v)};
-    msg.temperature_c = {static_cast<float>(r.temperature_c)};
-    msg.consumption_mah = {static_cast<float>(r.consumption_mah)};
+  // A KISS reading arrived at `now` (monotonic s): stamped when its request
+  // went (the ESC measured it then); one nobody asked for, when it came.
+  void publish_telemetry(const TelemetryWire& wire, const KissReading& r, double now) {
+    const std::optional<double> asked_s = requests_.answered(wire.port.motor, now);
+    motormix::esc_telemetry_t msg;
+    fill_kiss_message(wire.port.motor, r,
+                      wall_us() - (asked_s ? static_cast<std::int64_t>((now - *asked_s) * 1e6) : 0),
+                      msg);
     publisher_.publish(config_.channels.esc_telemetry, msg);
     ++telemetry_frames_;
   }
@@ -293,6 +311,8 @@ class OutputNode {
   bool taken_ = false;  // a message taken and not yet written
   std::uint64_t write_failures_ = 0;
   std::uint64_t telemetry_frames_ = 0;
+  TelemetryRequests requests_;
+  bool ask_open_ = false;            // a request waits on the driver for a frame
   std::uint32_t written_armed_ = 0;  // the channels the last write armed
   std::uint64_t reopened_ = 0;       // lost devices opened again
 };
@@ -411,6 +431,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     const double now = monotonic_s();
     node.write_taken(now);
     if (driver != nullptr) driver->send_waiting();
+    node.telemetry_turn();
     if (fds[1].revents & POLLIN) {
       std::uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);
@@ -451,7 +472,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
       const auto t_us = static_cast<std::int64_t>(now * 1e6);
       for (ssize_t k = 0; k < n; ++k) {
         KissReading r;
-        if (wires[i].parser.feed(buf[k], t_us, r)) node.publish_telemetry(wires[i], r);
+        if (wires[i].parser.feed(buf[k], t_us, r)) node.publish_telemetry(wires[i], r, now);
       }
     }
     if (now >= next_published) {

@@ -96,6 +96,7 @@ bool SerialPulseDriver::send_pulses(const double* pulse_us, int count, std::uint
   p.armed = armed;
   p.count = static_cast<std::uint8_t>(count);
   for (int i = 0; i < count; ++i) p.pulse_hus[i] = us(2.0 * pulse_us[i]);
+  if (ask_ != 0 && ask_ <= count) p.telemetry = ask_;
   std::uint8_t buf[MM_LINK_MAX_FRAME];
   const std::size_t n = mm_link_encode_pulses(&p, buf);
   credit_s_ = static_cast<double>(n) * byte_s_ / kWireShare;
@@ -104,8 +105,28 @@ bool SerialPulseDriver::send_pulses(const double* pulse_us, int count, std::uint
     ++frames_sent_;
     sent_pulses_ = true;
     last_armed_ = armed;
+    if (p.telemetry != 0) {
+      asked_ = p.telemetry;
+      asked_at_s_ = bus::monotonic_s();
+      ask_ = 0;
+    }
   }
   return ok;
+}
+
+bool SerialPulseDriver::ask_telemetry(int channel) {
+  if (config_.protocol == MM_LINK_PROTOCOL_PWM || channel < 0 || channel >= config_.count)
+    return false;
+  ask_ = static_cast<std::uint8_t>(channel + 1);
+  return true;
+}
+
+int SerialPulseDriver::take_asked(double& at_s) {
+  if (asked_ == 0) return -1;
+  at_s = asked_at_s_;
+  const int channel = asked_ - 1;
+  asked_ = 0;
+  return channel;
 }
 
 double SerialPulseDriver::waiting_until_s() const {

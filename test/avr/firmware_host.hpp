@@ -62,8 +62,11 @@ class Host {
     ASSERT_GT(n, 0u);
     board.send(buf, n);
   }
-  std::vector<std::uint8_t> pulses_frame(const std::vector<double>& widths, bool armed) {
+  // ask: the channel whose ESC the frame asks for its KISS telemetry (-1: none).
+  std::vector<std::uint8_t> pulses_frame(const std::vector<double>& widths, bool armed,
+                                         int ask = -1) {
     mm_link_pulses p{};
+    p.telemetry = static_cast<std::uint8_t>(ask + 1);
     p.session = session;
     p.sequence = seq++;
     p.armed = static_cast<std::uint8_t>(armed ? (1u << widths.size()) - 1u : 0u);
@@ -74,8 +77,8 @@ class Host {
     buf.resize(mm_link_encode_pulses(&p, buf.data()));
     return buf;
   }
-  void send_pulses(const std::vector<double>& widths, bool armed = true) {
-    board.send(pulses_frame(widths, armed));
+  void send_pulses(const std::vector<double>& widths, bool armed = true, int ask = -1) {
+    board.send(pulses_frame(widths, armed, ask));
   }
   void send_command(std::uint8_t command, std::uint8_t channels, std::uint8_t repeat) {
     mm_link_command c{};

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -626,6 +627,53 @@ TEST(PulseFirmwareDshot, FourChannelsEveryFrameDecodedWithinTheProtocolsTimes) {
     EXPECT_EQ(r.crc_errors + r.malformed + r.rejected, 0u) << speed.name;
     EXPECT_EQ(r.version, MM_LINK_VERSION);
   }
+}
+
+// KISS telemetry is asked for in the PULSES frame (link version 5): the
+// telemetry bit goes in the asked channel's next DShot frame alone, once,
+// armed or disarmed, and in no other frame. Frames at 1 kHz, PULSES at
+// 400 Hz asking each channel in turn, as `motormix output` does; an ESC
+// answers only a frame with the bit (KISS), so one bit per request is one
+// answer per request.
+TEST(PulseFirmwareDshot, ATelemetryRequestSetsTheBitInOneFrameOfTheAskedChannel) {
+  constexpr int kChannels = 4;
+  constexpr int kRequests = 80;
+  Host h;
+  Escs esc(kChannels, 16.0 * 1e6 / 600e3);
+  h.send_config(h.config(kChannels, 1000, 1000, MM_LINK_PROTOCOL_DSHOT600));
+  h.board.run_for_us(5000);
+  std::array<int, kChannels> asked{}, bits{}, wrong_value{};
+  for (int k = 0; k < kRequests; ++k) {
+    const bool armed = k >= kRequests / 4;  // disarmed (motor stop) at first
+    const int ask = k % kChannels;
+    ++asked[static_cast<std::size_t>(ask)];
+    h.send_pulses({1200, 1400, 1600, 1800}, armed, ask);
+    h.board.run_for_us(2500);
+    esc.feed(h.board);
+    for (int ch = 0; ch < kChannels; ++ch) {
+      for (const DshotFrame& f : esc.escs[static_cast<std::size_t>(ch)].take_frames()) {
+        EXPECT_TRUE(f.crc_ok);
+        if (!f.telemetry) continue;
+        ++bits[static_cast<std::size_t>(ch)];
+        EXPECT_EQ(ch, ask) << "request " << k << ": the bit on another channel";
+        // The bit rides on the frame the channel carries anyway.
+        const std::uint16_t expected = armed ? throttle_for(1200.0 + 200.0 * ch) : 0;
+        if (f.value != expected) ++wrong_value[static_cast<std::size_t>(ch)];
+      }
+    }
+  }
+  for (int ch = 0; ch < kChannels; ++ch) {
+    EXPECT_EQ(bits[static_cast<std::size_t>(ch)], asked[static_cast<std::size_t>(ch)])
+        << "channel " << ch << ": one bit per request";
+    EXPECT_EQ(wrong_value[static_cast<std::size_t>(ch)], 0) << "channel " << ch;
+  }
+  // Without requests, no frame carries the bit.
+  h.send_pulses({1200, 1400, 1600, 1800}, true);
+  h.board.run_for_us(20000);
+  esc.feed(h.board);
+  for (DshotEsc& e : esc.escs)
+    for (const DshotFrame& f : e.take_frames()) EXPECT_FALSE(f.telemetry);
+  EXPECT_EQ(h.last_report().malformed, 0u);
 }
 
 // Disarmed channels and the link failsafe send motor stop (0): a channel

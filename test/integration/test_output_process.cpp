@@ -4,8 +4,9 @@
 // - disarmed at start; armed values pass, clamped into range; a message with
 //   a NaN is refused; armed=false disarms; a silent publisher disarms after
 //   the 50 ms timeout; SIGTERM disarms and exits 0;
-// - KISS telemetry frames from a generator, a third of them corrupted,
-//   come out as esc_telemetry_t, every good one and no bad one;
+// - with DShot, two ESCs' KISS telemetry wires are asked in turn and each
+//   answer (a third of them corrupted) comes out as esc_telemetry_t for its
+//   motor, every good one and no bad one;
 // - under security.mode require, only a motor_pwm_t signed with the key
 //   moves a pin: unsigned, forged and replayed ones are refused and counted;
 // - output_status_t says what the pins carry (starting, armed, disarmed,
@@ -73,7 +74,8 @@ class OutputProcess : public ::testing::Test {
                               "hardware:\n"
                               "  driver: sysfs\n"
                               "  sysfs: {root: "
-                           << root_ << "}\n  telemetry: [{device: " << name << ", motor: 2}]\n";
+                           << root_ << "}\n";
+    wire_ = name;  // an ESC's KISS telemetry wire, for the DShot tests
   }
   void TearDown() override {
     ::close(master_);
@@ -108,6 +110,7 @@ class OutputProcess : public ::testing::Test {
   }
 
   std::string root_, config_;
+  std::string wire_;  // the slave side of master_
   int master_ = -1;
 };
 
@@ -158,59 +161,6 @@ TEST_F(OutputProcess, FailsafeChainOverSysfs) {
   const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("1 not finite"), std::string::npos) << text;
   EXPECT_NE(text.find("values clamped"), std::string::npos) << text;
-}
-
-TEST_F(OutputProcess, KissTelemetryFromAWireComesOutAsEscTelemetry) {
-  ChildProcess output({motormix_binary(), "output", "--config", config_}, root_ + "/output.log");
-  lcm::LCM lcm;
-  ASSERT_TRUE(lcm.good());
-  std::mutex mutex;
-  std::vector<motormix::esc_telemetry_t> got;
-  struct Handler {
-    std::mutex* mutex;
-    std::vector<motormix::esc_telemetry_t>* got;
-    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::esc_telemetry_t* m) {
-      std::lock_guard<std::mutex> lock(*mutex);
-      got->push_back(*m);
-    }
-  } handler{&mutex, &got};
-  lcm.subscribe("ESC_TELEMETRY", &Handler::on, &handler);
-  std::atomic<bool> stop{false};
-  std::thread receiver([&] {
-    while (!stop) lcm.handleTimeout(20);
-  });
-  ASSERT_GE(wait_duty(0, 1000000, 3000), 0.0);  // running
-  std::mt19937 rng(1234);
-  int good = 0;
-  for (int k = 0; k < 150; ++k) {
-    output::KissReading r;
-    r.temperature_c = 30 + k % 20;
-    r.voltage_v = 15.0 + (k % 100) / 100.0;
-    r.current_a = 5.0 + (k % 50) / 10.0;
-    r.consumption_mah = 100 + k;
-    r.erpm = 20000 + 100 * k;
-    auto frame = output::kiss_frame(r);
-    if (k % 3 == 2) {
-      frame[rng() % frame.size()] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
-    } else {
-      ++good;
-    }
-    ASSERT_EQ(::write(master_, frame.data(), frame.size()), static_cast<ssize_t>(frame.size()));
-    std::this_thread::sleep_for(3ms);  // the next request's gap
-  }
-  std::this_thread::sleep_for(200ms);
-  stop = true;
-  receiver.join();
-  std::lock_guard<std::mutex> lock(mutex);
-  EXPECT_EQ(static_cast<int>(got.size()), good);
-  for (const auto& m : got) {
-    ASSERT_EQ(m.count, 1);
-    EXPECT_EQ(m.motor[0], 2);
-    EXPECT_TRUE(std::isnan(m.rpm[0]));
-    EXPECT_GE(m.erpm[0], 20000.0f);
-    EXPECT_GE(m.voltage_v[0], 15.0f);
-    EXPECT_LE(m.voltage_v[0], 16.0f);
-  }
 }
 
 TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
@@ -355,6 +305,139 @@ struct Pty {
     return types;
   }
 };
+
+// KISS telemetry asked for and matched. The output drives DShot600 through
+// a chip emulated on a pseudo-terminal, with two ESC telemetry wires
+// (motors 2 and 4) on two more; each emulated ESC answers only a PULSES
+// frame that asks it (the telemetry bit of its channel), a third of its
+// frames corrupted. The output asks the two in turn, every good answer comes
+// out as esc_telemetry_t for its motor, stamped no later than it arrived,
+// and no bad one; the log counts what was asked and answered.
+TEST_F(OutputProcess, KissTelemetryIsAskedInTurnAndEachAnswerComesOutForItsMotor) {
+  Pty chip, second_wire;
+  ASSERT_GE(chip.master, 0);
+  ASSERT_GE(second_wire.master, 0);
+  const std::string config = root_ + "/kiss.yaml";
+  std::ofstream(config) << "geometry: {preset: quad_x}\n"
+                           "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                           "hardware:\n"
+                           "  driver: serial\n"
+                           "  protocol: dshot600\n"
+                           "  pulse_rate_hz: 400\n"
+                           "  serial: {device: "
+                        << chip.slave << "}\n  telemetry: [{device: " << wire_
+                        << ", motor: 2}, {device: " << second_wire.slave << ", motor: 4}]\n";
+  ChildProcess output({motormix_binary(), "output", "--config", config}, root_ + "/kiss.log");
+  lcm::LCM lcm;
+  ASSERT_TRUE(lcm.good());
+  std::mutex mutex;
+  std::vector<std::pair<motormix::esc_telemetry_t, std::int64_t>> got;  // and when it came
+  struct Handler {
+    std::mutex* mutex;
+    std::vector<std::pair<motormix::esc_telemetry_t, std::int64_t>>* got;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const motormix::esc_telemetry_t* m) {
+      const auto now = std::chrono::duration_cast<std::chrono::microseconds>(
+                           std::chrono::system_clock::now().time_since_epoch())
+                           .count();
+      std::lock_guard<std::mutex> lock(*mutex);
+      got->emplace_back(*m, now);
+    }
+  } handler{&mutex, &got};
+  lcm.subscribe("ESC_TELEMETRY", &Handler::on, &handler);
+  std::atomic<bool> stop{false};
+  std::thread receiver([&] {
+    while (!stop) lcm.handleTimeout(20);
+  });
+  struct Join {
+    std::atomic<bool>* stop;
+    std::thread* t;
+    ~Join() {
+      *stop = true;
+      if (t->joinable()) t->join();
+    }
+  } join{&stop, &receiver};
+  // The chip: a report every 50 ms naming its session; each PULSES frame
+  // read; the asked ESC answers on its wire.
+  constexpr int kAnswers = 120;
+  std::mt19937 rng(1234);
+  mm_link_parser parser;
+  mm_link_parser_init(&parser);
+  std::vector<int> asked;  // motor (1-based) of each request, in order
+  int good = 0, sent = 0, pulses = 0;
+  const auto start = std::chrono::steady_clock::now();
+  auto next_report = start;
+  while (sent < kAnswers && std::chrono::steady_clock::now() - start < 10s) {
+    if (std::chrono::steady_clock::now() >= next_report) {
+      mm_link_report r{};
+      r.session = chip.session;
+      r.version = MM_LINK_VERSION;
+      r.flags = MM_LINK_FLAG_CONFIGURED;
+      std::uint8_t out[MM_LINK_MAX_FRAME];
+      [[maybe_unused]] const ssize_t w =
+          ::write(chip.master, out, mm_link_encode_report(&r, 0, out));
+      next_report += 50ms;
+    }
+    std::uint8_t buf[256];
+    const ssize_t n = ::read(chip.master, buf, sizeof buf);
+    for (ssize_t i = 0; i < n; ++i) {
+      mm_link_frame f{};
+      if (mm_link_feed(&parser, buf[i], &f) != MM_LINK_PULSES) continue;
+      ++pulses;
+      if (f.u.pulses.telemetry == 0) continue;
+      const int motor = f.u.pulses.telemetry;  // channel + 1
+      asked.push_back(motor);
+      if (motor != 2 && motor != 4) continue;  // no wire: nobody answers
+      output::KissReading r;
+      r.temperature_c = 30 + sent % 20;
+      r.voltage_v = 15.0 + (sent % 100) / 100.0;
+      r.current_a = 5.0 + (sent % 50) / 10.0;
+      r.consumption_mah = 100 + sent;
+      r.erpm = 20000 + 100 * sent;
+      auto frame = output::kiss_frame(r);
+      if (sent % 3 == 2) {
+        frame[rng() % frame.size()] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+      } else {
+        ++good;
+      }
+      const int wire = motor == 2 ? master_ : second_wire.master;
+      ASSERT_EQ(::write(wire, frame.data(), frame.size()), static_cast<ssize_t>(frame.size()));
+      ++sent;
+    }
+    if (n <= 0) std::this_thread::sleep_for(500us);
+  }
+  ASSERT_EQ(sent, kAnswers) << "requests seen: " << asked.size() << " in " << pulses << " frames";
+  std::this_thread::sleep_for(300ms);
+  output.signal(SIGTERM);
+  EXPECT_EQ(output.wait_for(3s), 0);
+  // Asked in turn: motors 2 and 4 alternate, no other asked.
+  for (std::size_t i = 0; i < asked.size(); ++i) {
+    ASSERT_TRUE(asked[i] == 2 || asked[i] == 4) << "request " << i << " for motor " << asked[i];
+    if (i > 0) {
+      EXPECT_NE(asked[i], asked[i - 1]) << "request " << i << " not in turn";
+    }
+  }
+  stop = true;
+  if (receiver.joinable()) receiver.join();
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(static_cast<int>(got.size()), good);
+  int on_two = 0, on_four = 0;
+  for (const auto& [m, arrived_us] : got) {
+    ASSERT_EQ(m.count, 1);
+    EXPECT_TRUE(m.motor[0] == 2 || m.motor[0] == 4);
+    (m.motor[0] == 2 ? on_two : on_four) += 1;
+    EXPECT_TRUE(std::isnan(m.rpm[0]));
+    EXPECT_GE(m.erpm[0], 20000.0f);
+    EXPECT_GE(m.voltage_v[0], 15.0f);
+    EXPECT_LE(m.voltage_v[0], 16.0f);
+    EXPECT_LE(m.utime, arrived_us) << "stamped when asked, never later than it came";
+  }
+  EXPECT_GT(on_two, 0);
+  EXPECT_GT(on_four, 0);
+  std::ifstream in(root_ + "/kiss.log");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("KISS telemetry: "), std::string::npos) << text;
+  EXPECT_NE(text.find(" unasked"), std::string::npos) << text;
+}
 
 TEST_F(OutputProcess, ALostSerialDeviceIsReopenedAndTheFirmwareConfiguredAgain) {
   auto first = std::make_unique<Pty>();

@@ -87,10 +87,12 @@ hardware: {driver: serial, serial: {device: /dev/ttyUSB0}, protocol: dshot600}
     R"(geometry: {preset: quad_x}
 hardware: {driver: serial, serial: {device: /dev/ttyUSB0}, protocol: dshot300, bidirectional: true}
 )",
-    // A KISS telemetry wire (no bundled configuration has one: docs/wiring-it-to-motors.md).
+    // A KISS telemetry wire, asked through DShot (no bundled configuration
+    // has one: docs/wiring-it-to-motors.md).
     R"(geometry: {preset: quad_x}
 hardware:
   driver: serial
+  protocol: dshot600
   serial: {device: /dev/ttyUSB0}
   telemetry: [{device: /dev/ttyAMA1, motor: 1, baud: 115200}]
 )",

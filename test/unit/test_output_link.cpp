@@ -56,7 +56,7 @@ mm_link_config four_channel_config() {
 
 bool same(const mm_link_pulses& a, const mm_link_pulses& b) {
   if (a.session != b.session || a.sequence != b.sequence || a.armed != b.armed ||
-      a.count != b.count)
+      a.count != b.count || a.telemetry != b.telemetry)
     return false;
   for (std::uint8_t i = 0; i < a.count; ++i) {
     if (a.pulse_hus[i] != b.pulse_hus[i]) return false;
@@ -110,6 +110,48 @@ TEST(OutputLink, PulsesAndReportsRoundTrip) {
   mm_link_pulses bad = some_pulses(1, 8);
   bad.count = 9;
   EXPECT_EQ(mm_link_encode_pulses(&bad, buf), 0U);  // more channels than a frame carries
+}
+
+// The telemetry request (link version 5) rides in the count byte: every
+// channel of every count round-trips, none means none, and a request beyond
+// the count is neither sent nor taken; a frame of the same length is as
+// long as one without (the chip's two-byte receive buffer sees no more).
+TEST(OutputLink, TelemetryRequestsRoundTripInThePulsesFrame) {
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  for (std::uint8_t count = 1; count <= MM_LINK_MAX_CHANNELS; ++count) {
+    for (std::uint8_t ask = 0; ask <= count; ++ask) {
+      mm_link_pulses sent = some_pulses(ask, count);
+      sent.telemetry = ask;  // 0: none; c + 1: channel c
+      const std::size_t n = mm_link_encode_pulses(&sent, buf);
+      ASSERT_EQ(n, 7u + MM_LINK_PULSES_BODY(count));
+      mm_link_parser parser;
+      mm_link_parser_init(&parser);
+      mm_link_pulses got{};
+      bool completed = false;
+      for (std::size_t i = 0; i < n; ++i) completed = feed_pulses(parser, buf[i], got);
+      ASSERT_TRUE(completed) << "count " << int(count) << " ask " << int(ask);
+      EXPECT_TRUE(same(got, sent)) << "count " << int(count) << " ask " << int(ask);
+    }
+    mm_link_pulses beyond = some_pulses(0, count);
+    beyond.telemetry = static_cast<std::uint8_t>(count + 1);
+    EXPECT_EQ(mm_link_encode_pulses(&beyond, buf), 0U);
+  }
+  // Received: a channel named without the flag, or beyond the count, is malformed.
+  for (const std::uint8_t count_byte : {std::uint8_t{0x14}, std::uint8_t{0xC4}}) {
+    mm_link_pulses p = some_pulses(0, 4);
+    const std::size_t n = mm_link_encode_pulses(&p, buf);
+    buf[3 + 10] = count_byte;  // after sync and length: type, session, sequence, armed, count
+    // The CRC over length..payload, made again so only the content is wrong.
+    const std::uint32_t crc = mm_link_crc32(0, buf + 2, n - 6);
+    for (int b = 0; b < 4; ++b) buf[n - 4 + b] = static_cast<std::uint8_t>(crc >> (8 * b));
+    mm_link_parser parser;
+    mm_link_parser_init(&parser);
+    mm_link_pulses got{};
+    bool completed = false;
+    for (std::size_t i = 0; i < n; ++i) completed = completed || feed_pulses(parser, buf[i], got);
+    EXPECT_FALSE(completed) << std::hex << int(count_byte);
+    EXPECT_EQ(parser.malformed, 1U) << std::hex << int(count_byte);
+  }
 }
 
 TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {

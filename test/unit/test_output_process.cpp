@@ -10,6 +10,7 @@
 #include "output/serial_port.hpp"
 #include "output/serial_pulse_driver.hpp"
 #include "output/sysfs_pwm_driver.hpp"
+#include "output/telemetry_requests.hpp"
 
 #include "bus/clock.hpp"
 
@@ -174,6 +175,36 @@ std::string expect_hardware_error(const std::string& hardware, const std::string
   return "";
 }
 
+// KISS requests in turn over the wired motors; a reading answers the open
+// request of its motor within the window (stamped when it was asked), and is
+// unasked otherwise; a request nobody answers in the window, or before the
+// next one to the same ESC, is counted unanswered.
+TEST(TelemetryRequests, AskInTurnAndMatchEachReadingToItsRequest) {
+  constexpr double kWindowS = 0.03;
+  output::TelemetryRequests r({1, 3}, kWindowS);
+  EXPECT_EQ(r.next(), 1);
+  r.asked(1, 10.000);
+  EXPECT_EQ(r.next(), 3);
+  r.asked(3, 10.0025);
+  EXPECT_EQ(r.next(), 1);
+  const std::optional<double> first = r.answered(1, 10.004);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_DOUBLE_EQ(*first, 10.000);
+  EXPECT_FALSE(r.answered(1, 10.005).has_value()) << "one answer per request";
+  EXPECT_FALSE(r.answered(2, 10.005).has_value()) << "no wire, never asked";
+  // Motor 3's request expires unanswered; its late reading is unasked.
+  EXPECT_FALSE(r.answered(3, 10.0025 + kWindowS + 0.001).has_value());
+  r.asked(1, 10.1);
+  r.asked(3, 10.1025);
+  r.asked(1, 10.105);  // motor 1's request of 10.1 never answered
+  const output::TelemetryRequests::Counts& c = r.counts();
+  EXPECT_EQ(c.asked, 5u);
+  EXPECT_EQ(c.answered, 1u);
+  EXPECT_EQ(c.unasked, 3u);
+  EXPECT_EQ(c.unanswered, 2u);
+  EXPECT_EQ(output::TelemetryRequests({}, kWindowS).next(), -1);
+}
+
 TEST(OutputHardwareConfig, RefusesWhatNoDriverCanMakeNamingKeyValueAndRange) {
   EXPECT_NE(expect_hardware_error("  driver: serial\n").find("hardware.serial.device"),
             std::string::npos);
@@ -191,6 +222,14 @@ TEST(OutputHardwareConfig, RefusesWhatNoDriverCanMakeNamingKeyValueAndRange) {
   EXPECT_NE(expect_hardware_error("  driver: sysfs\n  telemetry: [{device: /dev/null, motor: 5}]\n")
                 .find("hardware.telemetry[0].motor"),
             std::string::npos);
+  // KISS wires hear only what a DShot frame's telemetry bit asks for:
+  // refused with servo PWM, on either driver, naming why.
+  for (const char* driver : {"sysfs", "serial\n  serial: {device: /dev/ttyUSB0}"}) {
+    const std::string pwm_wire = expect_hardware_error(
+        std::string("  driver: ") + driver + "\n  telemetry: [{device: /dev/null, motor: 2}]\n");
+    EXPECT_NE(pwm_wire.find("'hardware.telemetry'"), std::string::npos) << pwm_wire;
+    EXPECT_NE(pwm_wire.find("telemetry bit"), std::string::npos) << pwm_wire;
+  }
   EXPECT_NE(
       expect_hardware_error("  driver: sysfs\n", "output: {unit: duty}\n").find("output.unit"),
       std::string::npos);
@@ -530,6 +569,46 @@ TEST(SerialPulses, ANonSerialDeviceIsRefusedByName) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/dev/null"), std::string::npos);
   }
+}
+
+// A KISS telemetry request goes in the next PULSES frame, once; the driver
+// says which channel it asked and when; servo PWM cannot ask.
+TEST(SerialPulses, ATelemetryRequestGoesInTheNextFrameOnce) {
+  PtyPair pty;
+  output::SerialPulseSettings s;
+  s.period_us = 1000;
+  s.min_us = 1000;
+  s.max_us = 2000;
+  s.disarmed_us = {1000, 1000, 1000, 1000};
+  s.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  s.baud = 2e6;  // no pacing in the way
+  output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
+  pty.report(MM_LINK_FLAG_CONFIGURED, 0x50001, 0);
+  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
+    ASSERT_TRUE(driver.service(0.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_EQ(pty.frames(1).size(), 1u);  // the configuration
+  EXPECT_FALSE(driver.ask_telemetry(4)) << "no channel 4 on four motors";
+  ASSERT_TRUE(driver.ask_telemetry(2));
+  const double widths[4] = {1100, 1200, 1300, 1400};
+  double at = -1.0;
+  EXPECT_EQ(driver.take_asked(at), -1) << "asked before any frame went";
+  ASSERT_TRUE(driver.write(widths, 4, output::kAllArmed));
+  EXPECT_EQ(driver.take_asked(at), 2);
+  EXPECT_GT(at, 0.0);
+  EXPECT_EQ(driver.take_asked(at), -1) << "reported once";
+  ASSERT_TRUE(driver.write(widths, 4, output::kAllArmed));
+  const std::vector<mm_link_frame> got = pty.frames(2);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].u.pulses.telemetry, 3) << "channel 2 asked (+1)";
+  EXPECT_EQ(got[1].u.pulses.telemetry, 0) << "the next frame asks nothing";
+
+  PtyPair pwm_pty;
+  s.protocol = MM_LINK_PROTOCOL_PWM;
+  s.period_us = 2500;
+  output::SerialPulseDriver pwm(output::open_serial_port(pwm_pty.device, 250000), s);
+  EXPECT_FALSE(pwm.ask_telemetry(0)) << "servo PWM cannot ask";
 }
 
 // Bidirectional DShot: the CONFIG carries the flag; each TELEMETRY frame's

@@ -52,6 +52,20 @@ class PulseDriver {
     (void)repeat;
     return false;
   }
+  // KISS telemetry requests (DShot only: the telemetry bit in one frame of
+  // the channel asked). ask_telemetry(c) puts channel c's request in the
+  // next frame that goes (it waits while an earlier one has not gone; a
+  // later call replaces it); false when the hardware cannot ask.
+  // take_asked: the channel whose request went in a frame since the last
+  // call and when (monotonic seconds), -1 if none went.
+  virtual bool ask_telemetry(int channel) {
+    (void)channel;
+    return false;
+  }
+  virtual int take_asked(double& at_s) {
+    (void)at_s;
+    return -1;
+  }
   // A driver paced to its wire keeps the newest frame while the wire is
   // busy: when that frame can go (monotonic seconds; infinity when none
   // waits), and sending it once that time has come (else nothing).

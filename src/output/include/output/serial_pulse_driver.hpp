@@ -62,6 +62,8 @@ class SerialPulseDriver : public PulseDriver {
   std::vector<ErpmReading> take_erpm() override;
   double waiting_until_s() const override;
   void send_waiting() override;
+  bool ask_telemetry(int channel) override;
+  int take_asked(double& at_s) override;
   // eRPM replies the firmware decoded, and those it found missing or broken.
   std::uint64_t replies_decoded() const { return replies_decoded_; }
   std::uint64_t replies_missed() const { return replies_missed_; }
@@ -81,6 +83,10 @@ class SerialPulseDriver : public PulseDriver {
   bool send(const std::uint8_t* bytes, std::size_t n);
   void send_config();
   bool send_pulses(const double* pulse_us, int count, std::uint8_t armed);
+  // KISS telemetry: the request for the next frame (channel + 1, 0 none),
+  // and the one that went last with when (channel + 1, 0 none).
+  std::uint8_t ask_ = 0, asked_ = 0;
+  double asked_at_s_ = 0.0;
 
   int fd_;
   mm_link_config config_{};
