@@ -2,7 +2,11 @@
 """SIM.md's tables for motormix's own failure detector, flown with the CLI.
 
   tools/detection_table.py --motormix build-ci-release/motormix [--seeds N] [--jobs N]
-                           [--false-alarm-seeds N] > detection.md
+                           [--false-alarm-seeds N] [--first-seed S] > detection.md
+
+The detected and false-alarm tables fly seeds S, S + 1, ...: drawn fresh on
+every run (so the tables never rest on seeds the detector was tuned on) and
+printed above the tables, so a run can be replayed with --first-seed S.
 
 Three tables, every flight in lockstep through `motormix sim --json`:
 - detected: hexa X and octo X, optimal and prioritized, each motor stopping
@@ -23,6 +27,7 @@ Three tables, every flight in lockstep through `motormix sim --json`:
 
 import argparse
 import json
+import random
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -51,14 +56,14 @@ def fly(motormix, config, scenario, seed, sets, fail=None):
     return json.loads(out.stdout)
 
 
-def detected_table(motormix, seeds, pool):
+def detected_table(motormix, seeds, pool, first=1):
     jobs = []
     for vehicle, n in MOTORS.items():
         for strategy in ("optimal", "prioritized"):
             for source, sources in SOURCES.items():
                 for scenario, at in AT.items():
                     for motor in range(1, n + 1):
-                        for seed in range(1, seeds + 1):
+                        for seed in range(first, first + seeds):
                             sets = [f"mixer.strategy={strategy}",
                                     f"failure_detection.sources={sources}"]
                             jobs.append(((vehicle, strategy, source, scenario),
@@ -91,7 +96,7 @@ def detected_table(motormix, seeds, pool):
     return "\n".join(lines)
 
 
-def false_alarm_table(motormix, seeds, pool):
+def false_alarm_table(motormix, seeds, pool, first=1):
     sets_by_source = {"default": ["failure_detection.enabled=true"]}
     for source in ("telemetry", "rates", "outputs"):
         sets_by_source[source] = [f"failure_detection.sources={SOURCES[source]}"]
@@ -102,7 +107,7 @@ def false_alarm_table(motormix, seeds, pool):
                 continue  # outputs need six rotors or more
             for strategy in STRATEGIES:
                 for scenario in HEALTHY:
-                    for seed in range(1, seeds + 1):
+                    for seed in range(first, first + seeds):
                         jobs.append(((source, vehicle), (vehicle, scenario, seed,
                                                          sets + [f"mixer.strategy={strategy}"])))
     results = pool.map(lambda j: (j[0], fly(motormix, *j[1]), j[1]), jobs)
@@ -168,14 +173,20 @@ def main():
     p.add_argument("--false-alarm-seeds", type=int, default=10)
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--only", choices=["detected", "false", "other"], default=None)
+    p.add_argument("--first-seed", type=int, default=None,
+                   help="the campaigns' first seed (default: drawn fresh, printed)")
     a = p.parse_args()
+    first = a.first_seed if a.first_seed is not None else random.randrange(1_000_000, 1_000_000_000)
+    print(f"Seeds drawn for this run: from {first} (replay: `--first-seed {first}`).\n")
     with ThreadPoolExecutor(a.jobs) as pool:
         if a.only in (None, "detected"):
-            print("### Detected: each motor stopping at hover, never reported\n")
-            print(detected_table(a.motormix, a.seeds, pool) + "\n")
+            print(f"### Detected: each motor stopping at hover, never reported "
+                  f"(seeds {first}-{first + a.seeds - 1})\n")
+            print(detected_table(a.motormix, a.seeds, pool, first) + "\n")
         if a.only in (None, "false"):
-            print(f"### False alarms: healthy flights, {a.false_alarm_seeds} seeds\n")
-            print(false_alarm_table(a.motormix, a.false_alarm_seeds, pool) + "\n")
+            print(f"### False alarms: healthy flights, {a.false_alarm_seeds} seeds "
+                  f"({first}-{first + a.false_alarm_seeds - 1})\n")
+            print(false_alarm_table(a.motormix, a.false_alarm_seeds, pool, first) + "\n")
         if a.only in (None, "other"):
             print("### Other failures (steps, at 10.5 s, seed 1, default sources)\n")
             print(other_failures_table(a.motormix, pool) + "\n")

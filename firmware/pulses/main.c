@@ -277,14 +277,17 @@ static void apply_config(const mm_link_config* c) {
 
 static uint8_t same_config(const mm_link_config* a, const mm_link_config* b) {
   if (a->period_us != b->period_us || a->link_timeout_ms != b->link_timeout_ms ||
-      a->min_us != b->min_us || a->max_us != b->max_us || a->count != b->count)
+      a->min_us != b->min_us || a->max_us != b->max_us || a->count != b->count ||
+      a->protocol != b->protocol)
     return 0;
   return memcmp(a->disarmed_us, b->disarmed_us, sizeof a->disarmed_us[0] * a->count) == 0;
 }
 
-/* For this session and newer than every frame taken in it; else counted. */
+/* For this session, newer than every frame taken in it and at most
+ * MM_LINK_MAX_SEQUENCE_STEP beyond the last; else counted. */
 static uint8_t current(uint32_t session, uint32_t sequence) {
-  if (session != g_session || sequence <= g_report.last_sequence) {
+  const uint32_t step = sequence - g_report.last_sequence; /* 0 or wrapped: not newer */
+  if (session != g_session || step == 0u || step > MM_LINK_MAX_SEQUENCE_STEP) {
     ++g_report.rejected;
     return 0;
   }

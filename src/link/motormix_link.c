@@ -136,6 +136,10 @@ int mm_link_config_valid(const mm_link_config* c) {
     return 0;
   if (c->link_timeout_ms < MM_LINK_MIN_TIMEOUT_MS || c->link_timeout_ms > MM_LINK_MAX_TIMEOUT_MS)
     return 0;
+  /* The failsafe counts the timeout less one period: shorter than two, it
+   * would wrap. */
+  if ((uint32_t)c->link_timeout_ms * 1000UL < (uint32_t)MM_LINK_MIN_TIMEOUT_PERIODS * c->period_us)
+    return 0;
   /* DShot: the widths only name the throttle range, no pulse has to fit
    * in the period. */
   const uint16_t room = dshot ? MM_LINK_MAX_PERIOD_US : c->period_us;

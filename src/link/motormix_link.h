@@ -20,9 +20,10 @@
  * current session and with a sequence above the last it took. So a frame
  * recorded before a link timeout, or before a reset, is never taken again,
  * whatever its sequence; within a session only a frame newer than every
- * one taken, i.e. one younger than the link timeout. A host learns the
- * session, and the last sequence taken, from the reports: it sends nothing
- * before it has heard one.
+ * one taken, i.e. one younger than the link timeout, and at most
+ * MM_LINK_MAX_SEQUENCE_STEP beyond it. A host learns the session, and the
+ * last sequence taken, from the reports: it sends nothing before it has
+ * heard one.
  *
  * Host -> MCU (after type: session u32, sequence u32)
  *   MM_LINK_CONFIG: period (us), link timeout (ms), lowest and highest
@@ -112,6 +113,15 @@ extern "C" {
 #define MM_LINK_MIN_LOW_US 40u
 #define MM_LINK_MIN_TIMEOUT_MS 10u
 #define MM_LINK_MAX_TIMEOUT_MS 1000u
+/* The link timeout is at least this many periods: the chip calls the link
+ * lost one period before the timeout, so that outputs disarm within it. */
+#define MM_LINK_MIN_TIMEOUT_PERIODS 2u
+/* A frame is taken only when its sequence is above the last one taken in
+ * the session by at most this: more frames than a session sees before a
+ * link timeout (4 kHz for a second), so a frame with a wild sequence (a
+ * host whose counter started wrong) is refused and cannot lock the session
+ * out. */
+#define MM_LINK_MAX_SEQUENCE_STEP 65536UL
 
 #define MM_LINK_CONFIG_BODY(count) (19u + 2u * (count))
 #define MM_LINK_COMMAND_BODY 12u
@@ -190,7 +200,8 @@ typedef struct {
 } mm_link_report;
 
 /* 1 if every field is within the limits above (pulses shorter than the
- * period by MM_LINK_MIN_LOW_US, min <= max, disarmed pulses in range). */
+ * period by MM_LINK_MIN_LOW_US, min <= max, disarmed pulses in range, the
+ * link timeout at least MM_LINK_MIN_TIMEOUT_PERIODS periods). */
 int mm_link_config_valid(const mm_link_config* c);
 
 /* Encode into out (at least MM_LINK_MAX_FRAME bytes); the frame's length in

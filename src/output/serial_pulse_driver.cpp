@@ -176,6 +176,10 @@ bool SerialPulseDriver::service(double now_s) {
             ++sessions_;
           } else {
             sequence_ = std::max(sequence_, report_.last_sequence);
+            // Far ahead of what the chip took (frames it refused piled up):
+            // back to its last, or the chip would refuse every jump.
+            if (sequence_ - report_.last_sequence > MM_LINK_MAX_SEQUENCE_STEP / 2)
+              sequence_ = report_.last_sequence;
           }
           if (!(report_.flags & MM_LINK_FLAG_CONFIGURED)) resend_config_ = true;
         }

@@ -293,6 +293,95 @@ TEST(PulseFirmware, LinkWatchdogDisarmsWithinTheTimeoutOfTheLastFrame) {
   EXPECT_NEAR(Host::last_widths(h.board.take_pulses()).at(3), 1750.0, kExactToleranceUs);
 }
 
+// The failsafe at the limits of what the chip accepts: the longest period
+// with the shortest timeout it allows (two periods), the shortest period
+// that fits a 2000 us pulse with the shortest timeout, and the shortest
+// timeout at exactly two periods. Outputs disarm within the timeout of the last
+// frame plus one period; a timeout shorter than two periods (whose count,
+// timeout less a period, once wrapped to 8.4 s) is refused as malformed.
+TEST(PulseFirmware, TheFailsafeHoldsAtTheLimitsOfEveryAcceptedConfiguration) {
+  struct Limit {
+    std::uint16_t period_us, timeout_ms;
+  };
+  for (const Limit l : {Limit{25000, 50}, Limit{2040, 10}, Limit{5000, 10}}) {
+    SCOPED_TRACE("period " + std::to_string(l.period_us) + " us, timeout " +
+                 std::to_string(l.timeout_ms) + " ms");
+    Host h;
+    mm_link_config c = h.config(4, l.period_us);
+    c.link_timeout_ms = l.timeout_ms;
+    h.send_config(c);
+    h.board.run_for_us(4.0 * l.period_us);
+    const std::vector<double> armed = {1600, 1650, 1700, 1750};
+    for (int i = 0; i < 6; ++i) {
+      h.send_pulses(armed);
+      h.board.run_for_us(l.period_us);
+    }
+    while (h.board.sending()) h.board.run_for_us(10);
+    const std::uint64_t last_frame = h.board.cycle();
+    h.board.take_pulses();
+    h.board.run_for_us(l.timeout_ms * 1000.0 + 3.0 * l.period_us);
+    std::uint64_t first_disarmed = 0;
+    for (const Pulse& p : h.board.take_pulses()) {
+      if (std::abs(p.width_us - 1000.0) < kExactToleranceUs) {
+        first_disarmed = p.rise_cycle;
+        break;
+      }
+    }
+    ASSERT_NE(first_disarmed, 0u) << "still armed after the timeout and a period";
+    const double after_ms = static_cast<double>(first_disarmed - last_frame) * kUsPerCycle / 1000.0;
+    EXPECT_LE(after_ms, l.timeout_ms + l.period_us / 1000.0);
+  }
+  // One period short of the rule: refused, no pulse at all.
+  Host h;
+  mm_link_config c = h.config(4, 25000);
+  c.link_timeout_ms = 49;
+  std::uint8_t buf[MM_LINK_MAX_FRAME];
+  EXPECT_EQ(mm_link_encode_config(&c, buf), 0u) << "the host's encoder refuses it too";
+  c.link_timeout_ms = 50;
+  c.session = h.session;
+  c.sequence = h.seq++;
+  const std::size_t n = mm_link_encode_config(&c, buf);
+  ASSERT_GT(n, 0u);
+  buf[3 + 11] = 49;  // the timeout's low byte, after the encoder's check
+  const std::uint32_t crc = mm_link_crc32(0, buf + 2, n - 6);
+  for (int b = 0; b < 4; ++b) buf[n - 4 + b] = static_cast<std::uint8_t>(crc >> (8 * b));
+  h.board.send(buf, n);
+  h.board.run_for_us(100000);
+  EXPECT_TRUE(h.board.take_pulses().empty());
+  EXPECT_EQ(h.last_report().malformed, 1u);
+}
+
+// A frame whose sequence is far beyond the last one taken (a host whose
+// counter started wrong) is refused and counted; it locks nothing out: the
+// next frames in sequence are taken at once.
+TEST(PulseFirmware, AWildSequenceIsRefusedAndLocksNoSessionOut) {
+  Host h;
+  h.send_config(h.config());
+  h.board.run_for_us(10000);
+  h.send_pulses({1500, 1500, 1500, 1500});
+  h.board.run_for_us(3 * kPeriodUs);
+  const std::uint32_t good = h.seq;
+  h.seq += 0x80000000U;  // half the counter away
+  h.send_pulses({1900, 1900, 1900, 1900});
+  h.board.run_for_us(3 * kPeriodUs);
+  h.seq = good + static_cast<std::uint32_t>(MM_LINK_MAX_SEQUENCE_STEP) + 1;  // one beyond
+  h.send_pulses({1900, 1900, 1900, 1900});
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.take_pulses();
+  h.board.run_for_us(kPeriodUs);
+  EXPECT_NEAR(Host::last_widths(h.board.take_pulses()).at(0), 1500.0, kExactToleranceUs);
+  h.seq = good + 5;  // frames lost on the way: a small step is taken
+  h.send_pulses({1700, 1700, 1700, 1700});
+  h.board.run_for_us(3 * kPeriodUs);
+  h.board.take_pulses();
+  h.board.run_for_us(kPeriodUs);
+  EXPECT_NEAR(Host::last_widths(h.board.take_pulses()).at(0), 1700.0, kExactToleranceUs);
+  h.board.run_for_us(60000);
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.rejected, 2u);
+  EXPECT_EQ(r.link_timeouts, 0u);
+}
+
 // Frames recorded before a link timeout (issue 49: an independent probe
 // played frames 1.5-2 s old into the chip between good ones, and 92 pulses
 // followed them under the 8-bit sequence). MOTORMIX_AVR_REPLAYED_FRAMES
@@ -306,10 +395,11 @@ TEST(PulseFirmwareReplay, FramesFromBeforeALinkTimeoutMoveNoPulse) {
   Host h;
   h.send_config(h.config());
   h.board.run_for_us(10000);
-  // The recording: a second of armed frames, sequences climbing high.
+  // The recording: a second of armed frames, sequences climbing high (far
+  // above what the next session will use, within one step of the last).
   std::mt19937 rng(20261205);
   std::vector<std::vector<std::uint8_t>> recorded;
-  h.seq = 1u << 30;
+  h.seq += static_cast<std::uint32_t>(MM_LINK_MAX_SEQUENCE_STEP) - 500;
   for (int i = 0; i < 400; ++i) {
     std::vector<double> w(4);
     for (auto& x : w) x = static_cast<double>(1000 + rng() % 1001);
@@ -627,6 +717,41 @@ TEST(PulseFirmwareDshot, FourChannelsEveryFrameDecodedWithinTheProtocolsTimes) {
     EXPECT_EQ(r.crc_errors + r.malformed + r.rejected, 0u) << speed.name;
     EXPECT_EQ(r.version, MM_LINK_VERSION);
   }
+}
+
+// A configuration that changes only the protocol (or only the
+// bidirectional bit) is a different configuration: taken while disarmed.
+TEST(PulseFirmwareDshot, AConfigurationChangingOnlyTheProtocolIsTakenWhileDisarmed) {
+  constexpr int kChannels = 4;
+  Host h;
+  Escs esc(kChannels, 16.0 * 1e6 / 600e3);
+  mm_link_config c = h.config(kChannels, 2500, 1000, MM_LINK_PROTOCOL_PWM);
+  h.send_config(c);
+  h.board.run_for_us(10000);
+  ASSERT_FALSE(h.board.take_pulses().empty()) << "servo pulses first";
+  c.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  h.send_config(c);
+  h.board.run_for_us(2000);
+  esc.feed(h.board);
+  for (DshotEsc& e : esc.escs) e.take_frames();
+  h.board.run_for_us(20000);
+  esc.feed(h.board);
+  for (int ch = 0; ch < kChannels; ++ch) {
+    const auto frames = esc.escs[static_cast<std::size_t>(ch)].take_frames();
+    EXPECT_GE(frames.size(), 6u) << "channel " << ch << ": no DShot after the protocol changed";
+    for (const DshotFrame& f : frames) EXPECT_TRUE(f.crc_ok && f.value == 0);
+  }
+  c.protocol = MM_LINK_PROTOCOL_DSHOT600 | MM_LINK_PROTOCOL_BIDIRECTIONAL;
+  c.period_us = 2500;
+  h.send_config(c);
+  h.board.run_for_us(60000);
+  const mm_link_report r = h.last_report();
+  EXPECT_EQ(r.rejected + r.malformed, 0u);
+  EXPECT_TRUE(r.flags & MM_LINK_FLAG_CONFIGURED);
+  // Inverted frames now: the line idles high.
+  h.board.run_for_us(5000);
+  h.board.take_edges();
+  EXPECT_TRUE(h.board.pin_high(0)) << "bidirectional frames idle high";
 }
 
 // KISS telemetry is asked for in the PULSES frame (link version 5): the

@@ -155,6 +155,19 @@ TEST(OutputLink, TelemetryRequestsRoundTripInThePulsesFrame) {
 }
 
 TEST(OutputLink, ConfigurationsOutsideTheLimitsAreNeitherSentNorTaken) {
+  {
+    // The link timeout shorter than two periods: the chip's failsafe count
+    // (timeout less a period) would wrap. 50 Hz with 10 ms, 40 Hz with 49 ms.
+    mm_link_config c = four_channel_config();
+    c.period_us = 20000;
+    c.link_timeout_ms = 10;
+    EXPECT_FALSE(mm_link_config_valid(&c));
+    c.period_us = 25000;
+    c.link_timeout_ms = 49;
+    EXPECT_FALSE(mm_link_config_valid(&c));
+    c.link_timeout_ms = 50;
+    EXPECT_TRUE(mm_link_config_valid(&c));
+  }
   std::uint8_t buf[MM_LINK_MAX_FRAME];
   const mm_link_config good = four_channel_config();
   EXPECT_EQ(mm_link_config_valid(&good), 1);
