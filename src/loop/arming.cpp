@@ -38,12 +38,19 @@ Arming::Events Arming::update(const Inputs& in, std::int64_t now_us) {
       }
       break;
     case LoopState::kDisarmed:
-      if (in.setpoint_fresh && in.pid_fresh && in.setpoint_armed && arm_permitted_) {
-        if (std::abs(in.throttle) <= arm_max_throttle_) {
+      if (in.setpoint_fresh && in.pid_fresh && in.setpoint_armed) {
+        Refusal refusal = Refusal::kNone;
+        if (!arm_permitted_) {
+          refusal = Refusal::kNotDisarmedFirst;
+        } else if (std::abs(in.throttle) <= arm_max_throttle_) {
           state_ = LoopState::kArmed;
           armed_since_us_ = now_us;
-        } else if (!arm_refused_logged_) {
+        } else {
+          refusal = Refusal::kThrottleHigh;
+        }
+        if (refusal != Refusal::kNone && !arm_refused_logged_) {
           events.arming_refused = true;
+          events.refusal = refusal;
           arm_refused_logged_ = true;  // once per request, not once per cycle
         }
       }

@@ -286,6 +286,7 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   const Arming::Events events = arming_.update(in, now_us);
   if (events.failsafe_entered) ++counters_.failsafe_events;
   if (events.arming_refused) ++counters_.arming_refused;
+  result_.arming_refused = events.refusal;
 
   // The spool-up ramp runs from arming; a failsafe that keeps mixing (hold
   // the last inputs, idle) keeps it, so no output jumps up on the way down.

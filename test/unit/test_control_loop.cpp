@@ -204,6 +204,20 @@ TEST_F(ControlLoopTest, YawFromPidWhenConfigured) {
   EXPECT_NEAR(r.mix.command[0], 0.0, kExact);
 }
 
+// A mixer started while its controller already says armed (or after a
+// landing): refused, counted and said why in the cycle's result.
+TEST(ArmingCheck, ArmedWithoutADisarmedSetpointFirstIsRefusedWithItsReason) {
+  const config::Config c = team_quad_config();
+  ControlLoop loop(c, config::build_mixer(c));
+  loop.on_setpoint(SetpointSample{1, 0.0, 0, true}, 0, kWall);
+  loop.on_pid(PidSample{1, 0, 0, 0}, 0, kWall);
+  const auto& r = loop.cycle(0);
+  EXPECT_EQ(r.state, LoopState::kDisarmed);
+  EXPECT_EQ(r.arming_refused, loop::Arming::Refusal::kNotDisarmedFirst);
+  EXPECT_EQ(loop.cycle(1 * kMs).arming_refused, loop::Arming::Refusal::kNone) << "said once";
+  EXPECT_EQ(loop.counters().arming_refused, 1);
+}
+
 TEST(ArmingCheck, RefusedWithThrottleUp) {
   const config::Config c = team_quad_config();  // default check: |throttle| <= 0.1
   ControlLoop loop(c, config::build_mixer(c));

@@ -54,8 +54,12 @@ Arming::Inputs fresh_inputs(bool armed, double throttle = 0.0) {
 
 TEST(Arming, NeedsADisarmedSetpointFirstThenArms) {
   Arming a(0.1);
-  a.update(fresh_inputs(true), 0);
+  const Arming::Events first = a.update(fresh_inputs(true), 0);
   EXPECT_EQ(a.state(), LoopState::kDisarmed);  // started while "armed": no jump
+  // Refused with its reason, once per request (the node logs it).
+  EXPECT_TRUE(first.arming_refused);
+  EXPECT_EQ(first.refusal, Arming::Refusal::kNotDisarmedFirst);
+  EXPECT_FALSE(a.update(fresh_inputs(true), 0).arming_refused);
   a.on_setpoint(false);
   a.update(fresh_inputs(false), 1);
   a.on_setpoint(true);
@@ -67,7 +71,9 @@ TEST(Arming, NeedsADisarmedSetpointFirstThenArms) {
 TEST(Arming, RefusesHighThrottleOncePerRequest) {
   Arming a(0.1);
   a.on_setpoint(false);
-  EXPECT_TRUE(a.update(fresh_inputs(true, 0.5), 0).arming_refused);
+  const Arming::Events high = a.update(fresh_inputs(true, 0.5), 0);
+  EXPECT_TRUE(high.arming_refused);
+  EXPECT_EQ(high.refusal, Arming::Refusal::kThrottleHigh);
   EXPECT_FALSE(a.update(fresh_inputs(true, 0.5), 1).arming_refused);
   EXPECT_EQ(a.state(), LoopState::kDisarmed);
   a.update(fresh_inputs(false), 2);                                   // the request ends

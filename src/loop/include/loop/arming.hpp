@@ -37,10 +37,17 @@ class Arming {
     bool setpoint_armed = false;
     double throttle = 0.0;
   };
+  // Why a setpoint that says armed did not arm (once per request).
+  enum class Refusal : std::uint8_t {
+    kNone,
+    kThrottleHigh,      // throttle above inputs.arm_max_throttle
+    kNotDisarmedFirst,  // no armed=false setpoint since start, disarming or failsafe
+  };
   // What happened in this cycle, for the loop's counters.
   struct Events {
     bool failsafe_entered = false;
     bool arming_refused = false;
+    Refusal refusal = Refusal::kNone;
   };
   Events update(const Inputs& in, std::int64_t now_us);
 

@@ -67,6 +67,9 @@ struct CycleResult {
   LoopState state = LoopState::kDisarmed;
   FailsafeReason reason = FailsafeReason::kNone;
   bool state_changed = false;  // state differs from the previous cycle's
+  // A setpoint asked to arm and was refused in this cycle, and why (once
+  // per request: the node logs it).
+  Arming::Refusal arming_refused = Arming::Refusal::kNone;
   bool setpoint_stale = true;
   bool pid_stale = true;
   std::int64_t setpoint_utime = 0;  // utime of the setpoint in force, 0 if none
