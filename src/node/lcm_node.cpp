@@ -119,14 +119,9 @@ class Node {
     }
     last_cycle_us_ = now_us;
     const loop::CycleResult& r = loop_.cycle(now_us);
-    if (r.arming_refused == loop::Arming::Refusal::kNotDisarmedFirst) {
-      log_ << "motormix: arming refused: no setpoint with armed false came before this one "
-              "(since start, a landing or a failsafe): send armed false, then true"
+    if (r.arming_refused != loop::Arming::Refusal::kNone)
+      log_ << "motormix: arming refused: " << loop::Arming::to_string(r.arming_refused)
            << std::endl;
-    } else if (r.arming_refused == loop::Arming::Refusal::kThrottleHigh) {
-      log_ << "motormix: arming refused: throttle above inputs.arm_max_throttle "
-           << config_.inputs.arm_max_throttle << ": lower it, then ask again" << std::endl;
-    }
     if (r.state_changed) {
       log_ << "motormix: " << to_string(r.state);
       if (r.state == loop::LoopState::kFailsafe) log_ << " (" << to_string(r.reason) << ")";

@@ -56,6 +56,17 @@ using namespace std::chrono_literals;
 constexpr double kStaleBoundMs = 50.0 + 15.0;  // the timeout, its 5 ms tick, scheduling
 constexpr double kApplyBoundMs = 500.0;        // a value reaching the file, on a loaded machine
 
+// Stops and joins a receiver thread when the test leaves its scope, failed
+// assertions included.
+struct JoinOnExit {
+  std::atomic<bool>* stop;
+  std::thread* t;
+  ~JoinOnExit() {
+    *stop = true;
+    if (t->joinable()) t->join();
+  }
+};
+
 class OutputProcess : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -182,14 +193,7 @@ TEST_F(OutputProcess, OutputStatusSaysWhatThePinsCarryAndWhatWasRefused) {
   std::thread receiver([&] {
     while (!stop) lcm.handleTimeout(20);
   });
-  struct Join {  // on every way out, failed assertions included
-    std::atomic<bool>* stop;
-    std::thread* t;
-    ~Join() {
-      *stop = true;
-      if (t->joinable()) t->join();
-    }
-  } join{&stop, &receiver};
+  const JoinOnExit join{&stop, &receiver};  // on every way out, failed assertions included
   // The newest status once it satisfies `ok`, within 2 s (it comes at 10
   // Hz); `each` runs every 2.5 ms meanwhile (a publisher keeping it armed).
   const auto wait_status = [&](auto ok, auto each) -> std::optional<motormix::output_status_t> {
@@ -348,14 +352,7 @@ TEST_F(OutputProcess, KissTelemetryIsAskedInTurnAndEachAnswerComesOutForItsMotor
   std::thread receiver([&] {
     while (!stop) lcm.handleTimeout(20);
   });
-  struct Join {
-    std::atomic<bool>* stop;
-    std::thread* t;
-    ~Join() {
-      *stop = true;
-      if (t->joinable()) t->join();
-    }
-  } join{&stop, &receiver};
+  const JoinOnExit join{&stop, &receiver};
   // The chip: a report every 50 ms naming its session; each PULSES frame
   // read; the asked ESC answers on its wire.
   constexpr int kAnswers = 120;

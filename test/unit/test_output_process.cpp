@@ -432,6 +432,27 @@ struct PtyPair {
   }();
 };
 
+// Services the driver until it has heard the chip's first report (bounded):
+// false if it never did or the device was lost.
+bool first_report_heard(output::SerialPulseDriver& driver) {
+  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
+    if (!driver.service(0.0)) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return driver.reports() >= 1;
+}
+
+// Four motors in DShot600 at 1 kHz, 1000..2000 us.
+output::SerialPulseSettings dshot_four() {
+  output::SerialPulseSettings s;
+  s.period_us = 1000;
+  s.min_us = 1000;
+  s.max_us = 2000;
+  s.disarmed_us = {1000, 1000, 1000, 1000};
+  s.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  return s;
+}
+
 TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfterAReset) {
   PtyPair pty;
   output::SerialPulseSettings s;
@@ -517,18 +538,10 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
 // the kernel's queue: the pins followed tens of milliseconds late.
 TEST(SerialPulses, FramesFasterThanTheWireWaitNewestFirstAndArmingNeverWaits) {
   PtyPair pty;
-  output::SerialPulseSettings s;
-  s.period_us = 1000;
-  s.min_us = 1000;
-  s.max_us = 2000;
-  s.disarmed_us = {1000, 1000, 1000, 1000};
-  s.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  output::SerialPulseSettings s = dshot_four();
   output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
   pty.report(MM_LINK_FLAG_CONFIGURED, 0x40001, 0);
-  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
-    ASSERT_TRUE(driver.service(0.0));
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  ASSERT_TRUE(first_report_heard(driver));
   ASSERT_EQ(pty.frames(1).size(), 1u);  // the configuration
   // The first frame arms (never waits); twenty more as fast as they come.
   constexpr double kFrameS = (7.0 + MM_LINK_PULSES_BODY(4)) * 10.0 / 250000.0 / output::kWireShare;
@@ -575,19 +588,11 @@ TEST(SerialPulses, ANonSerialDeviceIsRefusedByName) {
 // says which channel it asked and when; servo PWM cannot ask.
 TEST(SerialPulses, ATelemetryRequestGoesInTheNextFrameOnce) {
   PtyPair pty;
-  output::SerialPulseSettings s;
-  s.period_us = 1000;
-  s.min_us = 1000;
-  s.max_us = 2000;
-  s.disarmed_us = {1000, 1000, 1000, 1000};
-  s.protocol = MM_LINK_PROTOCOL_DSHOT600;
+  output::SerialPulseSettings s = dshot_four();
   s.baud = 2e6;  // no pacing in the way
   output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
   pty.report(MM_LINK_FLAG_CONFIGURED, 0x50001, 0);
-  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
-    ASSERT_TRUE(driver.service(0.0));
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  ASSERT_TRUE(first_report_heard(driver));
   ASSERT_EQ(pty.frames(1).size(), 1u);  // the configuration
   EXPECT_FALSE(driver.ask_telemetry(4)) << "no channel 4 on four motors";
   ASSERT_TRUE(driver.ask_telemetry(2));
@@ -626,10 +631,7 @@ TEST(SerialPulses, BidirectionalDshotRepliesBecomeErpmAndEscTelemetry) {
   s.bidirectional = true;
   output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
   pty.report(0, 0x30001, 0);
-  for (int i = 0; i < 1000 && driver.reports() < 1; ++i) {
-    ASSERT_TRUE(driver.service(0.0));
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  ASSERT_TRUE(first_report_heard(driver));
   const std::vector<mm_link_frame> config = pty.frames(1);
   ASSERT_EQ(config.size(), 1u);
   EXPECT_EQ(config[0].u.config.protocol,

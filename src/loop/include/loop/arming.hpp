@@ -16,6 +16,8 @@
 
 #include "loop/loop_state.hpp"
 
+#include <motormix/enum_names.hpp>
+
 #include <cstdint>
 
 namespace motormix::loop {
@@ -43,6 +45,15 @@ class Arming {
     kThrottleHigh,      // throttle above inputs.arm_max_throttle
     kNotDisarmedFirst,  // no armed=false setpoint since start, disarming or failsafe
   };
+  // What the node logs for each (docs/running.md quotes them).
+  static constexpr EnumName<Refusal> kRefusalNames[] = {
+      {Refusal::kNone, "none"},
+      {Refusal::kThrottleHigh, "throttle above inputs.arm_max_throttle: lower it, then ask again"},
+      {Refusal::kNotDisarmedFirst,
+       "no setpoint with armed false came before this one (since start, a landing or a "
+       "failsafe): send armed false, then true"},
+  };
+  static const char* to_string(Refusal value) { return name_in(kRefusalNames, value); }
   // What happened in this cycle, for the loop's counters.
   struct Events {
     bool failsafe_entered = false;
