@@ -2,7 +2,10 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <stdexcept>
 
 namespace motormix::avr {
@@ -40,6 +43,7 @@ void RealtimeBridge::open_pty_and_start() {
   char name[128];
   if (ptsname_r(master_, name, sizeof name) != 0) throw std::runtime_error("ptsname_r failed");
   slave_path_ = name;
+  started_us_ = steady_us();
   thread_ = std::thread([this] { run(); });
 }
 
@@ -51,6 +55,25 @@ RealtimeBridge::~RealtimeBridge() {
 void RealtimeBridge::stop() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
+  if (stopped_) return;
+  stopped_ = true;
+  const std::int64_t now = steady_us();
+  const double life_ms = static_cast<double>(now - started_us_) / 1000.0;
+  const double absent_ms = static_cast<double>(absent_us(started_us_, now)) / 1000.0;
+  if (absent_ms > kBusyShare * life_ms)
+    std::printf(
+        "[chip-busy] the simulated chip was absent %.0f ms of its %.0f ms (%.0f %%): the machine "
+        "was too busy to keep it in real time (%.2f s of computing a simulated second)\n",
+        absent_ms, life_ms, 100.0 * absent_ms / life_ms, cost());
+}
+
+void RealtimeBridge::wait_chip_time(std::int64_t from_us, double chip_ms) {
+  const auto chip_us = static_cast<std::int64_t>(chip_ms * 1000.0);
+  while (true) {
+    const std::int64_t now = steady_us();
+    if (now - from_us - absent_us(from_us, now) >= chip_us || now - from_us >= 10 * chip_us) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
 }
 
 std::vector<TimedPulse> RealtimeBridge::take_pulses() {
@@ -58,6 +81,14 @@ std::vector<TimedPulse> RealtimeBridge::take_pulses() {
   std::vector<TimedPulse> out;
   out.swap(pulses_);
   return out;
+}
+
+std::int64_t RealtimeBridge::absent_us(std::int64_t from_us, std::int64_t to_us) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::int64_t sum = 0;
+  for (const Absence& a : absences_)
+    sum += std::max<std::int64_t>(0, std::min(a.to_us, to_us) - std::max(a.from_us, from_us));
+  return sum;
 }
 
 std::vector<RealtimeBridge::TimedEdge> RealtimeBridge::take_edges() {
@@ -77,7 +108,10 @@ void RealtimeBridge::run() {
       board_.send(buf, static_cast<std::size_t>(n));
       bytes_in_ += static_cast<std::uint64_t>(n);
     }
+    const std::int64_t busy_from = steady_us();
     board_.run_for_us(kChunkUs);
+    busy_us_ += static_cast<std::uint64_t>(steady_us() - busy_from);
+    simulated_us_ += static_cast<std::uint64_t>(kChunkUs);
     const std::vector<std::uint8_t> out = board_.take_output();
     if (!out.empty()) {
       // The host reads its end; bytes it leaves unread are dropped, as a
@@ -113,7 +147,14 @@ void RealtimeBridge::run() {
     // Late by more than a chunk: catch up from here rather than run fast
     // (time lost is lost, as for a chip whose clock stopped).
     if (wall_elapsed - sim_elapsed > 2 * kSleepAtLeastUs) {
-      wall0 += static_cast<std::int64_t>(wall_elapsed - sim_elapsed);
+      const auto lost = static_cast<std::int64_t>(wall_elapsed - sim_elapsed);
+      wall0 += lost;
+      const std::int64_t now = steady_us();
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!absences_.empty() && now - lost <= absences_.back().to_us)
+        absences_.back().to_us = now;
+      else
+        absences_.push_back({now - lost, now});
     }
   }
 }

@@ -8,6 +8,7 @@
 #include "avr_board.hpp"
 #include "bidir_esc.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -58,8 +59,29 @@ class RealtimeBridge {
   // How far the simulation fell behind the wall clock at worst, us.
   double max_lag_us() const { return max_lag_us_.load(); }
   void reset_max_lag() { max_lag_us_ = 0.0; }
+  // Wall time (steady clock, us) in [from_us, to_us) when the chip was not
+  // running: it fell behind the wall clock by more than a millisecond and
+  // caught up by skipping the time (a busy machine; the chip's clock stood
+  // still). A run judges real-time behaviour only where this is zero, and
+  // counts what the chip could do in the time it ran.
+  std::int64_t absent_us(std::int64_t from_us, std::int64_t to_us);
+  bool present(std::int64_t from_us, std::int64_t to_us) { return absent_us(from_us, to_us) == 0; }
+  // Sleeps until the chip has run `chip_ms` since `from_us` (the wall time
+  // it was absent added), at most ten times that long.
+  void wait_chip_time(std::int64_t from_us, double chip_ms);
   std::uint64_t bytes_in() const { return bytes_in_.load(); }
+  // Wall time the simulation took per simulated second so far (its speed on
+  // this machine, as busy as it is: above 1 it cannot keep real time).
+  double cost() const {
+    return static_cast<double>(busy_us_.load()) /
+           static_cast<double>(std::max<std::uint64_t>(1, simulated_us_.load()));
+  }
+  // Stops the simulation. When the chip was absent for more than
+  // kBusyShare of its life it says so on stdout with the tag [chip-busy]:
+  // the run could not judge real time (test/avr/retry_when_busy.py runs
+  // such a failed test again).
   void stop();
+  static constexpr double kBusyShare = 0.05;
 
  private:
   void run();
@@ -73,9 +95,16 @@ class RealtimeBridge {
   std::mutex mutex_;
   std::vector<TimedPulse> pulses_;
   std::vector<TimedEdge> edges_;
+  struct Absence {
+    std::int64_t from_us, to_us;
+  };
+  std::vector<Absence> absences_;  // in order, merged
   std::atomic<bool> stop_{false};
+  bool stopped_ = false;
+  std::int64_t started_us_ = 0;
   std::atomic<double> max_lag_us_{0.0};
   std::atomic<std::uint64_t> bytes_in_{0};
+  std::atomic<std::uint64_t> busy_us_{0}, simulated_us_{0};
   std::thread thread_;
 };
 

@@ -54,12 +54,24 @@ using avr::TimedPulse;
 
 constexpr double kPulseToleranceUs = 1.0;  // the issue's bound
 constexpr double kDisarmedUs = 1000.0;
-// The simulated chip runs about 1.6 times faster than real time here, so a
-// busy moment on the host makes it late for a while; its lateness shows as
-// latency in every time below, and is allowed for in the failsafe bounds
-// (the chip's own timing is test_pulse_firmware's). Beyond this the run
-// says nothing about the chip.
-constexpr double kMaxSimulationLagUs = 20000.0;
+// The simulated chip runs about three times faster than real time on a
+// quiet machine, so a busy moment on the host only makes it late for a
+// while; on a machine busy for long (two other jobs on the two cores, or a
+// CI run beside other work: the chip kept half of real time) it is absent
+// for much of the run (RealtimeBridge::absent_us: its clock stood still).
+// (a VM whose host takes its CPU away: 17 % of the run's CPU time stolen,
+// the chip absent 1.4 s of 3 s, seen here). Latency and skipped messages
+// are judged only where the chip ran from kJudgeMarginUs before to
+// kJudgeMarginUs after them, and need kMinJudged such samples (fewer: the
+// machine was too busy to say anything of timing, and the run fails);
+// which message a pulse or frame carries is looked for back to 10 ms
+// before it plus the time the chip was absent before it; counts are of
+// what the chip could do in the time it ran; failsafe bounds add the time
+// it was absent in their window. The chip's own timing is
+// test_pulse_firmware's, cycle-exact.
+constexpr std::int64_t kJudgeMarginUs = 3000;
+constexpr int kMinJudged = 100;
+constexpr std::int64_t kCarriedWithinUs = 10000;
 constexpr double kMixerDeathBoundMs = 100.0;   // output's 50 ms staleness + frames + a period
 constexpr double kOutputDeathBoundMs = 100.0;  // the firmware's link timeout
 // Bus to pin, the median over every armed period: up to a period's wait for
@@ -103,6 +115,31 @@ constexpr double kLoneSkipsShare = 0.03;
 // A message's publication time against the chip's rise: clocks read in
 // different processes and threads.
 constexpr std::int64_t kReceiveSlackUs = 1000;
+
+// Judged for timing: the chip ran throughout [from - margin, to + margin].
+bool judged(avr::RealtimeBridge& bridge, std::int64_t from_us, std::int64_t to_us) {
+  return bridge.present(from_us - kJudgeMarginUs, to_us + kJudgeMarginUs);
+}
+
+// How far back from `at_us` a message it carries may have been published:
+// kCarriedWithinUs of the chip's time, and the wall time it was absent in
+// the 100 ms before (the bytes waited in the pseudo-terminal).
+std::int64_t carried_from(avr::RealtimeBridge& bridge, std::int64_t at_us) {
+  return at_us - kCarriedWithinUs - bridge.absent_us(at_us - 100000, at_us);
+}
+
+// The time the chip was absent in a failsafe's window, ms (NaN and
+// negative times, which fail by themselves, add nothing).
+double absent_ms(avr::RealtimeBridge& bridge, std::int64_t from_us, double after_ms) {
+  if (!(after_ms > 0.0)) return 0.0;
+  return static_cast<double>(
+             bridge.absent_us(from_us, from_us + static_cast<std::int64_t>(after_ms * 1000.0))) /
+         1000.0;
+}
+
+const char* const kTooBusy =
+    "the machine was too busy to run the simulated chip in real time: too little of the run "
+    "can be judged";
 
 std::string write_config(const std::string& device) {
   const std::string path = "/tmp/motormix-e2e-" + std::to_string(::getpid()) + ".yaml";
@@ -257,7 +294,7 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
     lcm.publish("MOTOR_PWM", &m);
   }
   const std::int64_t last_publish = steady_us();
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the "mixer" is gone
+  bridge.wait_chip_time(last_publish, 200.0);  // the "mixer" is gone
   const std::vector<Period> run = periods_of(bridge.take_pulses());
 
   // Each armed period: the message whose channel 0 it carries (the latest
@@ -295,7 +332,8 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
     }
     // Every period carrying it, not only its first: a chain that holds a
     // message for long shows there.
-    latency_ms.push_back(static_cast<double>(p.rise_us - published_us[k]) / 1000.0);
+    if (judged(bridge, published_us[k], p.rise_us))
+      latency_ms.push_back(static_cast<double>(p.rise_us - published_us[k]) / 1000.0);
     seen[k] = true;
   }
   const double mixer_gone_ms = ms_to_disarmed(run, last_publish);
@@ -315,17 +353,22 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
       percentile(latency_ms, 0.5), percentile(latency_ms, 0.99), held_ms, mixer_gone_ms,
       bridge.max_lag_us() / 1000.0);
   EXPECT_LE(worst, kPulseToleranceUs);
-  int lone_skips = 0;
-  for (int k = 1; k + 1 < kMessages; ++k)
+  int lone_skips = 0, judged_messages = 0;
+  for (int k = 1; k + 1 < kMessages; ++k) {
+    if (!judged(bridge, published_us[k - 1], published_us[k + 1])) continue;
+    ++judged_messages;
     lone_skips += !seen.count(k) && seen.count(k - 1) && seen.count(k + 1) ? 1 : 0;
-  std::printf("%d messages skipped alone\n", lone_skips);
-  EXPECT_LE(static_cast<double>(lone_skips), kMessages * kLoneSkipsShare);
+  }
+  std::printf("%d of %d messages judged (the chip running around them) skipped alone\n", lone_skips,
+              judged_messages);
+  ASSERT_GE(judged_messages, kMinJudged) << kTooBusy;
+  EXPECT_LE(static_cast<double>(lone_skips), judged_messages * kLoneSkipsShare);
   // The median without the chip's worst lag: lag comes in short episodes
   // that do not move it.
   EXPECT_LE(percentile(latency_ms, 0.5), kLatencyP50BoundMs);
   EXPECT_LE(held_ms, kHeldPeriods * kPeriodMs + bridge.max_lag_us() / 1000.0);
   EXPECT_GT(mixer_gone_ms, 0.0) << "armed again after disarming, or never disarmed";
-  EXPECT_LE(mixer_gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(mixer_gone_ms, kMixerDeathBoundMs + absent_ms(bridge, last_publish, mixer_gone_ms));
   // Everything queued (this process hears its own motor_pwm_t too), then a
   // fresh status (10 Hz).
   for (int i = 0; i < 100000 && lcm.handleTimeout(0) > 0; ++i) {
@@ -371,16 +414,15 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
     }
   }
   const std::int64_t killed = steady_us() - 49 * 2500;  // when k == 150 was
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  bridge.wait_chip_time(killed, 200.0);
   const std::vector<Period> after = periods_of(bridge.take_pulses());
   const double output_gone_ms = ms_to_disarmed(after, killed);
   std::printf(
       "disarmed %.1f ms after SIGKILL of motormix output; the simulation fell behind the "
       "wall clock by %.2f ms at worst\n",
       output_gone_ms, bridge.max_lag_us() / 1000.0);
-  EXPECT_LE(output_gone_ms, kOutputDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(output_gone_ms, kOutputDeathBoundMs + absent_ms(bridge, killed, output_gone_ms));
   EXPECT_GT(output_gone_ms, 0.0);
-  EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
   bridge.stop();
   std::remove(config.c_str());
 }
@@ -437,8 +479,10 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
     for (float v : m.pwm) expected[k].push_back(throttle(v));
     lcm.publish("MOTOR_PWM", &m);
   }
+  const std::int64_t first_publish = published_us.begin()->second;
   const std::int64_t last_publish = steady_us();
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the "mixer" is gone
+  const std::int64_t absent_armed_us = bridge.absent_us(first_publish, last_publish);
+  bridge.wait_chip_time(last_publish, 200.0);  // the "mixer" is gone
 
   // Every channel's frames, with the wall time of their first rise.
   auto decode = [&](const std::vector<avr::RealtimeBridge::TimedEdge>& edges) {
@@ -461,7 +505,7 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
   };
   const auto frames = decode(bridge.take_edges());
   const std::int64_t late = kReceiveSlackUs + static_cast<std::int64_t>(bridge.max_lag_us());
-  int armed_frames = 0, matched = 0, bad = 0;
+  int armed_frames = 0, judged_frames = 0, matched = 0, bad = 0;
   std::vector<double> latency_ms;
   for (std::size_t i = 0; i < frames[0].size(); ++i) {
     const auto& [at, f0] = frames[0][i];
@@ -473,8 +517,9 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
     ++armed_frames;
     // The newest message published before the frame whose throttles it carries.
     int best = -1;
+    const std::int64_t from = carried_from(bridge, at);
     for (const auto& [k, t] : published_us) {
-      if (t >= at + late || t < at - 10000) continue;
+      if (t >= at + late || t < from) continue;
       bool all = true;
       for (int ch = 0; ch < kMotors && all; ++ch) {
         const auto& fc = frames[static_cast<std::size_t>(ch)];
@@ -482,10 +527,11 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
       }
       if (all) best = k;
     }
-    if (best >= 0) {
-      ++matched;
-      latency_ms.push_back(static_cast<double>(at - published_us[best]) / 1000.0);
-    }
+    if (best < 0) continue;
+    ++matched;
+    if (!judged(bridge, published_us[best], at)) continue;
+    ++judged_frames;
+    latency_ms.push_back(static_cast<double>(at - published_us[best]) / 1000.0);
   }
   // Motor stop after the last message: within the output's staleness
   // (50 ms) and a frame, and no throttle after the first stop.
@@ -501,15 +547,23 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
   }
   std::printf(
       "DShot600 through motormix output: %d armed frames, %d carry a motor_pwm_t of the 10 ms "
-      "before, %d bad checksums; bus to frame p50 %.2f ms, p99 %.2f ms; motor stop %.1f ms after "
-      "the last motor_pwm_t; chip late by %.2f ms at worst\n",
+      "before, %d bad checksums; bus to frame p50 %.2f ms, p99 %.2f ms (%d frames judged: the chip "
+      "running around them); motor stop %.1f ms after the last motor_pwm_t; chip late by %.2f ms "
+      "at worst, absent %.0f ms of the %.0f ms armed; the simulation took %.2f s a simulated "
+      "second\n",
       armed_frames, matched, bad, percentile(latency_ms, 0.5), percentile(latency_ms, 0.99),
-      stop_ms, bridge.max_lag_us() / 1000.0);
+      judged_frames, stop_ms, bridge.max_lag_us() / 1000.0,
+      static_cast<double>(absent_armed_us) / 1000.0,
+      static_cast<double>(last_publish - first_publish) / 1000.0, bridge.cost());
   EXPECT_EQ(bad, 0);
-  EXPECT_GT(armed_frames, static_cast<int>(kMessages * 2.5 / kFrameMs * 0.9));
+  // A frame each kFrameMs the chip ran.
+  const double ran_ms =
+      static_cast<double>(last_publish - first_publish - absent_armed_us) / 1000.0;
+  EXPECT_GT(armed_frames, static_cast<int>(ran_ms / kFrameMs * 0.9));
   EXPECT_GE(matched, armed_frames * kMatchedShare);
+  ASSERT_GE(judged_frames, kMinJudged) << kTooBusy;
   EXPECT_LE(percentile(latency_ms, 0.5), kFrameMs + 1.0 + 1.0);
-  EXPECT_LE(stop_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(stop_ms, kMixerDeathBoundMs + absent_ms(bridge, last_publish, stop_ms));
   EXPECT_FALSE(throttle_after_stop);
 
   // Armed again, then the output SIGKILLed: the chip stops the motors.
@@ -525,7 +579,7 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
     if (k == 150) output->signal(SIGKILL);
   }
   const std::int64_t killed = steady_us() - 49 * 2500;
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  bridge.wait_chip_time(killed, 200.0);
   const auto after = decode(bridge.take_edges());
   double killed_stop_ms = NAN;
   bool armed_before_kill = false;
@@ -541,7 +595,7 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
   }
   std::printf("motor stop %.1f ms after SIGKILL of motormix output\n", killed_stop_ms);
   EXPECT_TRUE(armed_before_kill);
-  EXPECT_LE(killed_stop_ms, kOutputDeathBoundMs + bridge.max_lag_us() / 1000.0);
+  EXPECT_LE(killed_stop_ms, kOutputDeathBoundMs + absent_ms(bridge, killed, killed_stop_ms));
   EXPECT_GT(killed_stop_ms, 0.0);
   bridge.stop();
   std::remove(config.c_str());
@@ -617,12 +671,12 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
   std::this_thread::sleep_for(std::chrono::seconds(6));  // into the armed flight
   mixer.signal(SIGKILL);
   const std::int64_t killed = steady_us();
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  bridge.wait_chip_time(killed, 300.0);
   player.signal(SIGKILL);
   const std::vector<Period> periods = periods_of(bridge.take_pulses());
   const std::vector<PwmRecorder::Record> pwm = recorder.records();
 
-  int armed_periods = 0, matched = 0;
+  int armed_periods = 0, judged_periods = 0, matched = 0;
   double worst = 0.0;
   // The simulated chip runs behind real time by up to max_lag_us: a rise at
   // simulated time t saw the bytes written until t plus the lag.
@@ -630,11 +684,13 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
   for (const Period& p : periods) {
     if (p.rise_us > killed || disarmed(p)) continue;
     ++armed_periods;
+    judged_periods += judged(bridge, p.rise_us - kCarriedWithinUs, p.rise_us) ? 1 : 0;
+    const std::int64_t from = carried_from(bridge, p.rise_us);
     // The best match among the armed messages published in the 10 ms
     // before the rise.
     double best = 1e9;
     for (const auto& r : pwm) {
-      if (!r.armed || r.at_us >= p.rise_us + late || r.at_us < p.rise_us - 10000) continue;
+      if (!r.armed || r.at_us >= p.rise_us + late || r.at_us < from) continue;
       double e = 0.0;
       for (int ch = 0; ch < 4; ++ch)
         e = std::max(e, std::abs(p.width.at(ch) - r.pwm[static_cast<std::size_t>(ch)]));
@@ -652,17 +708,24 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
         return -1;
       });
   std::printf(
-      "team quad flight: %d armed periods, %d match a motor_pwm_t of the 10 ms before "
-      "within %.1f us (worst %.3f us); held at most %.2f ms; disarmed %.1f ms after SIGKILL of "
-      "motormix run; simulation late by %.2f ms at worst\n",
-      armed_periods, matched, kPulseToleranceUs, worst, held_ms, gone_ms,
+      "team quad flight: %d armed periods (%d with the chip running in the 10 ms before), %d "
+      "match a motor_pwm_t of the 10 ms before within %.1f us (worst %.3f us); held at most "
+      "%.2f ms; disarmed %.1f ms after SIGKILL of motormix run; simulation late by %.2f ms at "
+      "worst\n",
+      armed_periods, judged_periods, matched, kPulseToleranceUs, worst, held_ms, gone_ms,
       bridge.max_lag_us() / 1000.0);
   EXPECT_LE(held_ms, kHeldPeriods * kPeriodMs + bridge.max_lag_us() / 1000.0);
   EXPECT_GT(gone_ms, 0.0) << "armed again after disarming, or never disarmed";
-  EXPECT_GT(armed_periods, 1000);  // several seconds armed at 400 Hz
+  // A period each 2.5 ms the chip ran, from the mixer's first armed message.
+  std::int64_t first_armed = killed;
+  for (const auto& r : pwm)
+    if (r.armed) first_armed = std::min(first_armed, r.at_us);
+  const double ran_ms =
+      static_cast<double>(killed - first_armed - bridge.absent_us(first_armed, killed)) / 1000.0;
+  EXPECT_GT(ran_ms, 3000.0) << "several seconds armed";
+  EXPECT_GT(armed_periods, static_cast<int>(ran_ms / kFlightPeriodMs * 0.9));
   EXPECT_GE(matched, armed_periods * kMatchedShare);
-  EXPECT_LE(gone_ms, kMixerDeathBoundMs + bridge.max_lag_us() / 1000.0);
-  EXPECT_LE(bridge.max_lag_us(), kMaxSimulationLagUs);
+  EXPECT_LE(gone_ms, kMixerDeathBoundMs + absent_ms(bridge, killed, gone_ms));
 }
 
 // Bring-up through the output (issue 49): the mixer's motor test reaches
@@ -678,6 +741,12 @@ std::vector<std::string> esc_calibrate(const std::string& config, const char* en
 
 // Periods a second of bring-up must show at least (400 at 400 Hz).
 constexpr int kBringupPeriodsMin = 240;
+
+// Periods at 400 Hz the chip could not make since `from_us`: the time it
+// was absent (realtime_bridge.hpp).
+int periods_absent(avr::RealtimeBridge& bridge, std::int64_t from_us) {
+  return static_cast<int>(bridge.absent_us(from_us, steady_us()) / 2500);
+}
 
 TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutput) {
   avr::RealtimeBridge bridge(MOTORMIX_FIRMWARE_ELF);
@@ -718,6 +787,7 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
   };
 
   // Motor 2 at 10 %: 1100 us on its pin for about a second.
+  const std::int64_t test_from = steady_us();
   ChildProcess test({motormix_binary(), "motor-test", "--config", config, "--motor", "2",
                      "--throttle", "0.1", "--seconds", "1"},
                     "/tmp/motormix-e2e-bringup-test.log");
@@ -729,8 +799,9 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
       "%d with another channel off its disarmed pulse\n",
       spun.at, spun.periods, spun.others_moved);
   // 1 s at 400 Hz; measured 280-320 periods (the request's way through the
-  // bus and the mixer, the chip's pace against the wall clock).
-  EXPECT_GE(spun.at, kBringupPeriodsMin);
+  // bus and the mixer, the chip's pace against the wall clock), less the
+  // periods of the time the chip was absent.
+  EXPECT_GE(spun.at, kBringupPeriodsMin - periods_absent(bridge, test_from));
   EXPECT_EQ(spun.others_moved, 0);
 
   // Beyond the guard (motor_test.max_throttle 0.15): refused, nothing moves.
@@ -763,6 +834,7 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
   mixer.reset();
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // the mixer's last words are old
   bridge.take_pulses();
+  const std::int64_t calibrate_from = steady_us();
   ChildProcess calibrate(esc_calibrate(config, "2.5"), "/tmp/motormix-e2e-bringup-calibrate.log");
   EXPECT_EQ(calibrate.wait_for(std::chrono::seconds(15)), 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
@@ -788,8 +860,11 @@ TEST(OutputEndToEnd, TheMotorTestAndTheEscCalibrationReachThePinsThroughTheOutpu
       "ESC calibration through the output: %d periods at the maximum, %d at the minimum, "
       "%d after (%d disarmed)\n",
       at_max, at_min, after, stopped_after);
-  EXPECT_GE(at_max, kBringupPeriodsMin);  // about 1.5 s at the maximum (measured 597)
-  EXPECT_GE(at_min, kBringupPeriodsMin);  // --min-seconds 1 (measured 299-300)
+  // About 1.5 s at the maximum (measured 597) and --min-seconds 1 (measured
+  // 299-300), less what the chip could not make.
+  const int lost = periods_absent(bridge, calibrate_from);
+  EXPECT_GE(at_max, kBringupPeriodsMin - lost);
+  EXPECT_GE(at_min, kBringupPeriodsMin - lost);
   EXPECT_GT(after, 0);
   EXPECT_EQ(stopped_after, after);
   output.signal(SIGTERM);
