@@ -83,7 +83,8 @@ int run(const RunCommand& cmd) {
                                             : "of preset " + cmd.common.preset)
               << " is valid: " << config->motors() << " motors, strategy "
               << config::to_string(config->strategy) << "\n";
-    for (const std::string& line : node::describe_run(*config)) std::cout << line << "\n";
+    const loop::ControlLoop loop(*config, config::build_mixer(*config));
+    for (const std::string& line : node::describe_run(*config, loop)) std::cout << line << "\n";
     std::cout << "\n" << config::export_matrix(*config, config::MatrixFormat::kTable);
     return kExitOk;
   }

@@ -7,7 +7,7 @@
 
 namespace motormix::node {
 
-std::vector<std::string> describe_run(const config::Config& c) {
+std::vector<std::string> describe_run(const config::Config& c, const loop::ControlLoop& loop) {
   std::vector<std::string> lines;
   std::ostringstream s;
   s << "vehicle '" << c.name << "', " << c.motors() << " motors (" << c.description()
@@ -22,8 +22,8 @@ std::vector<std::string> describe_run(const config::Config& c) {
   s << "outputs '" << c.channels.motor_pwm << "' at " << c.loop_rate_hz << " Hz, status '"
     << c.channels.status << "' at " << c.status_rate_hz << " Hz";
   lines.push_back(s.str());
-  if (c.failure_detection) {
-    const FailureDetectorSettings& d = c.failure_detection->detector;
+  if (const loop::DetectionRunner* runner = loop.detection()) {
+    const FailureDetectorSettings& d = runner->detector().settings();
     const auto uses = [&d](DetectorSources source) {
       return (d.sources & static_cast<std::uint8_t>(source)) != 0;
     };
@@ -35,7 +35,7 @@ std::vector<std::string> describe_run(const config::Config& c) {
     // The gates, beside the hover they are fractions of: a reader sees at
     // once whether detection runs in hover.
     const config::HoverPoint hover = config::hover_point(c);
-    s << "; judges from throttle " << c.failure_detection->min_throttle << " and motor thrust "
+    s << "; judges from throttle " << runner->min_throttle() << " and motor thrust "
       << d.min_motor_thrust;
     if (hover.known) {
       s << " (hover: throttle " << hover.throttle << ", motor thrust " << hover.thrust << ")";

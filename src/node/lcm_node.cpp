@@ -97,6 +97,7 @@ class Node {
                            motor_status_msg_.getEncodedSize()})
       publisher_.reserve(static_cast<std::size_t>(size));
   }
+  const loop::ControlLoop& loop() const { return loop_; }
 
   void subscribe() {
     for (const auto& [channel, kind] : routes_.channels())
@@ -413,9 +414,9 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
         << std::endl;
     return 1;
   }
-  log_summary(config, options.lcm_url, log);
   const SocketDropsWatcher drops;
   Node node(config, std::move(*policy), lcm, drops, log);
+  log_summary(config, node.loop(), options.lcm_url, log);
   node.subscribe();  // starts LCM's receive thread
   // After every other thread has started: they keep the default scheduler,
   // and move off the loop's CPUs (realtime.hpp).

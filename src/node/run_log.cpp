@@ -8,8 +8,9 @@
 
 namespace motormix::node {
 
-void log_summary(const config::Config& config, const std::string& url, std::ostream& log) {
-  for (const std::string& line : describe_run(config)) log << "motormix: " << line << "\n";
+void log_summary(const config::Config& config, const loop::ControlLoop& loop,
+                 const std::string& url, std::ostream& log) {
+  for (const std::string& line : describe_run(config, loop)) log << "motormix: " << line << "\n";
   log << "motormix: lcm url '" << (url.empty() ? "(default)" : url) << "'\n";
   log << config::export_matrix(config, config::MatrixFormat::kTable) << std::flush;
 }

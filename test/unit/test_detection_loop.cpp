@@ -4,9 +4,11 @@
 // the failure set and cleared on disarming; its configuration section.
 
 #include "loop/control_loop.hpp"
+#include "node/describe.hpp"
 #include "node/messages.hpp"
 #include "test_support.hpp"
 
+#include <motormix/config/build_mixer.hpp>
 #include <motormix/config/hover_point.hpp>
 
 #include <gtest/gtest.h>
@@ -440,6 +442,33 @@ TEST(DetectionConfig, GatesDefaultToFractionsOfTheVehiclesHover) {
   EXPECT_FALSE(config::hover_point(preset).known);
   EXPECT_EQ(preset.failure_detection->min_throttle, 0.25);
   EXPECT_EQ(preset.failure_detection->detector.min_motor_thrust, 0.08);
+}
+
+// The start-up banner (and `run --check`) reads the detector the loop runs,
+// not the configuration: given a configuration that asks for other sources
+// and gates than the loop's detector was built with, it names the loop's.
+TEST(DetectionBanner, NamesWhatTheRunningDetectorReads) {
+  const config::Config rates_only = hexa_config({"failure_detection.sources=[rates]",
+                                                 "failure_detection.min_throttle=0.3"});
+  const config::Config both = hexa_config({"failure_detection.sources=[telemetry, rates]"});
+  const loop::ControlLoop loop(rates_only, config::build_mixer(rates_only));
+  const auto detection_line = [](const std::vector<std::string>& lines) {
+    for (const std::string& l : lines)
+      if (l.rfind("failure detection:", 0) == 0) return l;
+    return std::string();
+  };
+  const std::string line = detection_line(node::describe_run(both, loop));
+  EXPECT_EQ(line.find("telemetry"), std::string::npos) << line;
+  EXPECT_NE(line.find("rates"), std::string::npos) << line;
+  EXPECT_NE(line.find("judges from throttle 0.3 "), std::string::npos) << line;
+  const loop::ControlLoop both_loop(both, config::build_mixer(both));
+  const std::string both_line = detection_line(node::describe_run(rates_only, both_loop));
+  EXPECT_NE(both_line.find("telemetry"), std::string::npos) << both_line;
+  EXPECT_NE(both_line.find("rates"), std::string::npos) << both_line;
+  // Without a detector in the loop, no line.
+  const config::Config none = config::load_config_file(source_path("config/hexa_x.yaml"));
+  const loop::ControlLoop none_loop(none, config::build_mixer(none));
+  EXPECT_EQ(detection_line(node::describe_run(both, none_loop)), "");
 }
 
 TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {

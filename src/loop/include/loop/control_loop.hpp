@@ -136,6 +136,9 @@ class ControlLoop {
   const CycleResult& cycle(std::int64_t now_us);
 
   const CycleResult& last() const { return result_; }
+  // The failure detector as it runs (nullptr without failure_detection):
+  // what the start-up banner reports.
+  const DetectionRunner* detection() const { return detection_ ? &*detection_ : nullptr; }
   const Counters& counters() const { return counters_; }
   const Mixer& mixer() const { return mixer_; }
 

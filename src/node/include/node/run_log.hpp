@@ -12,7 +12,8 @@
 
 namespace motormix::node {
 
-void log_summary(const config::Config& config, const std::string& url, std::ostream& log);
+void log_summary(const config::Config& config, const loop::ControlLoop& loop,
+                 const std::string& url, std::ostream& log);
 void log_failures(std::ostream& log, const config::Config& config, const loop::CycleResult& r);
 void log_landing(std::ostream& log, const config::Config& config, const loop::CycleResult& r);
 
