@@ -9,7 +9,8 @@ judge timing only where it ran, but the host processes starve too, and a
 run like that says nothing either way. The bridge prints a line tagged
 [chip-busy] when the chip was absent for more than 5 % of its life
 (test/avr/realtime_bridge.hpp). A failed test with that line is run again,
-alone, up to ATTEMPTS runs in all; a failed test without it fails at once,
+alone, PAUSE_S later, up to ATTEMPTS runs in all; a failed test without it
+fails at once,
 as does one still failing on a busy machine after the last attempt.
 
     retry_when_busy.py TEST_BINARY [ARGS...]
@@ -18,9 +19,13 @@ as does one still failing on a busy machine after the last attempt.
 import re
 import subprocess
 import sys
+import time
 
 ATTEMPTS = 3
 BUSY_TAG = "[chip-busy]"
+# Before a second attempt: a burst of other work (a build, a VM's host
+# taking its CPU) often passes within seconds.
+PAUSE_S = 15
 
 
 def run(argv):
@@ -63,6 +68,7 @@ def main():
             return code or 1
         print(f"retry_when_busy: {', '.join(failed)} failed on a machine too busy to keep the "
               f"simulated chip in real time; attempt {attempt} of {ATTEMPTS}", flush=True)
+        time.sleep(PAUSE_S)
         code, tests = run(binary + ["--gtest_filter=" + ":".join(failed)])
     return code
 
