@@ -7,11 +7,12 @@ A machine busy for long (a VM whose host takes its CPU, other work on the
 two cores) stops the simulated chip's clock for much of a run; the tests
 judge timing only where it ran, but the host processes starve too, and a
 run like that says nothing either way. The bridge prints a line tagged
-[chip-busy] when the chip was absent for more than 5 % of its life
+[chip-busy] when the chip was absent for more than 2 % of its life or
+fell behind by more than 5 ms at once
 (test/avr/realtime_bridge.hpp). A failed test with that line is run again,
 alone, PAUSE_S later, up to ATTEMPTS runs in all; a failed test without it
-fails at once,
-as does one still failing on a busy machine after the last attempt.
+fails at once, as does one still failing on a busy machine after the last
+attempt.
 
     retry_when_busy.py TEST_BINARY [ARGS...]
 """

@@ -182,6 +182,62 @@ TEST(FailureDetector, APropDrawingTooLittleForItsRpmIsNamed) {
   EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
 }
 
+// Each telemetry threshold holds on both sides: one motor (m1) reports,
+// from a step at `onset`, a share of the rpm and of the current its command
+// gives (steady hover, a reading every cycle; `rpm` false: current only),
+// and is declared just past telemetry_persist_s when the share is a tenth
+// beyond its threshold, never in 2 s when a tenth inside. Seconds from the
+// step to the declaration, or -1.
+double declared_after(const FailureDetectorSettings& s, double rpm_share, double current_share,
+                      bool rpm = true, int reporting = 6) {
+  FailureDetector d(s);
+  const std::int64_t onset = 500'000;
+  for (std::int64_t t = 0; t < onset + 2'000'000 && d.detection().failed == 0; t += kCycleUs) {
+    for (int i = 0; i < reporting; ++i) {
+      const bool weak = i == 0 && t >= onset;
+      const double x = kHover;
+      const double current = 20.0 * x * std::sqrt(x) * (weak ? current_share : 1.0);
+      d.on_telemetry(i, rpm ? kFullRpm * std::sqrt(x) * (weak ? rpm_share : 1.0) : NAN, current,
+                     t);
+    }
+    d.update(hover(6), 0, true, t);
+  }
+  if (d.detection().failed == 0) return -1.0;
+  EXPECT_EQ(d.detection().motor, 0);
+  return static_cast<double>(d.detection().at_us - onset) / 1e6;
+}
+
+TEST(FailureDetector, EachTelemetryThresholdHoldsOnBothSides) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
+  constexpr double kBand = 0.1;  // a tenth of the threshold either side
+  // Declared one persistence after the step, to a cycle.
+  constexpr double kPersistToleranceS = 1.5 * kCycleUs / 1e6;
+  const auto declared_in_time = [&](double after) {
+    EXPECT_NEAR(after, s.telemetry_persist_s, kPersistToleranceS);
+  };
+  // Too slow for its command: rpm_ratio. The current follows the rpm as a
+  // whole prop's does (the cube), so the load check stays out of it.
+  const auto slow = [&](double share) {
+    return declared_after(s, share, share * share * share);
+  };
+  declared_in_time(slow(s.rpm_ratio * (1.0 - kBand)));
+  EXPECT_LT(slow(s.rpm_ratio * (1.0 + kBand)), 0.0);
+  // Too fast (a thrown prop): rpm_high_ratio.
+  const auto fast = [&](double share) { return declared_after(s, share, share * share * share); };
+  declared_in_time(fast(s.rpm_high_ratio * (1.0 + kBand)));
+  EXPECT_LT(fast(s.rpm_high_ratio * (1.0 - kBand)), 0.0);
+  // Drawing too little for its rpm (a broken tip): load_ratio.
+  declared_in_time(declared_after(s, 1.0, s.load_ratio * (1.0 - kBand)));
+  EXPECT_LT(declared_after(s, 1.0, s.load_ratio * (1.0 + kBand)), 0.0);
+  // Current alone (no rpm reported): current_ratio.
+  declared_in_time(declared_after(s, 1.0, s.current_ratio * (1.0 - kBand), false));
+  EXPECT_LT(declared_after(s, 1.0, s.current_ratio * (1.0 + kBand), false), 0.0);
+  // Fewer ESCs reporting than min_reporting: no median to judge against,
+  // nothing declared however slow; with min_reporting, declared.
+  EXPECT_LT(declared_after(s, 0.2, 0.008, true, s.min_reporting - 1), 0.0);
+  EXPECT_GT(declared_after(s, 0.2, 0.008, true, s.min_reporting), 0.0);
+}
+
 TEST(FailureDetector, ACurrentReadingAtOrBelowZeroIsTheMostUnloaded) {
   // A thrown prop draws nothing: its ESC's current is noise around zero,
   // and a reading of -0.1 A or 0 A is the least load of all, not "no load
@@ -394,6 +450,77 @@ TEST(FailureDetector, RatesIgnoreAGustAndATorqueNoMotorCouldMake) {
   EXPECT_EQ(d.detection().failed, 0U);
 }
 
+// The rates source on a hexa: motor m2 (index 1), commanded `thrust`,
+// keeps `keep` of it from a step at 0.5 s, with `external` beside it from
+// the same moment; telemetry, if a source, reports every motor as its
+// command asks. Seconds from the step to the declaration, or -1 in 1.5 s.
+double rates_declared_after(const FailureDetectorSettings& s, double thrust, double keep,
+                            const Eigen::Vector3d& external = Eigen::Vector3d::Zero()) {
+  constexpr int kMotor = 1;
+  FailureDetector d(s);
+  RatesVehicle body(s);
+  MotorVector command = hover(6);
+  command[kMotor] = thrust;
+  MotorVector actual = command;
+  const std::int64_t onset = 500'000;
+  for (std::int64_t t = 0; t < onset + 1'500'000 && d.detection().failed == 0; t += kCycleUs) {
+    if (t >= onset) actual[kMotor] = keep * thrust;
+    if (s.sources & bits(DetectorSources::kTelemetry)) feed_telemetry(d, command, 1.0, t);
+    body.step(d, actual, t >= onset ? external : Eigen::Vector3d::Zero(), t);
+    d.update(command, 0, true, t);
+  }
+  if (d.detection().failed == 0) return -1.0;
+  EXPECT_EQ(d.detection().motor, kMotor);
+  return static_cast<double>(d.detection().at_us - onset) / 1e6;
+}
+
+// Each of the rates source's knobs holds on both sides of its value.
+TEST(FailureDetector, EachRatesThresholdHoldsOnBothSides) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  constexpr double kBand = 0.15;  // of each threshold, either side
+  // min_loss: the share of the motor's thrust gone.
+  EXPECT_GT(rates_declared_after(s, kHover, 1.0 - s.min_loss * (1.0 + kBand)), 0.0);
+  EXPECT_LT(rates_declared_after(s, kHover, 1.0 - s.min_loss * (1.0 - kBand)), 0.0);
+  // min_residual_nm: a whole loss of a motor commanded so little that its
+  // torque is under the smallest residual judged, and one just over it.
+  const double column = s.torque_per_thrust.col(1).norm();
+  const double at_residual = s.min_residual_nm / column;  // the thrust whose loss is exactly it
+  ASSERT_GT(at_residual * (1.0 - kBand), s.min_motor_thrust);
+  EXPECT_GT(rates_declared_after(s, at_residual * (1.0 + kBand), 0.0), 0.0);
+  EXPECT_LT(rates_declared_after(s, at_residual * (1.0 - kBand), 0.0), 0.0);
+  // max_off_axis: a whole loss with a torque across its column beside it
+  // (horizontal, perpendicular), as a share of the loss's torque.
+  const Eigen::Vector3d loss = s.torque_per_thrust.col(1) * kHover;
+  const Eigen::Vector3d across = loss.cross(Eigen::Vector3d::UnitZ()).normalized() * loss.norm();
+  EXPECT_GT(rates_declared_after(s, kHover, 0.0, across * s.max_off_axis * (1.0 - kBand)), 0.0);
+  EXPECT_LT(rates_declared_after(s, kHover, 0.0, across * s.max_off_axis * (1.0 + kBand)), 0.0);
+}
+
+// The persistence is what is configured: the same loss declared with
+// rates_persist_s and with none differ by exactly it, to a cycle.
+TEST(FailureDetector, TheRatesPersistenceIsTheConfiguredOne) {
+  FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  const double with = rates_declared_after(s, kHover, 0.0);
+  const double persist = s.rates_persist_s;
+  s.rates_persist_s = 0.0;
+  const double without = rates_declared_after(s, kHover, 0.0);
+  ASSERT_GT(with, 0.0);
+  ASSERT_GE(without, 0.0);
+  EXPECT_NEAR(with - without, persist, 1.5 * kCycleUs / 1e6);
+}
+
+// An ESC reporting the speed its command asks for vetoes the rates: a
+// torque exactly like motor m2's loss, m2's ESC at its commanded rpm, is an
+// outside push. With rates alone the same torque is m2's loss.
+TEST(FailureDetector, AHealthyEscVetoesTheRates) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  const FailureDetectorSettings both =
+      hexa(bits(DetectorSources::kRates) | bits(DetectorSources::kTelemetry));
+  const Eigen::Vector3d push = -s.torque_per_thrust.col(1) * kHover;
+  EXPECT_GT(rates_declared_after(s, kHover, 1.0, push), 0.0);
+  EXPECT_LT(rates_declared_after(both, kHover, 1.0, push), 0.0);
+}
+
 TEST(FailureDetector, StaleRatesJudgeNothing) {
   const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
   FailureDetector d(s);
@@ -429,6 +556,41 @@ TEST(FailureDetector, OutputsFindTheMotorDrivenToFullForLong) {
     EXPECT_EQ(d.detection().motor, motor);
     EXPECT_EQ(d.detection().source, DetectionSource::kOutputs);
   }
+}
+
+// Each of the outputs source's knobs holds: a motor far above the others
+// but under outputs_high is not a failure (a vehicle manoeuvring drives
+// motors unevenly), nor one at full while the median is within
+// outputs_margin of it (a climb at full throttle), and the one driven to
+// full from hover is declared after the filter's rise to outputs_high and
+// outputs_persist_s more, to the cycle.
+TEST(FailureDetector, OutputsJudgeTheirHighTheirMarginAndTheirPersistence) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kOutputs));
+  constexpr double kRiseToleranceS = 0.01;  // a cycle and the filter's discretization
+  const auto run = [&](double top, double others, double seconds) {
+    FailureDetector d(s);
+    std::int64_t t = 0;
+    for (; t < 5'000'000; t += kCycleUs) d.update(hover(6), 0, true, t);  // settled at hover
+    MotorVector commands = MotorVector::Constant(6, others);
+    commands[2] = top;
+    const std::int64_t from = t;
+    for (; t < from + static_cast<std::int64_t>(seconds * 1e6) && d.detection().failed == 0;
+         t += kCycleUs)
+      d.update(commands, 0, true, t);
+    return d.detection().failed == 0 ? -1.0 : static_cast<double>(d.detection().at_us - from) / 1e6;
+  };
+  // Under the high mark, however far above the others: nothing in 10 s.
+  ASSERT_LT(0.85, s.outputs_high);
+  ASSERT_GE(0.85 - 0.4, s.outputs_margin);
+  EXPECT_LT(run(0.85, 0.4, 10.0), 0.0);
+  // At full, the others within the margin: nothing.
+  ASSERT_LT(1.0 - 0.7, s.outputs_margin);
+  EXPECT_LT(run(1.0, 0.7, 10.0), 0.0);
+  // From hover to full: the low-pass from kHover reaches outputs_high
+  // (the margin is reached before it), then the persistence.
+  ASSERT_LT(s.outputs_margin, s.outputs_high - kHover);
+  const double rise_s = s.outputs_filter_s * std::log((1.0 - kHover) / (1.0 - s.outputs_high));
+  EXPECT_NEAR(run(1.0, kHover, 10.0), rise_s + s.outputs_persist_s, kRiseToleranceS);
 }
 
 TEST(FailureDetector, ResetForgetsDeclarations) {
