@@ -182,6 +182,15 @@ TEST(FailureDetector, APropDrawingTooLittleForItsRpmIsNamed) {
   EXPECT_LE(latency, d.settings().telemetry_persist_s + kTelemetrySlackS);
 }
 
+// A suspicion held `persist` seconds is declared on the update that brings
+// it there: each update with the evidence adds a cycle, the first at the
+// evidence's own moment.
+constexpr double kCycleS = kCycleUs / 1e6;
+constexpr double kHalfCycleS = 0.5 * kCycleS;
+double persisted_after(double persist) {
+  return std::max(0.0, std::ceil(persist / kCycleS - 1e-9) - 1.0) * kCycleS;
+}
+
 // Each telemetry threshold holds on both sides: one motor (m1) reports,
 // from a step at `onset`, a share of the rpm and of the current its command
 // gives (steady hover, a reading every cycle; `rpm` false: current only),
@@ -210,10 +219,10 @@ double declared_after(const FailureDetectorSettings& s, double rpm_share, double
 TEST(FailureDetector, EachTelemetryThresholdHoldsOnBothSides) {
   const FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
   constexpr double kBand = 0.1;  // a tenth of the threshold either side
-  // Declared one persistence after the step, to a cycle.
-  constexpr double kPersistToleranceS = 1.5 * kCycleUs / 1e6;
+  // Declared on the update whose evidence, a cycle's worth each from the
+  // step's own, adds up to telemetry_persist_s.
   const auto declared_in_time = [&](double after) {
-    EXPECT_NEAR(after, s.telemetry_persist_s, kPersistToleranceS);
+    EXPECT_NEAR(after, persisted_after(s.telemetry_persist_s), kHalfCycleS);
   };
   // Too slow for its command: rpm_ratio. The current follows the rpm as a
   // whole prop's does (the cube), so the load check stays out of it.
@@ -236,6 +245,44 @@ TEST(FailureDetector, EachTelemetryThresholdHoldsOnBothSides) {
   // nothing declared however slow; with min_reporting, declared.
   EXPECT_LT(declared_after(s, 0.2, 0.008, true, s.min_reporting - 1), 0.0);
   EXPECT_GT(declared_after(s, 0.2, 0.008, true, s.min_reporting), 0.0);
+}
+
+// A motor commanded below min_motor_thrust is not judged, nor for the
+// telemetry latency after it rises above it: its ESC's reading can still be
+// of the speed it had there, where rpm says little (this one's motor does
+// not turn at all below the gate, and takes 15 ms to start).
+TEST(FailureDetector, AMotorRisingFromBelowTheGateIsJudgedOnlyPastItsLatency) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
+  FailureDetector d(s);
+  constexpr double kLow = 0.05;
+  constexpr std::int64_t kStartsAfterUs = 15'000;
+  ASSERT_LT(kLow, s.min_motor_thrust);
+  ASSERT_LT(kStartsAfterUs, static_cast<std::int64_t>(s.telemetry_latency_s * 1e6));
+  MotorVector command = hover(6);
+  command[0] = kLow;
+  const std::int64_t step = 1'000'000;
+  for (std::int64_t t = 0; t < 2'000'000; t += kCycleUs) {
+    if (t >= step) command[0] = kHover;
+    MotorVector actual = command;
+    if (t < step + kStartsAfterUs) actual[0] = 0.0;  // not turning yet
+    feed_telemetry(d, actual, 1.0, t);
+    d.update(command, 0, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+}
+
+// Silence needs most ESCs still reporting: the telemetry stream dying
+// whole (its wire, its UART) is no motor's failure.
+TEST(FailureDetector, EveryEscFallingSilentAtOnceIsNoFailure) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
+  ASSERT_TRUE(s.silence_declares);
+  FailureDetector d(s);
+  for (std::int64_t t = 0; t < 3'000'000; t += kCycleUs) {
+    if (t < 1'000'000) feed_telemetry(d, hover(6), 1.0, t);
+    d.update(hover(6), 0, true, t);
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+  EXPECT_EQ(d.detection().telemetry_silent, 0U);
 }
 
 TEST(FailureDetector, ACurrentReadingAtOrBelowZeroIsTheMostUnloaded) {
@@ -497,7 +544,7 @@ TEST(FailureDetector, EachRatesThresholdHoldsOnBothSides) {
 }
 
 // The persistence is what is configured: the same loss declared with
-// rates_persist_s and with none differ by exactly it, to a cycle.
+// rates_persist_s and with none differ by exactly it.
 TEST(FailureDetector, TheRatesPersistenceIsTheConfiguredOne) {
   FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
   const double with = rates_declared_after(s, kHover, 0.0);
@@ -506,7 +553,7 @@ TEST(FailureDetector, TheRatesPersistenceIsTheConfiguredOne) {
   const double without = rates_declared_after(s, kHover, 0.0);
   ASSERT_GT(with, 0.0);
   ASSERT_GE(without, 0.0);
-  EXPECT_NEAR(with - without, persist, 1.5 * kCycleUs / 1e6);
+  EXPECT_NEAR(with - without, persisted_after(persist), kHalfCycleS);
 }
 
 // An ESC reporting the speed its command asks for vetoes the rates: a
