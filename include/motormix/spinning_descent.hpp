@@ -95,6 +95,11 @@ struct SpinningDescentSettings {
   double velocity_integral = 0.6;  // 1/s^2
   double drift_gain = 0.4;         // 1/s: horizontal velocity to acceleration asked against it
   double landed_after_s = 0.5;     // vertical speed near zero this long: landed
+  // Before the spin is reached, raise the motors beside the dead one
+  // together along the torque rows' null direction (spin_up() in
+  // spinning_descent.cpp): the spin, and the stiffness it gives, come
+  // sooner, for a bounded climb. Off: the demands as they are.
+  bool spin_up_raise = true;
 };
 
 // The relaxed hover with motor `failed` stopped.

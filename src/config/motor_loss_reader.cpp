@@ -120,6 +120,7 @@ void read_motor_loss(MapReader section, Config& config) {
   s.spin_rate_rad_s = section.number("spin_rate_rad_s", 20.0, 3.0, 100.0);
   s.descent_rate_mps = section.number("descent_rate_mps", 1.0, 0.2, 3.0);
   s.max_tilt_deg = section.number("max_tilt_deg", 8.0, 0.0, 20.0);
+  s.spin_up_raise = section.boolean("spin_up_raise", true);
   ml.attitude_timeout_s = section.number("attitude_timeout_ms", 50.0, 5.0, 1000.0) / 1e3;
   if (s.spin_rate_rad_s > kSpinShareOfGyroRange * ml.gyro_range_rad_s) {
     std::ostringstream found, allowed;

@@ -291,7 +291,7 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   Eigen::Vector3d f = allocate(eq, demand);
   const Eigen::Vector3d got = allocation_[fk] * f;
   cmd_.saturated = (got - demand).cwiseAbs().maxCoeff() > 1e-6;
-  if (!spin_reached_ && !cmd_.saturated) f = spin_up(eq, f, in);
+  if (s_.spin_up_raise && !spin_reached_ && !cmd_.saturated) f = spin_up(eq, f, in);
 
   // Landing: no vertical motion for landed_after_s while the velocity loop
   // asks for well under the weight (in the air that much less thrust would
