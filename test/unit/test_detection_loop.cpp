@@ -200,6 +200,45 @@ TEST(DetectionGate, NothingIsDeclaredDuringAMotorTest) {
   EXPECT_GE(testing, 400);
 }
 
+// A refused reading never reaches the detector: motor 3's second reading
+// in every batch, at twice the largest rpm taken, is counted and dropped.
+// The same second reading at 20000 rpm, inside the range, is taken and far
+// too fast: declared (the set-up can declare).
+MotorMask declared_with_second_reading(double rpm, std::int64_t* refused) {
+  const config::Config c = hexa_config({"failure_detection.sources=[telemetry]"});
+  ControlLoop loop(c, config::build_mixer(c));
+  std::int64_t now = 0, utime = 1'700'000'000'000'000;
+  MotorMask failed = 0;
+  for (int k = 0; k < 800 && failed == 0; ++k, now += 2500) {
+    utime += 2500;
+    const bool armed = k >= 40;  // a disarmed setpoint first: arming needs one
+    EXPECT_EQ(loop.on_setpoint(SetpointSample{utime, armed ? 0.6 : 0.0, 0.0, armed}, now, kWall),
+              Rejection::kNone);
+    EXPECT_EQ(loop.on_pid(PidSample{utime, 0.0, 0.0, 0.0}, now, kWall), Rejection::kNone);
+    EscTelemetrySample batch;
+    batch.utime = utime;
+    for (int m = 1; m <= 6; ++m)
+      batch.readings[static_cast<std::size_t>(batch.count++)] = {m,    9000.0, kNaN, 10.0,
+                                                                 16.0, 40.0,   kNaN};
+    batch.readings[static_cast<std::size_t>(batch.count++)] = {3,    rpm,  kNaN, 10.0,
+                                                               16.0, 40.0, kNaN};
+    EXPECT_EQ(loop.on_esc_telemetry(batch, now, kWall), Rejection::kNone);
+    const auto& r = loop.cycle(now);
+    if (armed) EXPECT_EQ(r.state, LoopState::kArmed) << "cycle " << k;
+    failed = r.detection.failed;
+  }
+  *refused = loop.counters().rejected_range;
+  return failed;
+}
+
+TEST(DetectionLoop, ARefusedReadingNeverReachesTheDetector) {
+  std::int64_t refused = 0;
+  EXPECT_EQ(declared_with_second_reading(2e6, &refused), 0U);
+  EXPECT_EQ(refused, 800);
+  EXPECT_EQ(declared_with_second_reading(20000.0, &refused), MotorMask{1} << 2);
+  EXPECT_EQ(refused, 0);
+}
+
 TEST_F(DetectionLoopTest, RejectsMalformedTelemetryAndCountsIt) {
   const std::int64_t now = 0;
   EscTelemetrySample s = one_reading(utime_, 1, 100.0);
@@ -448,8 +487,8 @@ TEST(DetectionConfig, GatesDefaultToFractionsOfTheVehiclesHover) {
 // not the configuration: given a configuration that asks for other sources
 // and gates than the loop's detector was built with, it names the loop's.
 TEST(DetectionBanner, NamesWhatTheRunningDetectorReads) {
-  const config::Config rates_only = hexa_config({"failure_detection.sources=[rates]",
-                                                 "failure_detection.min_throttle=0.3"});
+  const config::Config rates_only =
+      hexa_config({"failure_detection.sources=[rates]", "failure_detection.min_throttle=0.3"});
   const config::Config both = hexa_config({"failure_detection.sources=[telemetry, rates]"});
   const loop::ControlLoop loop(rates_only, config::build_mixer(rates_only));
   const auto detection_line = [](const std::vector<std::string>& lines) {

@@ -291,6 +291,24 @@ TEST_F(SpinningDescentTest, BrakesTheDriftOnlyOnceTheSpinIsReached) {
   EXPECT_NEAR(descent_.update(still, 7500).axis_error_deg, max_tilt, kBrakeTiltToleranceDeg);
 }
 
+// "Reached" is 60 % of the equilibrium's spin (the documented share): a
+// spin at 45 % of it does not brake yet, one at 75 % does.
+TEST_F(SpinningDescentTest, TheSpinCountsAsReachedAtSixtyPercent) {
+  constexpr double kBrakeTiltToleranceDeg = 0.5;
+  constexpr double kBelow = 0.45, kAbove = 0.75;
+  const double max_tilt = config_.motor_loss->settings.max_tilt_deg;
+  descent_.start(1, 0, equilibrium_fractions(1));
+  DescentInput in = at_equilibrium(1);
+  in.velocity.x() = 5.0;
+  const Eigen::Vector3d spin = in.rates;
+  in.rates = kBelow * spin;
+  std::int64_t t = 0;
+  for (int k = 0; k < 40; ++k) descent_.update(in, t += 2500);
+  EXPECT_NEAR(descent_.command().axis_error_deg, 0.0, 1e-6);
+  in.rates = kAbove * spin;
+  EXPECT_NEAR(descent_.update(in, t += 2500).axis_error_deg, max_tilt, kBrakeTiltToleranceDeg);
+}
+
 TEST_F(SpinningDescentTest, HostileInputsGiveThrustsInsideTheMotorsRange) {
   descent_.start(2, 0, equilibrium_fractions(2));
   const DescentInput good = at_equilibrium(2);
@@ -329,6 +347,43 @@ TEST_F(SpinningDescentTest, LandsOnlyOnceStillWithLittleThrustAskedFor) {
     descent_.update(in, t += 2500);
   EXPECT_EQ(descent_.command().phase, DescentPhase::kLanded);
   EXPECT_EQ(descent_.command().thrust_fraction.sum(), 0.0);
+}
+
+// Still on the ground, it lands landed_after_s after the thrust asked for
+// falls under the touchdown share of the weight: the same descent with
+// twice the setting lands exactly one landed_after_s later. And stopped
+// for longer than landed_after_s, the velocity loop still asks for more
+// than that share at first (85 % of the weight the moment it stops, the
+// integral taking it under 80 % some 0.3 s later): not landed yet.
+TEST(SpinningDescentLanding, LandsLandedAfterSecondsOnceStillWithLittleThrust) {
+  const auto landed_after_stop = [](double landed_after_s) {
+    config::Config c = spin_quad("quad_x");
+    c.motor_loss->settings.landed_after_s = landed_after_s;
+    SpinningDescent d(c.motor_loss->model, c.motor_loss->settings);
+    const SpinEquilibrium& eq = d.equilibrium(0);
+    MotorVector x = MotorVector::Zero(4);
+    for (int j = 0; j < 3; ++j) {
+      const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
+      x[static_cast<Eigen::Index>(k)] = eq.thrust_n[j] / c.motor_loss->model.max_thrust_n[k];
+    }
+    d.start(0, 0, x);
+    DescentInput in;
+    in.attitude = Eigen::Quaterniond::FromTwoVectors(eq.up, Eigen::Vector3d(0, 0, -1));
+    in.rates = eq.rates;
+    in.velocity = {0.0, 0.0, c.motor_loss->settings.descent_rate_mps};
+    std::int64_t t = 0;
+    for (int k = 0; k < 800; ++k) d.update(in, t += 2500);  // 2 s down
+    in.velocity.setZero();
+    const std::int64_t stopped = t;
+    while (d.command().phase != DescentPhase::kLanded && t < stopped + 5'000'000)
+      d.update(in, t += 2500);
+    return static_cast<double>(t - stopped) / 1e6;
+  };
+  constexpr double kSetting = 0.5;
+  constexpr double kNotBeforeS = 0.2;  // beyond landed_after_s: the thrust's fall
+  const double once = landed_after_stop(kSetting), twice = landed_after_stop(2 * kSetting);
+  EXPECT_GT(once, kSetting + kNotBeforeS);
+  EXPECT_NEAR(twice - once, kSetting, 2 * 2500 / 1e6);
 }
 
 TEST_F(SpinningDescentTest, TouchdownIsTheSpinLostWhileStill) {
