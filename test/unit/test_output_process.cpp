@@ -531,6 +531,48 @@ TEST(SerialPulses, ConfiguresTheFirmwareSendsHalfMicrosecondsAndReconfiguresAfte
   EXPECT_EQ(got[0].type, MM_LINK_CONFIG);
 }
 
+// The host's sequence far ahead of the last the chip took in the same
+// session (frames the chip refused piled up: here, a report that moved it
+// to 40000, then one saying the chip took only up to 2): more than half of
+// the largest step the chip accepts ahead, it goes back to the chip's last,
+// or the chip would refuse every frame from then on.
+TEST(SerialPulses, AHostFarAheadOfTheChipGoesBackToItsLastSequence) {
+  PtyPair pty;
+  output::SerialPulseSettings s;
+  s.period_us = 2500;
+  s.min_us = 1000;
+  s.max_us = 2000;
+  s.disarmed_us = {1000, 1000, 1000, 1000};
+  output::SerialPulseDriver driver(output::open_serial_port(pty.device, 250000), s);
+  const double pulses[4] = {1200, 1300, 1400, 1500};
+  const auto serve_until_report = [&](std::uint64_t reports, double now) {
+    for (int i = 0; i < 1000 && driver.reports() < reports; ++i) {
+      ASSERT_TRUE(driver.service(now));
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ASSERT_EQ(driver.reports(), reports);
+  };
+  constexpr std::uint32_t kSession = 0x20001;
+  constexpr std::uint32_t kAhead = 40000;
+  static_assert(kAhead > MM_LINK_MAX_SEQUENCE_STEP / 2 && kAhead < MM_LINK_MAX_SEQUENCE_STEP);
+  pty.report(MM_LINK_FLAG_CONFIGURED, kSession, 0);
+  serve_until_report(1, 0.0);
+  pty.report(MM_LINK_FLAG_CONFIGURED, kSession, kAhead);
+  serve_until_report(2, 0.1);
+  pty.frames(8, 50);  // whatever went before
+  ASSERT_TRUE(driver.write(pulses, 4, output::kAllArmed));
+  std::vector<mm_link_frame> got = pty.frames(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].u.pulses.sequence, kAhead + 1);  // up to what the chip took
+  pty.report(MM_LINK_FLAG_CONFIGURED, kSession, 2);
+  serve_until_report(3, 0.2);
+  ASSERT_TRUE(driver.write(pulses, 4, output::kAllArmed));
+  got = pty.frames(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].u.pulses.session, kSession);
+  EXPECT_EQ(got[0].u.pulses.sequence, 3u);
+}
+
 // Values faster than the output's share of the wire (a loop rate above
 // some 580 Hz for four motors at 250000 baud): after one frame of credit, a
 // frame per share of time, the newest waiting in place of older ones and
