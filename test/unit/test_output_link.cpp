@@ -306,29 +306,41 @@ TEST(OutputLink, DshotConfigurationsAndCommandsRoundTripWithinTheirLimits) {
   EXPECT_EQ(mm_link_encode_command(&none, buf), 0U);
   EXPECT_EQ(parser.malformed + parser.crc_errors, 0U);
 }
-// A PULSES frame whose count disagrees with its length, with a good CRC (a
-// host of another version, a bug): refused as malformed, never read with
+// A frame whose channel count disagrees with its length, with a good CRC
+// (a host of another version, a bug): refused as malformed, never read with
 // the count it claims (three channels read from four's bytes, or five from
-// four's and the CRC's).
-TEST(OutputLink, APulsesFrameWhoseCountDisagreesWithItsLengthIsRefused) {
+// four's and the CRC's). `count_at`: the count's byte in the body, its low
+// nibble for PULSES.
+void expect_count_mismatch_refused(std::uint8_t* buf, std::size_t n, std::size_t count_at,
+                                   std::uint8_t claimed, std::uint8_t mask) {
+  std::uint8_t* body = buf + 3;
+  body[count_at] = static_cast<std::uint8_t>((body[count_at] & ~mask) | claimed);
+  const std::uint32_t crc = mm_link_crc32(0, buf + 2, static_cast<std::size_t>(buf[2]) + 1U);
+  for (int i = 0; i < 4; ++i) buf[3 + buf[2] + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+  mm_link_parser parser;
+  mm_link_parser_init(&parser);
+  int taken = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    mm_link_frame frame{};
+    taken += mm_link_feed(&parser, buf[i], &frame) != 0 ? 1 : 0;
+  }
+  EXPECT_EQ(taken, 0);
+  EXPECT_EQ(parser.malformed, 1U);
+  EXPECT_EQ(parser.crc_errors, 0U);
+}
+
+TEST(OutputLink, AFrameWhoseCountDisagreesWithItsLengthIsRefused) {
   for (const std::uint8_t claimed : {std::uint8_t{3}, std::uint8_t{5}}) {
     SCOPED_TRACE(static_cast<int>(claimed));
-    const mm_link_pulses sent = some_pulses(1, 4);
     std::uint8_t buf[MM_LINK_MAX_FRAME + 8];
-    const std::size_t n = mm_link_encode_pulses(&sent, buf);
+    const mm_link_pulses pulses = some_pulses(1, 4);
+    std::size_t n = mm_link_encode_pulses(&pulses, buf);
     ASSERT_EQ(buf[2], MM_LINK_PULSES_BODY(4));
-    std::uint8_t* body = buf + 3;
-    body[10] = static_cast<std::uint8_t>((body[10] & 0xF0U) | claimed);
-    const std::uint32_t crc = mm_link_crc32(0, buf + 2, static_cast<std::size_t>(buf[2]) + 1U);
-    for (int i = 0; i < 4; ++i) buf[3 + buf[2] + i] = static_cast<std::uint8_t>(crc >> (8 * i));
-    mm_link_parser parser;
-    mm_link_parser_init(&parser);
-    mm_link_pulses got{};
-    bool taken = false;
-    for (std::size_t i = 0; i < n; ++i) taken = feed_pulses(parser, buf[i], got) || taken;
-    EXPECT_FALSE(taken);
-    EXPECT_EQ(parser.malformed, 1U);
-    EXPECT_EQ(parser.crc_errors, 0U);
+    expect_count_mismatch_refused(buf, n, 10, claimed, 0x0F);
+    const mm_link_config config = four_channel_config();
+    n = mm_link_encode_config(&config, buf);
+    ASSERT_EQ(buf[2], MM_LINK_CONFIG_BODY(4));
+    expect_count_mismatch_refused(buf, n, 17, claimed, 0xFF);
   }
 }
 
