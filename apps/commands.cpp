@@ -91,6 +91,7 @@ int run(const RunCommand& cmd) {
   node::RunOptions options;
   options.lcm_url = cmd.lcm_url;
   options.max_cycles = cmd.max_cycles;
+  options.lockstep = cmd.lockstep;
   options.timing_report_path = cmd.timing_report;
   return node::run_node(*config, options, std::cerr);
 }

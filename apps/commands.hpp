@@ -40,6 +40,7 @@ struct RunCommand {
   bool check_only = false;
   long long max_cycles = 0;
   std::string timing_report;
+  bool lockstep = false;
 };
 int run(const RunCommand& cmd);
 
@@ -142,6 +143,7 @@ struct SimCommand {
   bool json = false;
   std::string log_path;
   bool lcm = false;
+  bool lockstep = false;  // with --lcm: drive motormix run --lockstep, tick by tick
   std::string lcm_url;
   bool controller = true;
   double duration_s = 0.0;

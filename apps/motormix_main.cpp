@@ -56,6 +56,9 @@ int main(int argc, char** argv) {
       ->add_option("--max-cycles", run_cmd.max_cycles,
                    "stop by itself after this many loop cycles (0: until a signal)")
       ->check(CLI::NonNegativeNumber);
+  run_app->add_flag("--lockstep", run_cmd.lockstep,
+                    "one cycle per lockstep_t a simulator publishes on channels.lockstep, at its "
+                    "time, instead of the timer (docs/lockstep.md)");
   run_app->add_option("--timing-report", run_cmd.timing_report,
                       "at the end of the run, write its loop timing to this file as JSON "
                       "(wake-up lateness and period percentiles, the largest and when, "
@@ -223,6 +226,9 @@ int main(int argc, char** argv) {
   sim_app->add_flag("--lcm", sim_cmd.lcm,
                     "run in real time on the bus against a separate motormix run");
   add_lcm_url(sim_app, sim_cmd.lcm_url, " with --lcm");
+  sim_app->add_flag("--lockstep", sim_cmd.lockstep,
+                    "with --lcm: drive a `motormix run --lockstep` tick by tick, as fast as both "
+                    "go, whatever the machine's load (docs/lockstep.md)");
   sim_app->add_flag("!--no-controller", sim_cmd.controller,
                     "with --lcm: publish no setpoint or pid (your controller flies from "
                     "VEHICLE_STATE)");

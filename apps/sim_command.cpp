@@ -45,6 +45,11 @@ bool parse_failure(const std::string& text_in, const config::Config& config,
 }  // namespace
 
 int sim(const SimCommand& cmd) {
+  if (cmd.lockstep && !cmd.lcm) {
+    std::cerr << "motormix sim: --lockstep drives a motormix run on the bus: it needs --lcm (the "
+                 "simulator alone is in lockstep already)\n";
+    return kExitUsage;
+  }
   std::optional<config::Config> config;
   std::optional<sim::Scenario> scenario;
   try {
@@ -122,10 +127,11 @@ int sim(const SimCommand& cmd) {
       live.sim = options;
       live.lcm_url = cmd.lcm_url;
       live.controller = cmd.controller;
+      live.lockstep = cmd.lockstep;
       sim::LiveResult result;
       if (!sim::run_live(*config, *scenario, live, result, std::cerr)) return kExitRuntime;
       j = sim::result_json(result.sim, wheeled);
-      j["mode"] = "live";
+      j["mode"] = cmd.lockstep ? "lcm_lockstep" : "live";
       j["pwm_received"] = result.pwm_received;
       j["pwm_rejected"] = result.pwm_rejected;
       j["statuses_received"] = result.statuses_received;
@@ -134,6 +140,7 @@ int sim(const SimCommand& cmd) {
                       {"trailing", refused.trailing},     {"wrong_type", refused.wrong_type},
                       {"bad_length", refused.bad_length}, {"undecodable", refused.undecodable}};
       j["interrupted"] = result.interrupted;
+      if (cmd.lockstep) j["lockstep_lost"] = result.lockstep_lost;
       sim::add_detections(j, result.sim, *config);
       sim::add_spin(j, result.sim, *config, result.sim.failures);
       outcomes = result.sim.failures;
@@ -177,6 +184,7 @@ int sim(const SimCommand& cmd) {
               << "\n";
   }
   std::cout << j.dump() << "\n";
+  if (j.value("lockstep_lost", false)) return kExitRuntime;
   return j["crashed"].get<bool>() ? kExitCrashed : kExitOk;
 }
 

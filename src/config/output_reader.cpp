@@ -132,6 +132,7 @@ void read_channels(MapReader channels, Config& config) {
   c.attitude = channels.text("attitude", c.attitude);
   c.output_status = channels.text("output_status", c.output_status);
   c.esc_command = channels.text("esc_command", c.esc_command);
+  c.lockstep = channels.text("lockstep", c.lockstep);
   channels.finish();
   // One channel, one message type: a shared input channel would hand each
   // message to two decoders (one of which rejects it, cycle after cycle),
@@ -144,7 +145,7 @@ void read_channels(MapReader channels, Config& config) {
       {"motor_status", &c.motor_status}, {"battery", &c.battery},
       {"motor_test", &c.motor_test},     {"esc_telemetry", &c.esc_telemetry},
       {"attitude", &c.attitude},         {"output_status", &c.output_status},
-      {"esc_command", &c.esc_command}};
+      {"esc_command", &c.esc_command},   {"lockstep", &c.lockstep}};
   for (std::size_t i = 0; i < std::size(named); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       if (*named[i].second == *named[j].second) {

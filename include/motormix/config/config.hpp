@@ -44,6 +44,7 @@ struct Channels {
   std::string attitude = "ATTITUDE";
   std::string output_status = "OUTPUT_STATUS";  // motormix output's own state
   std::string esc_command = "ESC_COMMAND";      // DShot special commands for motormix output
+  std::string lockstep = "MOTORMIX_LOCKSTEP";   // a simulator's clock (run --lockstep)
 };
 
 // `motormix motor-test`: a disarmed mixer spins one motor alone on request.

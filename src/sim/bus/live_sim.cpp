@@ -13,6 +13,7 @@
 #include <motormix/battery_t.hpp>
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/security.hpp>
+#include <motormix/lockstep_t.hpp>
 #include <motormix/mixer_status_t.hpp>
 #include <motormix/motor_pwm_t.hpp>
 #include <motormix/motor_status_t.hpp>
@@ -36,11 +37,19 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using bus::wall_us;
 
+// Lockstep: how long the simulator waits for the mixer's answer to a tick.
+constexpr double kLockstepWaitS = 5.0;
+
 // What the simulated ESCs last heard from the mixer. Decoding happens here,
 // inside the callback, and never throws out of it.
 struct MixerOutputs {
   signing::Policy* policy = nullptr;  // security: what the sim takes from the mixer
   int motors = 0;
+  // In lockstep every time is the simulated one (the tick's), the mixer's
+  // stamps too.
+  const std::int64_t* lockstep_now = nullptr;
+  std::int64_t now() const { return lockstep_now != nullptr ? *lockstep_now : wall_us(); }
+  std::int64_t utime = 0;  // the last accepted motor_pwm_t's
   MotorVector outputs;
   DirectionVector direction{};
   bool armed = false;
@@ -64,7 +73,7 @@ struct MixerOutputs {
 
   void on_pwm(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const motor_pwm_t& msg = pwm_msg;
-    if (bus::receive(*policy, rbuf, channel, wall_us(), pwm_msg, refused) != bus::Refusal::kNone ||
+    if (bus::receive(*policy, rbuf, channel, now(), pwm_msg, refused) != bus::Refusal::kNone ||
         msg.num_motors != motors) {
       ++rejected;
       return;
@@ -81,13 +90,14 @@ struct MixerOutputs {
       direction[static_cast<std::size_t>(i)] = msg.direction[static_cast<std::size_t>(i)];
     }
     armed = msg.armed;
+    utime = msg.utime;
     received = Clock::now();
     any = true;
     ++accepted;
   }
   void on_status(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const mixer_status_t& msg = status_msg;
-    if (bus::receive(*policy, rbuf, channel, wall_us(), status_msg, refused) != bus::Refusal::kNone)
+    if (bus::receive(*policy, rbuf, channel, now(), status_msg, refused) != bus::Refusal::kNone)
       return;
     axis_limited = 0;
     for (int a = 0; a < kNumAxes; ++a) {
@@ -143,6 +153,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   MixerOutputs mix;
   mix.policy = &policy;
   mix.motors = config.motors();
+  std::int64_t tick_us = 0;  // lockstep: the simulated time of this cycle
+  if (options.lockstep) mix.lockstep_now = &tick_us;
   lcm.subscribe(config.channels.motor_pwm, &MixerOutputs::on_pwm, &mix);
   lcm.subscribe(config.channels.status, &MixerOutputs::on_status, &mix);
 
@@ -171,8 +183,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     }
     const auto due = start + std::chrono::duration_cast<Clock::duration>(
                                  std::chrono::duration<double>(static_cast<double>(k) * period));
-    // Serve the bus until this cycle is due.
-    for (;;) {
+    // Serve the bus until this cycle is due (in lockstep: at once).
+    for (; !options.lockstep;) {
       const auto left = due - Clock::now();
       if (left <= Clock::duration::zero()) break;
       const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(left).count();
@@ -187,7 +199,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     while (lcm.handleTimeout(0) > 0) {
     }
     const double t = periods.start_of(k);
-    const std::int64_t now = wall_us();
+    tick_us = kEpochUs + std::llround(t * 1e6);
+    const std::int64_t now = options.lockstep ? tick_us : wall_us();
     clock.advance(t);
     const Reference& ref = clock.reference();
     ControllerCommand cmd;
@@ -236,7 +249,27 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     fill_vehicle_state(state, vehicle, now);
     publish(kVehicleStateChannel, state);
 
-    const bool fresh = mix.any && Clock::now() - mix.received <= stale_after;
+    if (options.lockstep) {
+      // The tick after everything of this cycle, then its outputs: the
+      // mixer's motor_pwm_t stamped with it (bounded: a mixer gone is an
+      // error, never a hang).
+      lockstep_t tick;
+      tick.utime = tick_us;
+      publish(config.channels.lockstep, tick);
+      const auto asked = Clock::now();
+      while (!(mix.any && mix.utime == tick_us) &&
+             Clock::now() - asked < std::chrono::duration<double>(kLockstepWaitS)) {
+        if (lcm.handleTimeout(100) < 0) break;
+      }
+      if (!(mix.any && mix.utime == tick_us)) {
+        err << "motormix sim: no motor_pwm_t for the tick at " << t << " s within "
+            << kLockstepWaitS << " s: is `motormix run --lockstep` running on this bus?\n";
+        result.lockstep_lost = true;
+        break;
+      }
+    }
+    const bool fresh = options.lockstep ? mix.utime == tick_us
+                                        : mix.any && Clock::now() - mix.received <= stale_after;
     const bool armed = fresh && mix.armed;
     scorer.add(t, ref, cmd, vehicle, armed, mix.axis_limited);
     // A declaration at the mixer's stamp, in simulated time (both clocks

@@ -20,6 +20,9 @@ struct RunOptions {
   // percentiles, largest and when, overruns, kernel drops, the scheduling
   // granted) is written there as JSON at the end of the run.
   std::string timing_report_path;
+  // Cycles driven by a simulator's lockstep_t ticks on channels.lockstep,
+  // each at its time, instead of the timer (docs/lockstep.md).
+  bool lockstep = false;
 };
 
 // Runs until SIGINT, SIGTERM or SIGHUP (then publishes one disarmed message

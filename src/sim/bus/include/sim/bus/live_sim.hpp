@@ -22,6 +22,12 @@ struct LiveOptions {
   SimOptions sim;
   std::string lcm_url;     // empty: LCM's default ($LCM_DEFAULT_URL)
   bool controller = true;  // false: a controller of the user's flies from VEHICLE_STATE
+  // Drive `motormix run --lockstep` tick by tick (docs/lockstep.md): after
+  // each cycle's messages a lockstep_t at the simulated time, then wait for
+  // the mixer's motor_pwm_t stamped with it. As fast as both sides go, the
+  // same whatever the machine's load; times on the bus are simulated
+  // (from sim::kEpochUs).
+  bool lockstep = false;
 };
 
 struct LiveResult {
@@ -31,6 +37,7 @@ struct LiveResult {
   std::int64_t statuses_received = 0;  // mixer_status_t (its unallocated demand feeds anti-windup)
   bus::Refusals refused;               // on both channels, by reason (bus::receive)
   bool interrupted = false;            // SIGTERM / SIGINT / SIGHUP ended the flight early
+  bool lockstep_lost = false;          // lockstep: the mixer did not answer a tick (5 s)
   bool bus_ok = true;
 };
 

@@ -1,0 +1,80 @@
+#!/bin/sh
+# The spin landing over the bus in lockstep (docs/lockstep.md; ctest runs it
+# under scripts/private-bus): `motormix run --lockstep` with a quad X beside
+# `motormix sim --lcm --lockstep`, a CPU hog on every core the whole time
+# (bounded), with the configuration's own timing (attitude_timeout_ms 50).
+# Five flights: motor 1 stopping at 8 s at 10 m found by the mixer's own
+# detector, reported on motor_status 100 ms later, motors 1 and 2 together,
+# a thrown prop, a broken prop tip. Each passes when the quad did not crash,
+# touched down no faster than 2 m/s, and the mixer logged taking over and
+# disarming on touchdown. Then the first flight again: lockstep is
+# deterministic, so its result is the same to the last digit (but the wall
+# time it took).
+#   check_sitl_lockstep.sh MOTORMIX CONFIG
+set -eu
+mm=$1
+config=$2
+tmp=$(mktemp -d)
+hogs=""
+cleanup() {
+  for h in $hogs; do kill "$h" 2>/dev/null || true; done
+  rm -rf "$tmp"
+}
+trap cleanup EXIT
+# A hog per core, each bounded (the test's own timeout is 300 s).
+cores=$(nproc)
+i=0
+while [ "$i" -lt "$cores" ]; do
+  timeout 280 sh -c 'while :; do :; done' &
+  hogs="$hogs $!"
+  i=$((i + 1))
+done
+failed=0
+# fly NAME EXPECTED-LOG-LINE [SIM ARGS...]
+fly() {
+  name=$1
+  expected=$2
+  shift 2
+  # Bounded by itself too: 28 s of ticks at 400 Hz.
+  "$mm" run --config "$config" --lockstep --set failure_detection.enabled=true \
+    --max-cycles 11200 > "$tmp/run.log" 2>&1 &
+  mixer=$!
+  sleep 0.3
+  code=0
+  "$mm" sim --config "$config" --scenario spin_landing --lcm --lockstep --duration 26 --json \
+    "$@" > "$tmp/sim.json" || code=$?
+  kill "$mixer" 2>/dev/null || true
+  wait "$mixer" || true
+  echo "== $name"
+  cat "$tmp/sim.json"
+  speed=$(sed -n 's/.*"touchdown_speed_mps":\([0-9.e+-]*\).*/\1/p' "$tmp/sim.json")
+  if [ "$code" -ne 0 ] || ! grep -q '"crashed":false' "$tmp/sim.json" || [ -z "$speed" ] ||
+    ! awk -v s="$speed" 'BEGIN { exit !(s <= 2.0) }' ||
+    ! grep -q "$expected" "$tmp/run.log" ||
+    ! grep -q 'spin landing touched down: disarmed' "$tmp/run.log"; then
+    echo "FAILED $name (exit $code, touchdown at ${speed:-no} m/s)"
+    cat "$tmp/run.log"
+    failed=1
+    return
+  fi
+  grep 'spin landing\|landing spinning\|lockstep' "$tmp/run.log"
+}
+fly "found by the detector" 'landing spinning on the other three' --undetected
+# Without the wall-clock fields, kept for the comparison below.
+strip() { sed 's/"realtime_factor":[^,}]*//; s/"wall_seconds":[^,}]*//' "$1"; }
+strip "$tmp/sim.json" > "$tmp/first.json"
+fly "reported after 100 ms" 'landing spinning on the other three'
+fly "two opposite motors, found by the detector" 'landing spinning on the other two' \
+  --undetected --no-scenario-failures --fail 1@8 --fail 2@8
+fly "a thrown prop, found by the detector" 'landing spinning on the other three' \
+  --undetected --no-scenario-failures --fail 1@8:prop_lost
+fly "a broken prop tip, found by the detector" 'landing spinning on the other three' \
+  --undetected --no-scenario-failures --fail 1@8:prop_damaged
+fly "found by the detector, again" 'landing spinning on the other three' --undetected
+strip "$tmp/sim.json" > "$tmp/again.json"
+if ! cmp -s "$tmp/first.json" "$tmp/again.json"; then
+  echo "FAILED: the same flight in lockstep gave another result"
+  diff "$tmp/first.json" "$tmp/again.json" || true
+  failed=1
+fi
+exit $failed
