@@ -15,20 +15,9 @@ set -eu
 mm=$1
 config=$2
 tmp=$(mktemp -d)
-hogs=""
-cleanup() {
-  for h in $hogs; do kill "$h" 2>/dev/null || true; done
-  rm -rf "$tmp"
-}
-trap cleanup EXIT
-# A hog per core, each bounded (the test's own timeout is 300 s).
-cores=$(nproc)
-i=0
-while [ "$i" -lt "$cores" ]; do
-  timeout 280 sh -c 'while :; do :; done' &
-  hogs="$hogs $!"
-  i=$((i + 1))
-done
+. "$(dirname "$0")/cpu_hogs.sh"
+trap 'stop_hogs; rm -rf "$tmp"' EXIT
+start_hogs 280  # the test's own timeout is 300 s
 failed=0
 # fly NAME EXPECTED-LOG-LINE [SIM ARGS...]
 fly() {
