@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <random>
 
@@ -445,6 +446,27 @@ TEST(FailureDetector, SilenceIsJudgedAgainstEachEscsOwnInterval) {
   EXPECT_EQ(d.detection().source, DetectionSource::kTelemetrySilent);
 }
 
+// Silence is never sooner than telemetry_timeout_s: an ESC reporting every
+// cycle (six of its intervals: 15 ms) that stops is flagged silent the
+// cycle its last reading is telemetry_timeout_s old, not before.
+TEST(FailureDetector, AFastEscIsSilentAfterTheTimeoutNotAfterItsIntervals) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kTelemetry));
+  FailureDetector d(s);
+  const std::int64_t stop = 1'000'000;
+  std::int64_t last = 0, flagged_at = -1;
+  for (std::int64_t t = 0; t < 2'000'000 && flagged_at < 0; t += kCycleUs) {
+    for (int i = 0; i < 6; ++i) {
+      if (i == 3 && t >= stop) continue;
+      if (i == 3) last = t;
+      d.on_telemetry(i, kFullRpm * std::sqrt(kHover), NAN, t);
+    }
+    d.update(hover(6), 0, true, t);
+    if ((d.detection().telemetry_silent >> 3 & 1U) != 0) flagged_at = t;
+  }
+  ASSERT_GE(flagged_at, 0);
+  EXPECT_NEAR(static_cast<double>(flagged_at - last) / 1e6, s.telemetry_timeout_s, kCycleS);
+}
+
 // The body's rates under the rotors' torque plus `external`, integrated at
 // the cycle rate, fed to the detector as a gyro would.
 class RatesVehicle {
@@ -568,6 +590,79 @@ TEST(FailureDetector, AHealthyEscVetoesTheRates) {
   const Eigen::Vector3d push = -s.torque_per_thrust.col(1) * kHover;
   EXPECT_GT(rates_declared_after(s, kHover, 1.0, push), 0.0);
   EXPECT_LT(rates_declared_after(both, kHover, 1.0, push), 0.0);
+}
+
+// The rates model is the vehicle's: a healthy hexa whose motors follow
+// their commands with the configured lag (time_constant_up_s and _down_s),
+// commanded in steps of a fifth of hover every 150 ms on every motor at its
+// own phase, leaves no residual but rounding (a model lag half the
+// motors' own left 2.4 % of the smallest judged after each step).
+TEST(FailureDetector, AHealthyVehicleFollowingTheModelledLagLeavesNoResidual) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  constexpr double kResidualShare = 0.002;
+  FailureDetector d(s);
+  RatesVehicle body(s);
+  MotorVector command = hover(6), actual = hover(6);
+  double worst = 0.0;
+  for (std::int64_t t = 0; t < 3'000'000; t += kCycleUs) {
+    for (int i = 0; i < 6; ++i) {
+      const bool high = ((t / 150'000) + i) % 2 == 0;
+      command[i] = kHover * (high ? 1.1 : 0.9);
+      const double tau = command[i] > actual[i] ? s.time_constant_up_s : s.time_constant_down_s;
+      actual[i] += (command[i] - actual[i]) * (1.0 - std::exp(-kCycleS / tau));
+    }
+    body.step(d, actual, Eigen::Vector3d::Zero(), t);
+    d.update(command, 0, true, t);
+    if (t > 500'000) worst = std::max(worst, d.rates_residual().norm());
+  }
+  EXPECT_EQ(d.detection().failed, 0U);
+  EXPECT_LT(worst, kResidualShare * s.min_residual_nm);
+}
+
+// The gyro's vibration through the rates filter (rates_filter_hz, two
+// first-order stages on the differentiated rates): a 100 Hz roll-rate
+// vibration of 0.05 rad/s on a hovering hexa leaves a roll residual of the
+// amplitude the filter's own response gives, worked here from its
+// discrete form: I_x |D| |H|^2 A (D the difference over a cycle, H one
+// stage), to a tenth (a cut-off half again higher doubles it).
+TEST(FailureDetector, TheRatesFilterTakesTheVibrationDownAsConfigured) {
+  const FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  constexpr double kVibrationHz = 100.0, kAmplitude = 0.05, kWithin = 0.1;
+  constexpr double kPi = 3.14159265358979;
+  FailureDetector d(s);
+  // The amplitude from the RMS over whole periods (four samples each: the
+  // largest sample depends on the phase).
+  double sum_sq = 0.0;
+  int n = 0;
+  for (std::int64_t t = 0; t < 2'000'000; t += kCycleUs) {
+    const double w = kAmplitude * std::sin(2.0 * kPi * kVibrationHz * t / 1e6);
+    d.on_rates(Eigen::Vector3d(w, 0.0, 0.0), t, t);
+    d.update(hover(6), 0, false, t);
+    if (t >= 1'000'000) {
+      sum_sq += d.rates_residual().x() * d.rates_residual().x();
+      ++n;
+    }
+  }
+  const double peak = std::sqrt(2.0 * sum_sq / n);
+  const double omega_t = 2.0 * kPi * kVibrationHz * kCycleS;
+  const double a = 1.0 - std::exp(-kCycleS * 2.0 * kPi * s.rates_filter_hz);
+  const double stage = a / std::abs(std::complex<double>(1.0) -
+                                    (1.0 - a) * std::polar(1.0, -omega_t));
+  const double difference = 2.0 * std::sin(omega_t / 2.0) / kCycleS;
+  const double expected = s.inertia_kgm2.x() * difference * stage * stage * kAmplitude;
+  EXPECT_NEAR(peak, expected, kWithin * expected);
+}
+
+// A motor below min_motor_thrust is not judged by the rates either: on a
+// hexa whose smallest judged residual is a twentieth of a hover motor's,
+// a motor commanded at 0.06 stopping outright is not declared (nor its
+// torque ever near a failure's); at 0.12 it is.
+TEST(FailureDetector, TheRatesJudgeNoMotorBelowTheGate) {
+  FailureDetectorSettings s = hexa(bits(DetectorSources::kRates));
+  s.min_residual_nm = 0.05 * s.torque_per_thrust.col(1).norm() * kHover;
+  ASSERT_LT(0.06, s.min_motor_thrust);
+  EXPECT_LT(rates_declared_after(s, 0.06, 0.0), 0.0);
+  EXPECT_GT(rates_declared_after(s, 0.12, 0.0), 0.0);
 }
 
 // The torque scale learned in healthy flight stays within 0.7..1.3
