@@ -8,6 +8,8 @@
 #include "security_reader.hpp"
 #include "vehicle_physics_reader.hpp"
 
+#include <motormix/config/hover_point.hpp>
+
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -136,6 +138,13 @@ Config read_document(const YAML::Node& document, LoadContext& context) {
   config.status_rate_hz = root.number("status_rate_hz", 10.0, 0.1, 1000.0);
   if (root.has("battery")) read_battery(root.map("battery"), config);
   read_vehicle_physics(root.map("vehicle"), config);
+  // Newtons and newton-metres are converted through the vehicle's own
+  // physics: its weight and thrust must be given, and it must hover.
+  if (config.inputs.units == InputUnits::kPhysical && !hover_point(config).known) {
+    fail("inputs.units", "physical",
+         "normalized, or physical with a `vehicle:` section giving mass_kg and max_thrust_n "
+         "of an aircraft that can hover");
+  }
   read_failure_detection(root.map("failure_detection"), root.has("failure_detection"), config);
   read_motor_loss(root.map("motor_loss"), config);
   read_hardware(root.map("hardware"), config);

@@ -96,6 +96,7 @@ void read_inputs(MapReader inputs, Config& config) {
   config.inputs.hold_last_s = inputs.number("hold_last_ms", 500.0, 1.0, 5000.0) / 1e3;
   config.inputs.max_future_s = inputs.number("max_future_ms", 1000.0, 1.0, 3.6e6) / 1e3;
   config.inputs.arm_max_throttle = inputs.number("arm_max_throttle", 0.1, 0.0, 1.0);
+  config.inputs.units = inputs.choice("units", InputUnits::kNormalized, kInputUnitsNames);
   inputs.finish();
 }
 

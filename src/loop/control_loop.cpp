@@ -2,6 +2,8 @@
 
 #include "loop/durations.hpp"
 
+#include <motormix/config/config_error.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -23,6 +25,14 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
       failures_(config.failed_motors, mixer_.motors()) {
   if (config.battery) battery_.emplace(*config.battery);
   if (config.failure_detection) detection_.emplace(config);
+  if (config.inputs.units == config::InputUnits::kPhysical) {
+    physical_ = PhysicalInputs::build(config, mixer_);
+    if (!physical_) {
+      throw config::ConfigError(
+          "inputs.units: physical, but the vehicle's torque per demand cannot be inverted at "
+          "hover (a rotor layout that cannot make each torque): use normalized");
+    }
+  }
   if (config.motor_loss) landing_.emplace(config);
   // What the status says is being read (constant for the configuration).
   result_.detector_sources =
@@ -63,9 +73,15 @@ bool ControlLoop::from_future(std::int64_t utime, std::int64_t wall_us) {
   return true;
 }
 
-Rejection ControlLoop::on_setpoint(const SetpointSample& sample, std::int64_t now_us,
+Rejection ControlLoop::on_setpoint(const SetpointSample& in, std::int64_t now_us,
                                    std::int64_t wall_us) {
-  if (from_future(sample.utime, wall_us)) return Rejection::kFromFuture;
+  if (from_future(in.utime, wall_us)) return Rejection::kFromFuture;
+  SetpointSample sample = in;
+  // Newtons and newton-metres to demands; NaN stays NaN for the checks.
+  if (physical_ && std::isfinite(in.throttle) && std::isfinite(in.yaw)) {
+    sample.throttle = physical_->throttle_for(in.throttle);
+    sample.yaw = physical_->torques_for(Eigen::Vector3d(0.0, 0.0, in.yaw)).z();
+  }
   const Rejection rejection = check_setpoint(sample, thrust_range_, setpoint_.last_utime());
   count(rejection);
   if (rejection != Rejection::kNone) return rejection;
@@ -91,8 +107,15 @@ MotorTestResult ControlLoop::on_motor_test(const MotorTestSample& s, std::int64_
   return r;
 }
 
-Rejection ControlLoop::on_pid(const PidSample& pid, std::int64_t now_us, std::int64_t wall_us) {
-  if (from_future(pid.utime, wall_us)) return Rejection::kFromFuture;
+Rejection ControlLoop::on_pid(const PidSample& in, std::int64_t now_us, std::int64_t wall_us) {
+  if (from_future(in.utime, wall_us)) return Rejection::kFromFuture;
+  PidSample pid = in;
+  if (physical_ && std::isfinite(in.roll) && std::isfinite(in.pitch) && std::isfinite(in.yaw)) {
+    const Eigen::Vector3d d = physical_->torques_for(Eigen::Vector3d(in.roll, in.pitch, in.yaw));
+    pid.roll = d.x();
+    pid.pitch = d.y();
+    pid.yaw = d.z();
+  }
   const Rejection rejection = check_pid(pid, pid_.last_utime());
   count(rejection);
   if (rejection != Rejection::kNone) return rejection;

@@ -9,17 +9,7 @@ DetectionRunner::DetectionRunner(const config::Config& config)
     : detector_(config.failure_detection->detector),
       min_throttle_(config.failure_detection->min_throttle),
       pole_pairs_(config.failure_detection->motor_poles / 2.0),
-      curve_{config.vehicle_model.esc_min, config.vehicle_model.esc_max,
-             config.vehicle_model.thrust_expo} {
-  // Without a vehicle section's ESC range, the output stage's own.
-  curve_.min.resize(static_cast<std::size_t>(config.motors()));
-  curve_.max.resize(static_cast<std::size_t>(config.motors()));
-  for (std::size_t i = 0; i < config.outputs.size() && i < curve_.min.size(); ++i) {
-    if (!(curve_.max[i] > curve_.min[i])) {
-      curve_.min[i] = config.outputs[i].min;
-      curve_.max[i] = config.outputs[i].max;
-    }
-  }
+      curve_(esc_curve_of(config)) {
   thrust_.setZero(config.motors());
 }
 

@@ -12,8 +12,7 @@ LandingRunner::LandingRunner(const config::Config& config)
                config.motor_loss->equilibria),
       two_rotor_(config.motor_loss->model, config.motor_loss->settings),
       attitude_timeout_us_(seconds_to_us(config.motor_loss->attitude_timeout_s)),
-      curve_{config.vehicle_model.esc_min, config.vehicle_model.esc_max,
-             config.vehicle_model.thrust_expo} {}
+      curve_(esc_curve_of(config)) {}
 
 void LandingRunner::stop() {
   descent_.stop();

@@ -3,6 +3,8 @@
 #include <motormix/config/hover_point.hpp>
 #include <motormix/config/security.hpp>
 
+#include <iomanip>
+#include <optional>
 #include <sstream>
 
 namespace motormix::node {
@@ -18,6 +20,22 @@ std::vector<std::string> describe_run(const config::Config& c, const loop::Contr
     << c.inputs.setpoint_timeout_s * 1e3 << " ms), '" << c.channels.pid << "' (pid, timeout "
     << c.inputs.pid_timeout_s * 1e3 << " ms), yaw from " << to_string(c.inputs.yaw_source);
   lines.push_back(s.str());
+  // The inputs' scale through this vehicle's physics: what one unit of each
+  // demand is, or (inputs.units: physical) what the newtons become.
+  std::optional<loop::PhysicalInputs> built;
+  const loop::PhysicalInputs* scale = loop.physical_inputs();
+  if (!scale && (built = loop::PhysicalInputs::build(c, loop.mixer()))) scale = &*built;
+  if (scale) {
+    const Eigen::Matrix3d& m = scale->torque_per_demand();
+    s.str("");
+    s << "inputs in "
+      << (loop.physical_inputs() ? "newtons and newton-metres (inputs.units physical)"
+                                 : "demands (inputs.units normalized)")
+      << std::setprecision(4) << ": throttle 1 = " << scale->thrust_at_full_n() << " N, hover " << scale->hover_thrust_n()
+      << " N at throttle " << scale->hover_throttle() << "; one unit of roll, pitch, yaw = "
+      << m(0, 0) << ", " << m(1, 1) << ", " << m(2, 2) << " N m at hover";
+    lines.push_back(s.str());
+  }
   s.str("");
   s << "outputs '" << c.channels.motor_pwm << "' at " << c.loop_rate_hz << " Hz, status '"
     << c.channels.status << "' at " << c.status_rate_hz << " Hz";

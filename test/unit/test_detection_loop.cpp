@@ -224,7 +224,9 @@ MotorMask declared_with_second_reading(double rpm, std::int64_t* refused) {
                                                                16.0, 40.0, kNaN};
     EXPECT_EQ(loop.on_esc_telemetry(batch, now, kWall), Rejection::kNone);
     const auto& r = loop.cycle(now);
-    if (armed) EXPECT_EQ(r.state, LoopState::kArmed) << "cycle " << k;
+    if (armed) {
+      EXPECT_EQ(r.state, LoopState::kArmed) << "cycle " << k;
+    }
     failed = r.detection.failed;
   }
   *refused = loop.counters().rejected_range;

@@ -635,7 +635,7 @@ TEST(FailureDetector, TheRatesFilterTakesTheVibrationDownAsConfigured) {
   double sum_sq = 0.0;
   int n = 0;
   for (std::int64_t t = 0; t < 2'000'000; t += kCycleUs) {
-    const double w = kAmplitude * std::sin(2.0 * kPi * kVibrationHz * t / 1e6);
+    const double w = kAmplitude * std::sin(2.0 * kPi * kVibrationHz * static_cast<double>(t) / 1e6);
     d.on_rates(Eigen::Vector3d(w, 0.0, 0.0), t, t);
     d.update(hover(6), 0, false, t);
     if (t >= 1'000'000) {
@@ -687,7 +687,7 @@ TEST(FailureDetector, TheLearnedTorqueScaleStaysWithinItsBounds) {
       // pitch and yaw torques all moving, the body rocking.
       MotorVector command = hover(6);
       for (int i = 0; i < 6; ++i)
-        command[i] += 0.1 * kHover * std::sin(2.0 * 3.14159265358979 * 0.7 * t / 1e6 + i);
+        command[i] += 0.1 * kHover * std::sin(2.0 * 3.14159265358979 * 0.7 * static_cast<double>(t) / 1e6 + i);
       body.step(d, command, Eigen::Vector3d::Zero(), t);
       d.update(command, 0, true, t);
     }

@@ -31,6 +31,10 @@ namespace motormix::config {
 
 enum class Strategy { kLegacyBudget, kBudget, kShift, kClip, kPrioritized, kOptimal };
 enum class YawSource { kSetpoint, kPid };
+// What setpoint_t and pid_t carry: demands of -1..1 (0..1 for the
+// throttle) in the mixing table's signs, or newtons and newton-metres
+// (docs/running.md, "The inputs' units").
+enum class InputUnits { kNormalized, kPhysical };
 
 struct Channels {
   std::string setpoint = "SETPOINT";
@@ -70,6 +74,7 @@ struct Inputs {
   double hold_last_s = 0.5;       // kHoldLast: how long, at most
   double max_future_s = 1.0;      // utime further ahead of this host's clock: rejected
   double arm_max_throttle = 0.1;  // arming refused while |throttle| is above this
+  InputUnits units = InputUnits::kNormalized;
 };
 
 enum class PublishMode {
@@ -157,6 +162,11 @@ inline constexpr EnumName<YawSource> kYawSourceNames[] = {
     {YawSource::kPid, "pid"},
 };
 inline const char* to_string(YawSource value) { return name_in(kYawSourceNames, value); }
+inline constexpr EnumName<InputUnits> kInputUnitsNames[] = {
+    {InputUnits::kNormalized, "normalized"},
+    {InputUnits::kPhysical, "physical"},
+};
+inline const char* to_string(InputUnits value) { return name_in(kInputUnitsNames, value); }
 inline constexpr EnumName<FailsafeAction> kFailsafeActionNames[] = {
     {FailsafeAction::kDisarm, "disarm"},
     {FailsafeAction::kHoldLast, "hold_last"},

@@ -43,6 +43,7 @@
 #include "loop/arming.hpp"
 #include "loop/counters.hpp"
 #include "loop/detection_runner.hpp"
+#include "loop/physical_inputs.hpp"
 #include "loop/failure_set.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/landing_runner.hpp"
@@ -139,6 +140,8 @@ class ControlLoop {
   // The failure detector as it runs (nullptr without failure_detection):
   // what the start-up banner reports.
   const DetectionRunner* detection() const { return detection_ ? &*detection_ : nullptr; }
+  // The conversion from newtons and newton-metres (inputs.units: physical).
+  const PhysicalInputs* physical_inputs() const { return physical_ ? &*physical_ : nullptr; }
   const Counters& counters() const { return counters_; }
   const Mixer& mixer() const { return mixer_; }
 
@@ -178,6 +181,9 @@ class ControlLoop {
   SpoolUp spool_up_;
   FailureSet failures_;
   std::optional<DetectionRunner> detection_;
+  // inputs.units physical: newtons and newton-metres to demands, at
+  // reception (every later rule reads demands: arming, the gates).
+  std::optional<PhysicalInputs> physical_;
   std::optional<LandingRunner> landing_;
   LoopState previous_state_ = LoopState::kDisarmed;  // the state the previous cycle ended in
   LatestInput<AttitudeSample> attitude_;

@@ -5,6 +5,7 @@
 // outputs) and the value that gives a thrust fraction (the spin landing's
 // commands). One curve for both, so they cannot disagree.
 
+#include <motormix/config/config.hpp>
 #include <motormix/output_stage.hpp>
 
 #include <algorithm>
@@ -27,5 +28,21 @@ struct EscCurve {
     return min[i] + OutputStage::linearize(std::clamp(thrust, 0.0, 1.0), expo) * (max[i] - min[i]);
   }
 };
+
+// The curve of a configuration: its vehicle section's ESC range, or, for a
+// motor without one, the output stage's own range.
+inline EscCurve esc_curve_of(const config::Config& config) {
+  EscCurve c{config.vehicle_model.esc_min, config.vehicle_model.esc_max,
+             config.vehicle_model.thrust_expo};
+  c.min.resize(static_cast<std::size_t>(config.motors()));
+  c.max.resize(static_cast<std::size_t>(config.motors()));
+  for (std::size_t i = 0; i < config.outputs.size() && i < c.min.size(); ++i) {
+    if (!(c.max[i] > c.min[i])) {
+      c.min[i] = config.outputs[i].min;
+      c.max[i] = config.outputs[i].max;
+    }
+  }
+  return c;
+}
 
 }  // namespace motormix::loop
