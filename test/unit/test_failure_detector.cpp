@@ -128,6 +128,52 @@ MotorMask speed_lag_quad_after_a_thrown_prop(std::uint8_t sources) {
   return d.detection().failed & (MotorMask{1} << kAcross);
 }
 
+// The spin landing's first cycles on a light quad with fast motors (thrust
+// to weight 10, hovering at a tenth of full thrust, 5 ms speed lag, as
+// RotorPy's Hummingbird): motor 1 stopped and declared, the two beside it
+// raised from hover to full, the one across from it dropped near idle. The
+// ESCs' readings are fresh (bidirectional DShot, a simulator), the detector
+// assumes the default 20 ms latency: the raised motors' readings run ahead
+// of the thrust 10 ms ago. The motor across, slowing exactly as commanded,
+// must not be declared. Returns what was declared beside motor 1.
+MotorMask spin_up_with_fresh_readings() {
+  constexpr double kTau = 0.005;
+  constexpr double kLightHover = 0.1;
+  constexpr int kStopped = 0, kAcross = 1;  // quad X: m1 front right, m2 rear left
+  FailureDetectorSettings s;
+  s.motors = 4;
+  s.sources = bits(DetectorSources::kTelemetry);
+  s.time_constant_up_s = s.time_constant_down_s = kTau;
+  s.min_motor_thrust = 0.16 * kLightHover;  // the default for this vehicle
+  FailureDetector d(s);
+  MotorVector command = MotorVector::Constant(4, kLightHover);
+  std::array<double, 4> speed{};
+  for (auto& w : speed) w = std::sqrt(kLightHover);
+  const std::int64_t fail_at = 500'000;
+  const double alpha = 1.0 - std::exp(-kCycleUs / 1e6 / kTau);
+  MotorMask excluded = 0;
+  for (std::int64_t t = 0; t < 1'000'000; t += kCycleUs) {
+    if (t >= fail_at) {
+      excluded = MotorMask{1} << kStopped;
+      command.setConstant(1.0);
+      command[kStopped] = 0.0;
+      command[kAcross] = 0.02;
+    }
+    for (int i = 0; i < 4; ++i) {
+      auto& w = speed[static_cast<std::size_t>(i)];
+      w += (std::sqrt(command[i]) - w) * alpha;
+      d.on_telemetry(i, kFullRpm * w, NAN, t);
+    }
+    d.update(command, excluded, true, t);
+  }
+  return d.detection().failed & ~(MotorMask{1} << kStopped);
+}
+
+TEST(FailureDetector, TheMotorAcrossADeadOneIsNotDeclaredWhileTheOthersSpinUp) {
+  EXPECT_EQ(spin_up_with_fresh_readings(), 0U)
+      << "a motor slowing as commanded beside two spinning up was declared";
+}
+
 TEST(FailureDetector, AMotorSlowingAsItsSpeedLagHasItIsNotDeclared) {
   EXPECT_EQ(speed_lag_quad_after_a_thrown_prop(bits(DetectorSources::kTelemetry)), 0U)
       << "the motor across from a thrown prop, slowing as commanded, was declared";

@@ -250,9 +250,9 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     return w;
   };
   // Each judged motor's ratio of rpm (or current) to what its thrust should
-  // give, up to a common scale: at its likeliest thrust, at the kindest to a
-  // slow motor (best: the least thrust) and to a fast one (fastest: the
-  // most); kind: 1 rpm, 2 current, 0 not judged.
+  // give, up to a common scale: at its likeliest thrust (ratio: current
+  // only), at the kindest to a slow motor (best: the least thrust) and to a
+  // fast one (fastest: the most); kind: 1 rpm, 2 current, 0 not judged.
   std::array<double, kMaxMotors> ratio{}, best{}, fastest{}, load{};
   std::array<std::uint8_t, kMaxMotors> kind{};
   // Whether load[k] was measured: a thrown prop's current is noise around
@@ -274,11 +274,15 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
     if (w.least < s_.min_motor_thrust) continue;
     const double mid = w.mid, least = w.least;
     if (std::isfinite(e.rpm)) {
-      ratio[k] = e.rpm / std::sqrt(mid);
       best[k] = e.rpm / std::sqrt(least);
       fastest[k] = e.rpm / std::sqrt(w.most);
       kind[k] = 1;
-      rpm_ratios[static_cast<std::size_t>(n_rpm++)] = ratio[k];
+      // The reference a slow motor is judged against: each motor at its
+      // least kind (its rpm over the most thrust its reading can come
+      // from). A reading fresher than the assumed latency, on motors
+      // spinning up fast (the spin landing's raise), would otherwise lift
+      // the median and make the motor being slowed beside them look dead.
+      rpm_ratios[static_cast<std::size_t>(n_rpm++)] = fastest[k];
       // The prop's load: battery current grows as the cube of the rpm for a
       // given prop. Not while the motor is being slowed (a braking ESC's
       // current says nothing of its prop).
@@ -305,13 +309,15 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   };
   // A fast motor is judged against the motors that are not too slow: two
   // motors stopped on a quad put the median halfway to zero, and the two
-  // healthy ones would look twice too fast.
+  // healthy ones would look twice too fast. Each at its kindest to the one
+  // judged (its rpm over the least thrust it can come from), for the same
+  // reason as above, the other way round.
   std::array<double, kMaxMotors> spinning{};
   int n_spinning = 0;
   for (int i = 0; i < s_.motors && rpm_median > 0.0; ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (kind[k] == 1 && best[k] >= s_.rpm_ratio * rpm_median)
-      spinning[static_cast<std::size_t>(n_spinning++)] = ratio[k];
+      spinning[static_cast<std::size_t>(n_spinning++)] = best[k];
   }
   const double fast_median = n_spinning >= s_.min_reporting ? median(spinning, n_spinning) : 0.0;
   const auto too_fast = [&](std::size_t k) {
