@@ -45,6 +45,9 @@ def fly(python, motormix, seed, *args):
 
 def main():
     python, motormix = sys.argv[1], sys.argv[2]
+    if subprocess.run([python, "-c", "import rotorpy, lcm"], capture_output=True, check=False).returncode:
+        print(f"SKIPPED: RotorPy or LCM's Python bindings are not in {python} (scripts/python-env installs them)")
+        return 0
     seed = int(sys.argv[sys.argv.index("--seed") + 1]) if "--seed" in sys.argv else random.SystemRandom().randrange(1, 10**6)
     rng = random.Random(seed)
     stopped, thrown = rng.randrange(1, 5), rng.randrange(1, 5)
