@@ -182,6 +182,8 @@ def main():
     ap.add_argument("--build-dir", help="where motormix's generated Python types are (default: beside --motormix)")
     ap.add_argument("--json", action="store_true", help="one JSON line of results")
     ap.add_argument("--log", help="keep motormix run's log here")
+    ap.add_argument("--lcm-url", help="the bus for this flight (default: $LCM_DEFAULT_URL); flights at "
+                    "the same time need one each")
     args = ap.parse_args()
     if os.environ.get("MOTORMIX_PRIVATE_BUS") != "1" and not os.environ.get("LCM_DEFAULT_URL", "").startswith("memq"):
         sys.exit("rotorpy_bridge: run it on a private bus: scripts/private-bus .venv/bin/python tools/rotorpy_bridge.py ...")
@@ -211,12 +213,14 @@ def main():
     log_path = args.log or os.path.join(tmp.name, "run.log")
     cycles = int(args.duration * rate_hz) + 400
     mixer_cmd = [args.motormix, "run", "--config", config, "--lockstep", "--max-cycles", str(cycles)]
+    if args.lcm_url:
+        mixer_cmd += ["--lcm-url", args.lcm_url]
     for s in args.set:
         mixer_cmd += ["--set", s]
     log = open(log_path, "w")
     mixer = subprocess.Popen(mixer_cmd, stdout=log, stderr=subprocess.STDOUT)
 
-    lc = lcm.LCM()
+    lc = lcm.LCM(args.lcm_url) if args.lcm_url else lcm.LCM()
     answer = {}
 
     def on_pwm(channel, data):

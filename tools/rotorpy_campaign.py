@@ -22,9 +22,12 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def fly(motormix, vehicle, failure, wind, seed, duration, extra):
+def fly(motormix, vehicle, failure, wind, seed, duration, extra, slot):
+    # One bus per flight in flight at once: its own multicast port.
+    url = f"udpm://239.255.76.67:{7700 + slot}?ttl=0"
     cmd = [sys.executable, os.path.join(HERE, "rotorpy_bridge.py"), vehicle, "--motormix", motormix,
-           "--duration", str(duration), "--wind", wind, "--seed", str(seed), "--json"] + extra
+           "--duration", str(duration), "--wind", wind, "--seed", str(seed), "--json",
+           "--lcm-url", url] + extra
     if failure:
         cmd += ["--fail", failure]
     out = subprocess.run(cmd, capture_output=True, text=True, check=False)
@@ -70,10 +73,25 @@ def main():
             for kind in args.kinds:
                 for motor in range(1, 5):
                     for k in range(args.seeds):
-                        jobs.append((v, f"{motor}@{args.fail_at:g}:{kind}", wind, base + k, args.duration))
+                        # The seed also moves the failure within half a second
+                        # (a gust's phase, the gyro noise's, the motors' state).
+                        at = args.fail_at + random.Random(base + k).uniform(0.0, 0.5)
+                        jobs.append((v, f"{motor}@{at:.4f}:{kind}", wind, base + k, args.duration))
     results = []
+    import queue
+    slots = queue.Queue()
+    for k in range(args.jobs):
+        slots.put(k)
+
+    def run(job):
+        slot = slots.get()
+        try:
+            return fly(args.motormix, *job, extra, slot)
+        finally:
+            slots.put(slot)
+
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        futures = [pool.submit(fly, args.motormix, v, f, w, s, d, extra) for v, f, w, s, d in jobs]
+        futures = [pool.submit(run, job) for job in jobs]
         for fut in concurrent.futures.as_completed(futures):
             r = fut.result()
             results.append(r)
@@ -97,7 +115,7 @@ def table(results):
         if not r.get("failures"):
             healthy[(r["vehicle"], r["wind"])] = r
             continue
-        kind = r["failures"][0].split(":")[1]
+        kind = r["failures"][0].split(":")[-1]
         cells.setdefault((r["vehicle"], kind, r["wind"]), []).append(r)
     for (v, kind, wind), rs in sorted(cells.items()):
         ok = [r for r in rs if "error" not in r]
