@@ -263,9 +263,13 @@ def main():
             ctrl = controller.update(t, state, hover)
             thrust = float(ctrl["cmd_thrust"])
             moment = FLIP @ np.asarray(ctrl["cmd_moment"], dtype=float)
-            arm = step >= 4  # a disarmed setpoint first: arming needs the transition
+            # A disarmed setpoint first (arming needs the transition), then
+            # armed at zero thrust until motormix says armed (arming is
+            # refused above inputs.arm_max_throttle), then the controller's.
+            arm = step >= 4
             sp = setpoint_t()
-            sp.utime, sp.throttle, sp.yaw, sp.armed = utime, (thrust if arm else 0.0), 0.0, arm
+            sp.utime, sp.throttle, sp.yaw, sp.armed = (
+                utime, (thrust if armed_since is not None else 0.0), 0.0, arm)
             pid = pid_t()
             pid.utime, pid.roll, pid.pitch, pid.yaw = utime, float(moment[0]), float(moment[1]), float(moment[2])
             att = attitude_t()
@@ -276,10 +280,13 @@ def main():
             rates = FLIP @ state["w"] + rng.normal(0.0, args.gyro_noise, 3)
             att.rates = [float(v) for v in rates]
             att.velocity = [float(v) for v in FLIP @ state["v"]]
-            if step % 4 == 0 or step < 8:
-                lc.publish("SETPOINT", sp.encode())
-            lc.publish("PID", pid.encode())
-            lc.publish("ATTITUDE", att.encode())
+            # Nothing before the first tick: until then the mixer has no time
+            # and would refuse every input as from the future.
+            if step > 0:
+                if step % 4 == 0 or armed_since is None:
+                    lc.publish("SETPOINT", sp.encode())
+                lc.publish("PID", pid.encode())
+                lc.publish("ATTITUDE", att.encode())
             _, _, _, telemetry = health.at(t)
             if step % 2 == 0:
                 esc = esc_telemetry_t()
@@ -291,7 +298,7 @@ def main():
                 nan = [float("nan")] * len(alive)
                 esc.erpm, esc.current_a, esc.voltage_v, esc.temperature_c, esc.consumption_mah = (
                     nan, nan, nan, nan, nan)
-                if esc.count > 0:
+                if esc.count > 0 and step > 0:
                     lc.publish("ESC_TELEMETRY", esc.encode())
             tick = lockstep_t()
             tick.utime = utime
