@@ -67,6 +67,16 @@ EPOCH_US = int(time.time()) * 1_000_000  # simulated time starts at the wall clo
 ANSWER_TIMEOUT_S = 10.0
 
 
+def die_with_parent():
+    """In the mixer's process before exec: SIGTERM when the bridge dies, even
+    killed outright (a lockstep mixer without its simulator would wait for
+    ticks forever: --max-cycles counts ticks)."""
+    import ctypes
+    import signal
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
 def parse_failure(text):
     try:
         motor, rest = text.split("@", 1)
@@ -218,7 +228,7 @@ def main():
     for s in args.set:
         mixer_cmd += ["--set", s]
     log = open(log_path, "w")
-    mixer = subprocess.Popen(mixer_cmd, stdout=log, stderr=subprocess.STDOUT)
+    mixer = subprocess.Popen(mixer_cmd, stdout=log, stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
 
     lc = lcm.LCM(args.lcm_url) if args.lcm_url else lcm.LCM()
     answer = {}
