@@ -3,6 +3,7 @@
 #include "loop/esc_curve.hpp"
 
 #include <motormix/config/hover_point.hpp>
+#include <motormix/spinning_descent.hpp>
 
 #include <Eigen/LU>
 
@@ -14,7 +15,6 @@ namespace motormix::loop {
 
 namespace {
 
-constexpr double kGravity = 9.80665;
 // The torque demands' step for the slope at hover: small against the range,
 // large against rounding.
 constexpr double kSlopeStep = 0.02;
@@ -56,11 +56,11 @@ std::optional<PhysicalInputs> PhysicalInputs::build(const config::Config& config
     // Monotonic by construction of a vehicle that lifts with throttle; a
     // flat stretch (idle, a clamp) keeps the lowest throttle that gives it.
     if (k > 0) {
-      p.table_[static_cast<std::size_t>(k)] =
-          std::max(p.table_[static_cast<std::size_t>(k)], p.table_[static_cast<std::size_t>(k - 1)]);
+      p.table_[static_cast<std::size_t>(k)] = std::max(p.table_[static_cast<std::size_t>(k)],
+                                                       p.table_[static_cast<std::size_t>(k - 1)]);
     }
   }
-  p.hover_thrust_n_ = config.vehicle_model.mass_kg * kGravity;
+  p.hover_thrust_n_ = config.vehicle_model.mass_kg * kStandardGravity;
   p.hover_throttle_ = p.throttle_for(p.hover_thrust_n_);
   for (int a = 0; a < 3; ++a) {
     AxisVector hi(0.0, 0.0, 0.0, p.hover_throttle_), lo = hi;

@@ -31,9 +31,10 @@ std::vector<std::string> describe_run(const config::Config& c, const loop::Contr
     s << "inputs in "
       << (loop.physical_inputs() ? "newtons and newton-metres (inputs.units physical)"
                                  : "demands (inputs.units normalized)")
-      << std::setprecision(4) << ": throttle 1 = " << scale->thrust_at_full_n() << " N, hover " << scale->hover_thrust_n()
-      << " N at throttle " << scale->hover_throttle() << "; one unit of roll, pitch, yaw = "
-      << m(0, 0) << ", " << m(1, 1) << ", " << m(2, 2) << " N m at hover";
+      << std::setprecision(4) << ": throttle 1 = " << scale->thrust_at_full_n() << " N, hover "
+      << scale->hover_thrust_n() << " N at throttle " << scale->hover_throttle()
+      << "; one unit of roll, pitch, yaw = " << m(0, 0) << ", " << m(1, 1) << ", " << m(2, 2)
+      << " N m at hover";
     lines.push_back(s.str());
   }
   s.str("");

@@ -46,8 +46,9 @@ Wrench wrench_of(const config::Config& c, const Eigen::VectorXd& output) {
         1.0);
     const double thrust = (expo * x * x + (1.0 - expo) * x) * v.rotors[i].max_thrust_n;
     const auto& r = v.rotors[i];
-    w.torque += (r.position_m.cross(r.axis) - static_cast<double>(r.spin) * r.torque_ratio_m * r.axis) *
-                thrust;
+    w.torque +=
+        (r.position_m.cross(r.axis) - static_cast<double>(r.spin) * r.torque_ratio_m * r.axis) *
+        thrust;
     w.thrust += -r.axis.z() * thrust;
   }
   return w;
@@ -103,8 +104,11 @@ TEST_P(PhysicalInputsTest, TheTorquesAskedAtHoverAreTheTorquesMade) {
   const double weight = config_.vehicle_model.mass_kg * kGravity;
   // One axis at a time and all three together, both signs: a tenth of a
   // newton-metre of roll on this frame is a strong but unsaturated demand.
-  const Eigen::Vector3d asks[] = {{0.10, 0.0, 0.0},   {0.0, -0.10, 0.0}, {0.0, 0.0, 0.02},
-                                  {-0.06, 0.05, -0.015}, {0.03, 0.03, 0.01}};
+  const Eigen::Vector3d asks[] = {{0.10, 0.0, 0.0},
+                                  {0.0, -0.10, 0.0},
+                                  {0.0, 0.0, 0.02},
+                                  {-0.06, 0.05, -0.015},
+                                  {0.03, 0.03, 0.01}};
   for (const Eigen::Vector3d& asked : asks) {
     const auto& r = fly(weight, asked);
     ASSERT_EQ(r.state, LoopState::kArmed);
@@ -122,8 +126,8 @@ TEST_P(PhysicalInputsTest, BeyondTheVehicleIsClampedNeverOutOfRange) {
   arm();
   // Ten times the rotors' total thrust, a torque no rotor can make, and
   // negative thrust: demands stay in their range, outputs in theirs.
-  for (const auto& [thrust, torque] :
-       {std::pair{1000.0, Eigen::Vector3d(50.0, -50.0, 9.0)}, std::pair{-5.0, Eigen::Vector3d(0.0, 0.0, 0.0)}}) {
+  for (const auto& [thrust, torque] : {std::pair{1000.0, Eigen::Vector3d(50.0, -50.0, 9.0)},
+                                       std::pair{-5.0, Eigen::Vector3d(0.0, 0.0, 0.0)}}) {
     const auto& r = fly(thrust, torque);
     ASSERT_EQ(r.state, LoopState::kArmed);
     for (int i = 0; i < r.mix.output.size(); ++i) {
@@ -153,8 +157,9 @@ TEST(PhysicalInputsConfig, NeedsAVehicleThatHovers) {
       EXPECT_NE(std::string(e.what()).find("inputs.units"), std::string::npos) << e.what();
     }
   }
-  EXPECT_THROW(config::load_config_file(source_path("config/quad_x.yaml"), {"inputs.units=newtons"}),
-               config::ConfigError);
+  EXPECT_THROW(
+      config::load_config_file(source_path("config/quad_x.yaml"), {"inputs.units=newtons"}),
+      config::ConfigError);
 }
 
 }  // namespace

@@ -33,7 +33,7 @@ enum class Strategy { kLegacyBudget, kBudget, kShift, kClip, kPrioritized, kOpti
 enum class YawSource { kSetpoint, kPid };
 // What setpoint_t and pid_t carry: demands of -1..1 (0..1 for the
 // throttle) in the mixing table's signs, or newtons and newton-metres
-// (docs/running.md, "The inputs' units").
+// (docs/inputs-in-physical-units.md).
 enum class InputUnits { kNormalized, kPhysical };
 
 struct Channels {

@@ -277,11 +277,10 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
       best[k] = e.rpm / std::sqrt(least);
       fastest[k] = e.rpm / std::sqrt(w.most);
       kind[k] = 1;
-      // The reference a slow motor is judged against: each motor at its
-      // least kind (its rpm over the most thrust its reading can come
-      // from). A reading fresher than the assumed latency, on motors
-      // spinning up fast (the spin landing's raise), would otherwise lift
-      // the median and make the motor being slowed beside them look dead.
+      // A slow motor is judged against each motor at its least kind: a
+      // reading fresher than the assumed latency on motors spinning up fast
+      // (the spin landing's raise) would lift the median of likeliest
+      // ratios and make the motor slowed beside them look dead.
       rpm_ratios[static_cast<std::size_t>(n_rpm++)] = fastest[k];
       // The prop's load: battery current grows as the cube of the rpm for a
       // given prop. Not while the motor is being slowed (a braking ESC's
@@ -310,8 +309,7 @@ void FailureDetector::judge_telemetry(MotorMask excluded, bool allowed, double d
   // A fast motor is judged against the motors that are not too slow: two
   // motors stopped on a quad put the median halfway to zero, and the two
   // healthy ones would look twice too fast. Each at its kindest to the one
-  // judged (its rpm over the least thrust it can come from), for the same
-  // reason as above, the other way round.
+  // judged, for the same reason as above, the other way round.
   std::array<double, kMaxMotors> spinning{};
   int n_spinning = 0;
   for (int i = 0; i < s_.motors && rpm_median > 0.0; ++i) {
