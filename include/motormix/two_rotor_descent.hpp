@@ -79,8 +79,6 @@ class TwoRotorDescent {
 
   const DescentCommand& update(const DescentInput& in, std::int64_t now_us);
   const DescentCommand& command() const { return cmd_; }
-  // The spin rate the gain is scheduled on (rad/s, signed about body z).
-  double spin_estimate() const { return spin_; }
 
  private:
   static int pair_index(unsigned failed);

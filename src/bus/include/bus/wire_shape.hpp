@@ -9,7 +9,7 @@
 //
 // Only the offset, the largest length and how to size the arrays are
 // written here; the fixed part and the bytes per element are measured from
-// the generated encoder itself (wire_size.hpp), and a unit test checks each
+// the generated encoder itself (receive.hpp), and a unit test checks each
 // offset against an encoded message.
 
 #include <motormix/attitude_t.hpp>

@@ -68,7 +68,6 @@ class SerialPulseDriver : public PulseDriver {
   std::uint64_t replies_decoded() const { return replies_decoded_; }
   std::uint64_t replies_missed() const { return replies_missed_; }
 
-  bool have_report() const { return reports_ > 0; }
   std::uint64_t reports() const { return reports_; }
   const mm_link_report& report() const { return report_; }
   std::uint64_t frames_sent() const { return frames_sent_; }
