@@ -18,6 +18,9 @@ if(NOT MOTORMIX_BUILD_FIRMWARE STREQUAL "OFF")
     set(MOTORMIX_FIRMWARE_ELF ${fw_dir}/motormix-pulses.elf)
     set(fw_sources
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/main.c
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/servo_pulses.c
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_out.c
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/sessions.c
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_schedule.c
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_isr.S
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot.S
@@ -27,6 +30,10 @@ if(NOT MOTORMIX_BUILD_FIRMWARE STREQUAL "OFF")
       ${CMAKE_CURRENT_SOURCE_DIR}/src/link/motormix_link.c)
     set(fw_headers
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_schedule.h
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/firmware_state.h
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/servo_pulses.h
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_out.h
+      ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/sessions.h
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/pulse_timing.h
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/dshot_reply.h
       ${CMAKE_CURRENT_SOURCE_DIR}/firmware/pulses/serial.h

@@ -44,6 +44,7 @@
 
 #include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
+#include <motormix/touchdown.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -216,9 +217,7 @@ class SpinningDescent {
   double velocity_integral_ = 0.0;
   double up_force_ = 0.0;  // the collective's vertical force asked for (N)
   Eigen::Vector3d lagged_n_ = Eigen::Vector3d::Zero();  // working motors' thrust through the lag
-  double still_s_ = 0.0;
-  double descending_s_ = 0.0;  // moving down at the descent rate this long
-  bool descended_ = false;     // the descent has been flown
+  Touchdown touchdown_;
   bool spin_reached_ = false;  // the spin has been near the equilibrium's
   DescentCommand cmd_;
 };

@@ -31,6 +31,7 @@
 //     still (the ground took it).
 
 #include <motormix/spinning_descent.hpp>
+#include <motormix/touchdown.hpp>
 
 #include <Eigen/Core>
 
@@ -96,9 +97,7 @@ class TwoRotorDescent {
   double peak_spin_ = 0.0;
   double lagged_differential_ = 0.0;  // N, working[0] minus working[1], through the lag
   Eigen::Vector2d lagged_n_ = Eigen::Vector2d::Zero();
-  double still_s_ = 0.0;
-  double descending_s_ = 0.0;
-  bool descended_ = false;
+  Touchdown touchdown_;
   DescentCommand cmd_;
 };
 

@@ -12,25 +12,13 @@ namespace motormix {
 
 namespace {
 
-// Below this vertical speed (fraction of the descent rate) the vehicle is
-// not moving; landed when that lasts while the thrust asked for is below
-// this share of the weight.
-constexpr double kStillFraction = 0.25;
+// Landed (Touchdown) only while the thrust asked for is below this share
+// of the weight: in the air that much less would have the vehicle moving
+// down within a fraction of landed_after_s.
 constexpr double kLandedThrustShare = 0.8;
-// That rule waits for the descent to have been flown (this share of the
-// descent rate for this long), or for a vehicle that does not turn: right
-// after the takeover the vehicle may hover with the torques taking the
-// thrust the velocity loop asks to be lower (the thrust is weighted below
-// them), but in the air three rotors' yaw torque turns it within that
-// time. Still and not turning is a motor lost on the ground.
-constexpr double kDescendingFraction = 0.5;
-constexpr double kDescendedS = 1.0;
-constexpr double kGroundedRateRadS = 0.5;
-// Touchdown: the spin, once reached (this share of the equilibrium rate),
-// falls below this share while the vehicle is still. In the air nothing
-// takes the spin away: the rotors drive it and only the air brakes it.
+// The spin is reached at this share of the equilibrium rate; lost below
+// Touchdown's share of it.
 constexpr double kSpinReachedShare = 0.6;
-constexpr double kSpinLostShare = 0.3;
 // The rate loop crosses over where the motors' lag and the rates' delay
 // together cost this much phase (45 degrees left); the attitude loop runs
 // this many times slower than the rate loop.
@@ -183,10 +171,8 @@ void SpinningDescent::start(int failed, std::int64_t now_us, const MotorVector& 
   last_us_ = now_us;
   velocity_integral_ = 0.0;
   up_force_ = 0.0;
-  still_s_ = 0.0;
   since_start_s_ = 0.0;
-  descending_s_ = 0.0;
-  descended_ = false;
+  touchdown_.reset();
   spin_reached_ = false;
   cmd_ = DescentCommand{};
   cmd_.thrust_fraction.setZero(4);
@@ -297,16 +283,12 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
   // asks for well under the weight (in the air that much less thrust would
   // have the vehicle moving down within a fraction of that time).
   if (std::isfinite(in.velocity.z())) {
-    const bool moving_down = in.velocity.z() > kDescendingFraction * s_.descent_rate_mps;
-    descending_s_ = moving_down ? descending_s_ + dt : 0.0;
-    if (descending_s_ >= kDescendedS) descended_ = true;
-    const bool not_moving = std::abs(in.velocity.z()) < kStillFraction * s_.descent_rate_mps;
-    const bool still = not_moving && (descended_ || cmd_.measured_rate_rad_s < kGroundedRateRadS) &&
-                       up_force_ < kLandedThrustShare * m_.mass_kg * kStandardGravity;
-    still_s_ = still ? still_s_ + dt : 0.0;
-    const bool spin_lost =
-        not_moving && spin_reached_ && cmd_.measured_rate_rad_s < kSpinLostShare * eq.rates.norm();
-    if (still_s_ >= s_.landed_after_s || spin_lost) {
+    const bool not_moving =
+        touchdown_.update(in.velocity.z(), s_.descent_rate_mps, cmd_.measured_rate_rad_s,
+                          up_force_ < kLandedThrustShare * m_.mass_kg * kStandardGravity, dt);
+    const bool spin_lost = not_moving && spin_reached_ &&
+                           cmd_.measured_rate_rad_s < Touchdown::kSpinLostShare * eq.rates.norm();
+    if (touchdown_.landed(s_.landed_after_s, spin_lost)) {
       cmd_.phase = DescentPhase::kLanded;
       f.setZero();
     }

@@ -39,14 +39,7 @@ constexpr double kDesignPeriodS = 0.0025;
 constexpr int kDoublingIterations = 80;
 // The gyro is trusted up to this share of its range; beyond, the model.
 constexpr double kGyroTrustShare = 0.9;
-// Landing (see spinning_descent.cpp for the three-rotor rules): still is
-// under this share of the descent rate; the descent has been flown after
-// this share for this long; a spin lost is under this share of its peak.
-constexpr double kStillFraction = 0.25;
-constexpr double kDescendingFraction = 0.5;
-constexpr double kDescendedS = 1.0;
-constexpr double kGroundedRateRadS = 0.5;
-constexpr double kSpinLostShare = 0.3;
+// Landing (Touchdown): a spin lost is one that peaked at this at least.
 constexpr double kSpinReachedRadS = 5.0;
 
 using StateMatrix = Eigen::Matrix<double, TwoRotorDescent::kStates, TwoRotorDescent::kStates>;
@@ -280,9 +273,7 @@ void TwoRotorDescent::start(unsigned failed, std::int64_t now_us,
   up_force_ = 0.0;
   spin_ = 0.0;
   peak_spin_ = 0.0;
-  still_s_ = 0.0;
-  descending_s_ = 0.0;
-  descended_ = false;
+  touchdown_.reset();
   cmd_ = DescentCommand{};
   cmd_.thrust_fraction.setZero(4);
   cmd_.phase = DescentPhase::kDescending;
@@ -353,15 +344,11 @@ const DescentCommand& TwoRotorDescent::update(const DescentInput& in, std::int64
   // Landing: still once the descent has been flown (or never turning: two
   // motors lost on the ground), or the spin lost while still.
   if (std::isfinite(in.velocity.z())) {
-    const bool moving_down = in.velocity.z() > kDescendingFraction * s_.descent_rate_mps;
-    descending_s_ = moving_down ? descending_s_ + dt : 0.0;
-    if (descending_s_ >= kDescendedS) descended_ = true;
-    const bool not_moving = std::abs(in.velocity.z()) < kStillFraction * s_.descent_rate_mps;
-    const bool still = not_moving && (descended_ || cmd_.measured_rate_rad_s < kGroundedRateRadS);
-    still_s_ = still ? still_s_ + dt : 0.0;
-    const bool spin_lost = not_moving && descended_ && peak_spin_ >= kSpinReachedRadS &&
-                           std::abs(spin_) < kSpinLostShare * peak_spin_;
-    if (still_s_ >= s_.landed_after_s || spin_lost) cmd_.phase = DescentPhase::kLanded;
+    const bool not_moving =
+        touchdown_.update(in.velocity.z(), s_.descent_rate_mps, cmd_.measured_rate_rad_s, true, dt);
+    const bool spin_lost = not_moving && touchdown_.descended() && peak_spin_ >= kSpinReachedRadS &&
+                           std::abs(spin_) < Touchdown::kSpinLostShare * peak_spin_;
+    if (touchdown_.landed(s_.landed_after_s, spin_lost)) cmd_.phase = DescentPhase::kLanded;
   }
   cmd_.thrust_fraction.setZero(4);
   cmd_.thrust_n.setZero();
