@@ -70,6 +70,7 @@ int run(const RunCommand& cmd) {
   options.lcm_url = cmd.lcm_url;
   options.max_cycles = cmd.max_cycles;
   options.lockstep = cmd.lockstep;
+  options.lockstep_idle_s = cmd.lockstep_idle_s;
   options.timing_report_path = cmd.timing_report;
   return node::run_node(*config, options, std::cerr);
 }

@@ -41,6 +41,7 @@ struct RunCommand {
   long long max_cycles = 0;
   std::string timing_report;
   bool lockstep = false;
+  double lockstep_idle_s = 30.0;
 };
 int run(const RunCommand& cmd);
 

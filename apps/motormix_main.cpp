@@ -59,6 +59,12 @@ int main(int argc, char** argv) {
   run_app->add_flag("--lockstep", run_cmd.lockstep,
                     "one cycle per lockstep_t a simulator publishes on channels.lockstep, at its "
                     "time, instead of the timer (docs/lockstep.md)");
+  run_app
+      ->add_option("--lockstep-idle-s", run_cmd.lockstep_idle_s,
+                   "with --lockstep: exit (status 3) once no tick has come for this many seconds "
+                   "of wall time, the simulator gone (0: wait for ever)")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
   run_app->add_option("--timing-report", run_cmd.timing_report,
                       "at the end of the run, write its loop timing to this file as JSON "
                       "(wake-up lateness and period percentiles, the largest and when, "

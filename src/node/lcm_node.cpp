@@ -52,6 +52,11 @@ using bus::monotonic_ns;
 using bus::monotonic_us;
 using bus::wall_us;
 
+// In lockstep, how often (ms) the idle limit is looked at while no tick
+// comes, and the exit status once it is reached.
+constexpr int kIdleLookMs = 250;
+constexpr int kExitLockstepIdle = 3;
+
 // Owns a file descriptor.
 class Fd {
  public:
@@ -134,6 +139,11 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
                    {signals.fd(), POLLIN, 0}};
   long long cycles = 0;
   std::int64_t ticks = 0;  // timer periods elapsed
+  // Lockstep: when the last tick (or the start) came, and how long poll may
+  // wait before the idle limit is looked at again.
+  std::int64_t last_tick_ns = monotonic_ns();
+  const auto idle_ns = static_cast<std::int64_t>(options.lockstep_idle_s * 1e9);
+  const int poll_ms = options.lockstep && idle_ns > 0 ? kIdleLookMs : -1;
   // Written once at the end, whichever way the loop ends.
   const auto finish = [&](int code) {
     node.publish_disarmed();
@@ -151,7 +161,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return code;
   };
   while (true) {
-    if (poll(fds, 3, -1) < 0) {
+    if (poll(fds, 3, poll_ms) < 0) {
       if (errno == EINTR) continue;
       log << "motormix: poll failed: " << std::strerror(errno) << std::endl;
       return finish(1);
@@ -171,8 +181,14 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     // Each tick one cycle at its time, after everything sent before it and
     // nothing sent after (the drain stops at a tick).
     for (std::int64_t tick = 0; options.lockstep && node.take_tick(tick); node.drain()) {
+      last_tick_ns = woke_ns;
       node.cycle(tick, monotonic_us());
       if (options.max_cycles > 0 && ++cycles >= options.max_cycles) return finish(0);
+    }
+    if (poll_ms >= 0 && woke_ns - last_tick_ns >= idle_ns) {
+      log << "motormix: lockstep: no tick for " << options.lockstep_idle_s
+          << " s: the simulator is gone; publishing disarmed outputs and exiting" << std::endl;
+      return finish(kExitLockstepIdle);
     }
     if (fds[1].revents & POLLIN) {
       std::uint64_t expirations = 0;

@@ -66,4 +66,26 @@ if ! cmp -s "$tmp/first.json" "$tmp/again.json"; then
   diff "$tmp/first.json" "$tmp/again.json" || true
   failed=1
 fi
+# A simulator gone: the mixer stops by itself once no tick has come for
+# --lockstep-idle-s, with status 3 (bounded here to 10 s all the same).
+"$mm" run --config "$config" --lockstep --lockstep-idle-s 1 > "$tmp/idle.log" 2>&1 &
+mixer=$!
+sleep 0.3
+"$mm" sim --config "$config" --scenario hover --lcm --lockstep --duration 2 --json \
+  > "$tmp/idle.json" || true
+waited=0
+while kill -0 "$mixer" 2>/dev/null && [ "$waited" -lt 40 ]; do
+  sleep 0.25
+  waited=$((waited + 1))
+done
+kill "$mixer" 2>/dev/null || true
+code=0
+wait "$mixer" || code=$?
+echo "== simulator gone: the mixer exited $code after $waited quarter seconds"
+if [ "$code" -ne 3 ] || ! grep -q 'no tick for 1 s: the simulator is gone' "$tmp/idle.log" ||
+  ! grep -q '"crashed":false' "$tmp/idle.json"; then
+  echo "FAILED: a lockstep mixer whose simulator stopped did not stop by itself"
+  cat "$tmp/idle.log"
+  failed=1
+fi
 exit $failed

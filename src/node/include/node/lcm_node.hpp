@@ -23,10 +23,16 @@ struct RunOptions {
   // Cycles driven by a simulator's lockstep_t ticks on channels.lockstep,
   // each at its time, instead of the timer (docs/lockstep.md).
   bool lockstep = false;
+  // In lockstep: stop by itself once no tick has come for this long (wall
+  // clock; 0: wait for ever). A simulator that dies without a word leaves
+  // its mixer waiting, and time stands still for it.
+  double lockstep_idle_s = 30.0;
 };
 
 // Runs until SIGINT, SIGTERM or SIGHUP (then publishes one disarmed message
-// and returns 0) or a fatal set-up error (returns 1, message on `log`).
+// and returns 0), max_cycles or, in lockstep, lockstep_idle_s without a tick
+// (the same, returning 0 and 3), or a fatal set-up error (returns 1, message
+// on `log`).
 int run_node(const config::Config& config, const RunOptions& options, std::ostream& log);
 
 }  // namespace motormix::node
