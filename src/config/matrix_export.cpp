@@ -1,5 +1,6 @@
 #include <motormix/config/matrix_export.hpp>
 
+#include <motormix/angles.hpp>
 #include <motormix/config/build_mixer.hpp>
 
 #include <motormix/version.hpp>
@@ -264,7 +265,7 @@ std::string ardupilot(const Config& c) {
   for (int i = 0; i < n; ++i) {
     const double x = c.mixing(i, index(Axis::kPitch));
     const double y = -c.mixing(i, index(Axis::kRoll));
-    double deg = std::atan2(y, x) * 180.0 / 3.14159265358979323846;
+    double deg = std::atan2(y, x) * 180.0 / kPi;
     if (deg < -1e-9) deg += 360.0;
     bearing.emplace_back(std::max(deg, 0.0), i);
   }

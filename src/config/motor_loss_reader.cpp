@@ -2,6 +2,7 @@
 
 #include "motor_loss_reader.hpp"
 
+#include <motormix/angles.hpp>
 #include <motormix/two_rotor_descent.hpp>
 
 #include <algorithm>
@@ -12,7 +13,6 @@ namespace motormix::config {
 
 namespace {
 
-constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 // The equilibrium spin may use at most this share of the gyro's range: the
 // transient after the failure and gusts swing the rates above it.
 constexpr double kSpinShareOfGyroRange = 0.7;

@@ -8,6 +8,7 @@
 //
 // Units are SI throughout; frames are the geometry's (body FRD).
 
+#include <motormix/angles.hpp>
 #include <motormix/enum_names.hpp>
 #include <motormix/geometry.hpp>
 
@@ -60,7 +61,7 @@ struct ImuPhysics {
   // How late the filtered rates are: a second-order Butterworth low-pass
   // delays slow signals by sqrt(2) / (2 pi f).
   double rate_delay_s() const {
-    return lowpass_hz > 0.0 ? 1.4142135623730951 / (2.0 * 3.14159265358979323846 * lowpass_hz)
+    return lowpass_hz > 0.0 ? 1.4142135623730951 / (kTwoPi * lowpass_hz)
                             : 0.0;
   }
 };

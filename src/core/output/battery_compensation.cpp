@@ -1,12 +1,13 @@
 #include <motormix/battery_compensation.hpp>
 
+#include <motormix/angles.hpp>
+
 #include <algorithm>
 #include <cmath>
 
 namespace motormix {
 
 namespace {
-constexpr double kTwoPi = 6.283185307179586;
 }  // namespace
 
 double battery_gain(const BatterySettings& s, double voltage) {

@@ -5,6 +5,7 @@
 // velocity, or, without one, the setpoint's throttle) and where the thrust
 // should point (up, tilted against the drift). Internal to the core.
 
+#include <motormix/angles.hpp>
 #include <motormix/spinning_descent.hpp>
 
 #include <algorithm>
@@ -57,7 +58,6 @@ inline double descent_collective(const SpinningDescentModel& m, const SpinningDe
 // up without a velocity. `body_to_world`: the attitude's rotation.
 inline Eigen::Vector3d wanted_up_body(const SpinningDescentSettings& s, const DescentInput& in,
                                       const Eigen::Matrix3d& body_to_world) {
-  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
   Eigen::Vector3d thrust_world(0.0, 0.0, -kStandardGravity);
   if (in.velocity.allFinite() && in.velocity.cwiseAbs().maxCoeff() < kMaxSpeedMps) {
     Eigen::Vector2d brake = -s.drift_gain * Eigen::Vector2d(in.velocity.x(), in.velocity.y());

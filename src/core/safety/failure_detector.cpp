@@ -1,5 +1,7 @@
 #include <motormix/failure_detector.hpp>
 
+#include <motormix/angles.hpp>
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,7 +9,6 @@ namespace motormix {
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
 // A rates sample further than this after the previous one starts the
 // angular acceleration afresh: a difference across a gap is no derivative.
 constexpr double kMaxRatesGapS = 0.05;

@@ -4,6 +4,7 @@
 // angular momentum, the torque that holds body rates, a vector's part in
 // the rotor plane, the degree. Internal to the core.
 
+#include <motormix/angles.hpp>
 #include <motormix/spinning_descent.hpp>
 
 #include <Eigen/Core>
@@ -15,7 +16,7 @@
 
 namespace motormix::detail {
 
-inline constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+using motormix::kDegPerRad;
 
 inline Eigen::Vector2d planar(const Eigen::Vector3d& v) { return {v.x(), v.y()}; }
 

@@ -1,5 +1,7 @@
 #include <motormix/spinning_descent.hpp>
 
+#include <motormix/angles.hpp>
+
 #include "descent_collective.hpp"
 #include "spin_dynamics.hpp"
 
@@ -22,7 +24,7 @@ constexpr double kSpinReachedShare = 0.6;
 // The rate loop crosses over where the motors' lag and the rates' delay
 // together cost this much phase (45 degrees left); the attitude loop runs
 // this many times slower than the rate loop.
-constexpr double kRateLoopLagRad = 3.14159265358979323846 / 4.0;
+constexpr double kRateLoopLagRad = kPi / 4.0;
 constexpr double kLoopSeparation = 2.5;
 constexpr double kThrustWeight = 0.3;
 // Null-direction entries smaller than this are zero (a motor the raise leaves alone).
