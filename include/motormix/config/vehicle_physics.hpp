@@ -61,8 +61,7 @@ struct ImuPhysics {
   // How late the filtered rates are: a second-order Butterworth low-pass
   // delays slow signals by sqrt(2) / (2 pi f).
   double rate_delay_s() const {
-    return lowpass_hz > 0.0 ? 1.4142135623730951 / (kTwoPi * lowpass_hz)
-                            : 0.0;
+    return lowpass_hz > 0.0 ? 1.4142135623730951 / (kTwoPi * lowpass_hz) : 0.0;
   }
 };
 

@@ -7,8 +7,7 @@
 
 namespace motormix {
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 double battery_gain(const BatterySettings& s, double voltage) {
   if (!std::isfinite(voltage) || voltage <= 0.0) return 1.0;
