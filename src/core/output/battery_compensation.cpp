@@ -7,8 +7,6 @@
 
 namespace motormix {
 
-namespace {}  // namespace
-
 double battery_gain(const BatterySettings& s, double voltage) {
   if (!std::isfinite(voltage) || voltage <= 0.0) return 1.0;
   const double gain = std::pow(s.nominal_v / voltage, s.exponent);
