@@ -30,7 +30,7 @@ namespace motormix::bringup {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Clock = bus::MonotonicClock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();

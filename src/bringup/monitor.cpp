@@ -23,7 +23,7 @@ namespace motormix::bringup {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Clock = bus::MonotonicClock;
 
 // The wire's codes carry the control loop's own enums: their names are the
 // ones the mixer logs (a code this build does not know reads "?").

@@ -34,7 +34,7 @@ namespace motormix::sim {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Clock = bus::MonotonicClock;
 using bus::wall_us;
 
 // Lockstep: how long the simulator waits for the mixer's answer to a tick.

@@ -7,6 +7,7 @@
 // (CLOCK_MONOTONIC) times everything else: loop periods, staleness, the
 // output gate, timeouts; it never steps when an operator or NTP sets the time.
 
+#include <chrono>
 #include <cstdint>
 #include <ctime>
 
@@ -27,5 +28,9 @@ inline std::int64_t monotonic_ns() {
 inline std::int64_t monotonic_us() { return monotonic_ns() / 1000; }
 
 inline double monotonic_s() { return static_cast<double>(monotonic_ns()) * 1e-9; }
+
+// The monotonic clock as a std::chrono clock, for waits and deadlines
+// written with durations (libstdc++ reads CLOCK_MONOTONIC for it).
+using MonotonicClock = std::chrono::steady_clock;
 
 }  // namespace motormix::bus
