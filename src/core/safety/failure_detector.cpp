@@ -15,8 +15,7 @@ constexpr double kMaxRatesGapS = 0.05;
 // Along-the-column fraction above which a residual is more than one motor's
 // whole thrust can explain, even with the scale off by this much.
 constexpr double kMaxLoss = 2.0;
-// The learned torque scale stays within these: beyond, the vehicle section
-// is wrong, not the battery.
+// The learned torque scale's bounds: beyond, the vehicle section is wrong.
 constexpr double kMinScale = 0.7, kMaxScale = 1.3;
 // rpm in thousands for the load (current / krpm^3): keeps the cube in range.
 constexpr double kLoadRpmScale = 1000.0;
