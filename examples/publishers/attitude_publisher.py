@@ -10,7 +10,8 @@ the spin landing's attitude goes stale (motor_loss.attitude_timeout_ms).
 
     PYTHONPATH=/usr/lib/python3/dist-packages python3 attitude_publisher.py --count 1000
 
-Runs until Ctrl-C without --count.
+Runs until Ctrl-C without --count. With --key it signs each message
+(signing_option.py), as a configuration with security.mode require needs.
 """
 import argparse
 import math
@@ -21,6 +22,7 @@ import lcm
 from motormix import attitude_t
 
 import frames
+import signing_option
 
 
 def estimate(t):
@@ -36,10 +38,12 @@ def main():
     p.add_argument("--channel", default="ATTITUDE")
     p.add_argument("--rate-hz", type=float, default=500.0)
     p.add_argument("--count", type=int, default=-1, help="messages to send (default: until Ctrl-C)")
+    signing_option.add_arguments(p)
     args = p.parse_args()
     if not 0.0 < args.rate_hz <= 10000.0:
         p.error("--rate-hz: 0 < rate <= 10000")
     bus = lcm.LCM(args.lcm_url) if args.lcm_url else lcm.LCM()
+    publish = signing_option.publisher(args, bus)
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     start = time.time()
@@ -55,7 +59,7 @@ def main():
             msg.rates = list(frames.frd_from_flu(rates_flu))
             # Unknown? Publish NaN: the spin landing then follows the throttle.
             msg.velocity = list(frames.ned_from_enu(velocity_enu))
-            bus.publish(args.channel, msg.encode())
+            publish(args.channel, msg.encode(), utime)
             sent += 1
             next_t += 1.0 / args.rate_hz
             time.sleep(max(0.0, next_t - time.monotonic()))

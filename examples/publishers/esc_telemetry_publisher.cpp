@@ -60,17 +60,34 @@ int main(int argc, char** argv) {
   double rate_hz = 200.0;
   long count = -1;
   int motors = 4;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--channel"))
+  const char* usage =
+      "usage: esc_telemetry_publisher [--channel NAME] [--motors N] [--rate-hz HZ] [--count N]\n"
+      "                               [--lcm-url URL]\n"
+      "publishes esc_telemetry_t until Ctrl-C (or N messages); unsigned: for a configuration\n"
+      "with security.mode require, sign as examples/signed_controller does\n";
+  for (int i = 1; i < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::cout << usage;
+      return 0;
+    }
+    if (i + 1 >= argc) {
+      std::cerr << argv[i] << ": a value is missing\n" << usage;
+      return 2;
+    }
+    if (!std::strcmp(argv[i], "--channel")) {
       channel = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--rate-hz"))
+    } else if (!std::strcmp(argv[i], "--rate-hz")) {
       rate_hz = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--count"))
+    } else if (!std::strcmp(argv[i], "--count")) {
       count = std::atol(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--motors"))
+    } else if (!std::strcmp(argv[i], "--motors")) {
       motors = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--lcm-url"))
+    } else if (!std::strcmp(argv[i], "--lcm-url")) {
       url = argv[i + 1];
+    } else {
+      std::cerr << argv[i] << ": unknown option\n" << usage;
+      return 2;
+    }
   }
   if (!(rate_hz > 0.0 && rate_hz <= 10000.0) || motors < 1 || motors > 16) {
     std::cerr << "--rate-hz: 0 < rate <= 10000; --motors: 1..16\n";

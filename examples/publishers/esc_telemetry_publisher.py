@@ -19,6 +19,8 @@ import time
 import lcm
 from motormix import esc_telemetry_t
 
+import signing_option
+
 NAN = math.nan
 POLE_PAIRS = 7  # a 14-pole motor: eRPM = rpm * 7 (failure_detection.motor_poles: 14)
 
@@ -35,10 +37,12 @@ def main():
     p.add_argument("--motors", type=int, default=4)
     p.add_argument("--rate-hz", type=float, default=200.0)
     p.add_argument("--count", type=int, default=-1, help="messages to send (default: until Ctrl-C)")
+    signing_option.add_arguments(p)
     args = p.parse_args()
     if not 0.0 < args.rate_hz <= 10000.0 or not 1 <= args.motors <= 16:
         p.error("--rate-hz: 0 < rate <= 10000; --motors: 1..16")
     bus = lcm.LCM(args.lcm_url) if args.lcm_url else lcm.LCM()
+    publish = signing_option.publisher(args, bus)
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     next_t = time.monotonic()
@@ -56,7 +60,7 @@ def main():
             msg.voltage_v = [r[4] for r in readings]
             msg.temperature_c = [r[5] for r in readings]
             msg.consumption_mah = [NAN] * len(readings)
-            bus.publish(args.channel, msg.encode())
+            publish(args.channel, msg.encode(), msg.utime)
             sent += 1
             next_t += 1.0 / args.rate_hz
             time.sleep(max(0.0, next_t - time.monotonic()))

@@ -6,6 +6,8 @@
 # inputs fresh. First the C++ publishers, then, with LCM's Python bindings,
 # the Python ones (after the C++ ones stopped, so the ages they leave are
 # old). The Python frame conversion is checked against rotation matrices.
+# Then the Python ones again with the bus key (--key) against a mixer that
+# requires signatures: taken, verified, none refused.
 #   scripts/private-bus check_publisher_examples.sh MOTORMIX ATTITUDE_CPP ESC_CPP SOURCE_DIR \
 #     PYTHON_TYPES_DIR WORKDIR [PYTHON]
 # Exit 77: the Python publishers could not be run (no bindings).
@@ -95,6 +97,30 @@ PY
   fresh python
   wait "$att" || fail "the Python attitude publisher failed"
   wait "$esc" || fail "the Python ESC publisher failed"
+
+  # Signed: a mixer that requires signatures takes the Python publishers'
+  # messages when they are given the bus key (--key), and refuses them
+  # without it (counted on the monitor's `signed` line).
+  kill -TERM "$mixer"
+  wait "$mixer" || fail "motormix run did not exit cleanly"
+  "$motormix" keygen "$work/bus.key" > /dev/null
+  config+=(--set security.mode=require --set "security.key_file=$work/bus.key")
+  "$motormix" run "${config[@]}" --max-cycles 12000 2> "$work/run_signed.log" &
+  mixer=$!
+  sleep 0.5
+  signed_path="$types:$src/python"
+  PYTHONPATH="$signed_path" "$python" "$src/examples/publishers/attitude_publisher.py" \
+    --rate-hz 500 --count 1500 --key "$work/bus.key" --link-id 3 &
+  att=$!
+  PYTHONPATH="$signed_path" "$python" "$src/examples/publishers/esc_telemetry_publisher.py" \
+    --motors 4 --rate-hz 200 --count 600 --key "$work/bus.key" --link-id 4 &
+  esc=$!
+  sleep 1.5
+  fresh signed
+  wait "$att" || fail "the signing Python attitude publisher failed"
+  wait "$esc" || fail "the signing Python ESC publisher failed"
+  grep -Eq '^signed +require +verified [1-9][0-9]* .*refused: unsigned 0 +bad signature 0' \
+    "$work/signed.monitor.txt" || fail "signed: $(grep '^signed' "$work/signed.monitor.txt")"
 else
   echo "check_publisher_examples: no LCM Python bindings: the Python publishers were not run"
   status=77
