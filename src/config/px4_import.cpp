@@ -124,6 +124,64 @@ struct Axis3 {
   double x, y, z;
 };
 
+// PX4's output groups whose FUNCi parameters can name a motor: PWM outputs
+// (MIN/MAX/DIS per channel, a group default without the number) and
+// UAVCAN ESCs, which motormix does not drive.
+struct OutputGroup {
+  const char* prefix;  // "PWM_MAIN_"
+  const char* label;   // "MAIN"
+  bool pwm;
+};
+constexpr OutputGroup kOutputGroups[] = {
+    {"PWM_MAIN_", "MAIN", true}, {"PWM_AUX_", "AUX", true}, {"UAVCAN_EC_", "UAVCAN ESC", false}};
+constexpr int kMaxChannelsPerGroup = 16;
+
+const OutputGroup* group_of(const std::string& name) {
+  for (const OutputGroup& g : kOutputGroups)
+    if (name.rfind(g.prefix, 0) == 0) return &g;
+  return nullptr;
+}
+
+// Where a motor's commands go: a group's channel (1-based).
+struct Output {
+  const OutputGroup* group = nullptr;
+  int channel = 0;
+  std::string name() const { return std::string(group->label) + " " + std::to_string(channel); }
+};
+
+// Why a parameter that concerns the outputs is not taken, where PX4's
+// meaning says more than "not mapped".
+std::string why_not_mapped(const std::string& name, double value) {
+  if (name.find("_TIM") != std::string::npos && group_of(name) != nullptr) {
+    // PWM_MAIN_TIMn / PWM_AUX_TIMn: a timer group's protocol.
+    const int v = static_cast<int>(std::lround(value));
+    if (v == -5 || v == -4 || v == -3) {
+      const char* speed = v == -5 ? "150" : v == -4 ? "300" : "600";
+      return std::string("DShot") + speed +
+             " on this timer's outputs: with the pulse firmware set hardware.protocol: dshot" +
+             speed + " (docs/wiring-it-to-motors.md); the output range stays in microseconds";
+    }
+    if (v == -2) return "DShot1200: the pulse firmware sends DShot150, 300 or 600";
+    if (v == -1) return "OneShot125: not supported (servo PWM or DShot)";
+    if (v > 0)
+      return "PWM at " + number(value) +
+             " Hz on this timer's outputs: hardware.pulse_rate_hz with the pulse firmware";
+  }
+  if (name == "DSHOT_CONFIG") {
+    return "DShot " + number(value) +
+           ": with the pulse firmware set hardware.protocol (dshot150, dshot300 or dshot600)";
+  }
+  if (name.rfind("DSHOT_", 0) == 0) return "PX4's DShot driver setting: see hardware: instead";
+  if (name.rfind("UAVCAN_EC_", 0) == 0)
+    return "a UAVCAN ESC's setting: motormix does not drive UAVCAN ESCs";
+  if (name.rfind("CA_SV_CS", 0) == 0) {
+    return "control surfaces: motormix mixes the rotors only; the surfaces need another "
+           "mixer";
+  }
+  if (name.rfind("CA_SV_TL", 0) == 0) return "tilt servos: motormix drives no servo";
+  return "not mapped";
+}
+
 struct Range {
   double min, max, disarmed;
   bool operator==(const Range& o) const {
@@ -182,6 +240,12 @@ Px4Import import_px4(const Px4Parameters& params, const std::string& source_name
         y << ", axis: [" << number(axis.x) << ", " << number(axis.y) << ", " << number(axis.z)
           << "]";
       y << "}  # motor " << i + 1 << "\n";
+      const std::optional<double> tilt = r.get(p + "TILT");
+      if (tilt && *tilt != 0.0) {
+        throw std::runtime_error(p + "TILT = " + number(*tilt) +
+                                 ": a rotor a servo tilts in flight; motormix's mixing matrix is "
+                                 "fixed, so it cannot mix this vehicle");
+      }
     }
   } else if (const std::optional<double> autostart = r.get("SYS_AUTOSTART")) {
     const int id = static_cast<int>(std::lround(*autostart));
@@ -221,48 +285,62 @@ Px4Import import_px4(const Px4Parameters& params, const std::string& source_name
       << "}  # MC_AIRMODE " << number(airmode) << "\n";
   }
 
-  // Outputs: the channels PWM_MAIN_FUNCi gives to motors.
-  std::vector<int> channel(static_cast<std::size_t>(motors), 0);
+  // Outputs: the channels each group's FUNCi parameters give to motors.
+  std::vector<Output> where(static_cast<std::size_t>(motors));
   bool functions = false;
-  for (int c = 1; c <= 16; ++c) {
-    const std::optional<double> f = r.get("PWM_MAIN_FUNC" + std::to_string(c));
-    if (!f) continue;
-    functions = true;
-    const int motor = static_cast<int>(std::lround(*f)) - kMotorFunctionFirst;
-    if (motor >= 0 && motor < motors) {
-      channel[static_cast<std::size_t>(motor)] = c;
-    } else if (*f != 0.0) {
-      out.not_mapped.push_back(
-          "PWM_MAIN_FUNC" + std::to_string(c) + " = " + number(*f) + ": output " +
-          std::to_string(c) + " drives something other than a motor (motormix drives motors only)");
+  for (const OutputGroup& g : kOutputGroups) {
+    for (int c = 1; c <= kMaxChannelsPerGroup; ++c) {
+      const std::string name = std::string(g.prefix) + "FUNC" + std::to_string(c);
+      const std::optional<double> f = r.get(name);
+      if (!f) continue;
+      functions = true;
+      const int motor = static_cast<int>(std::lround(*f)) - kMotorFunctionFirst;
+      if (motor >= 0 && motor < motors) {
+        Output& w = where[static_cast<std::size_t>(motor)];
+        if (w.group != nullptr) {
+          out.not_mapped.push_back(name + " = " + number(*f) + ": motor " +
+                                   std::to_string(motor + 1) + " is on " + w.name() +
+                                   " already: only that output is taken");
+        } else {
+          w = {&g, c};
+        }
+      } else if (*f != 0.0) {
+        out.not_mapped.push_back(name + " = " + number(*f) + ": " + g.label + " output " +
+                                 std::to_string(c) +
+                                 " drives something other than a motor (motormix drives motors "
+                                 "only)");
+      }
     }
   }
-  const double global_min = r.get("PWM_MAIN_MIN", kDefaultPwmMin);
-  const double global_max = r.get("PWM_MAIN_MAX", kDefaultPwmMax);
-  const double global_dis = r.get("PWM_MAIN_DISARM", kDefaultPwmDisarmed);
   std::vector<Range> ranges;
-  std::vector<int> motor_channels;  // the output each motor is on
   for (int m = 0; m < motors; ++m) {
-    int c = channel[static_cast<std::size_t>(m)];
-    if (c == 0) {
+    Output& w = where[static_cast<std::size_t>(m)];
+    if (w.group == nullptr) {
       if (functions) {
         out.notes.push_back("motor " + std::to_string(m + 1) +
-                            " has no PWM_MAIN_FUNC output: the default range is used");
+                            " has no FUNC output: the default range is used");
       }
-      c = m + 1;
+      w = {&kOutputGroups[0], m + 1};
     }
-    motor_channels.push_back(c);
-    const std::string n = std::to_string(c);
-    ranges.push_back({r.get("PWM_MAIN_MIN" + n, global_min), r.get("PWM_MAIN_MAX" + n, global_max),
-                      r.get("PWM_MAIN_DIS" + n, global_dis)});
+    if (!w.group->pwm) {
+      out.notes.push_back("motor " + std::to_string(m + 1) + " is on " + w.name() +
+                          ", an ESC motormix cannot drive (it drives PWM and DShot ESCs through "
+                          "its pulse firmware): wire it there; the default range is used");
+      ranges.push_back({kDefaultPwmMin, kDefaultPwmMax, kDefaultPwmDisarmed});
+      continue;
+    }
+    const std::string g = w.group->prefix, n = std::to_string(w.channel);
+    ranges.push_back({r.get(g + "MIN" + n, r.get(g + "MIN", kDefaultPwmMin)),
+                      r.get(g + "MAX" + n, r.get(g + "MAX", kDefaultPwmMax)),
+                      r.get(g + "DIS" + n, r.get(g + "DISARM", kDefaultPwmDisarmed))});
   }
   const double thr_mdl = r.get("THR_MDL_FAC", 0.0);
-  y << "# PWM_MAIN_MIN/MAX/DIS of each motor's output (PWM_MAIN_FUNC)";
+  y << "# MIN/MAX/DIS of each motor's output (its FUNC parameter)";
   if (functions) {
     y << ": ";
     for (int m = 0; m < motors; ++m)
-      y << (m ? ", " : "") << "motor " << m + 1 << " on output "
-        << (channel[static_cast<std::size_t>(m)] ? channel[static_cast<std::size_t>(m)] : m + 1);
+      y << (m ? ", " : "") << "motor " << m + 1 << " on "
+        << where[static_cast<std::size_t>(m)].name();
   }
   y << ".\n# motormix publishes the motors in order: wire output i to motor i, or remap.\n";
   y << "output:\n  mode: unipolar\n";
@@ -281,22 +359,30 @@ Px4Import import_px4(const Px4Parameters& params, const std::string& source_name
   if (thr_mdl < 0.0 || thr_mdl > 1.0)
     out.notes.push_back("THR_MDL_FAC = " + number(thr_mdl) + " clamped into 0..1");
 
-  // Whatever else concerns mixing or outputs, not taken: named.
+  y << "# PX4 keeps no mass, inertia or thrust: no spin landing on a guessed vehicle.\n"
+       "# Add a measured `vehicle:` section and remove this (docs/motor-loss-landing.md).\n"
+       "motor_loss: {mode: off}\n";
+
+  // Whatever else concerns mixing or outputs, not taken: named, with why.
   const auto concerns = [](const std::string& name) {
-    for (const char* prefix : {"CA_", "PWM_MAIN_", "MOT_", "THR_MDL", "MC_AIRMODE"})
+    for (const char* prefix :
+         {"CA_", "PWM_MAIN_", "PWM_AUX_", "UAVCAN_EC_", "DSHOT_", "MOT_", "THR_MDL", "MC_AIRMODE"})
       if (name.rfind(prefix, 0) == 0) return true;
     return false;
   };
   int zero = 0;
   for (const auto& [name, value] : params.values) {
     if (r.used.count(name) || !concerns(name)) continue;
-    // The outputs that are not motors: their function is named above.
-    if (name.rfind("PWM_MAIN_", 0) == 0) {
+    // The outputs that are not motors: their function is named above. A
+    // timer's protocol (TIMn) concerns the motors on it whatever its number.
+    const OutputGroup* group = group_of(name);
+    if (group != nullptr && name.find("TIM") == std::string::npos) {
       const std::size_t digit = name.find_first_of("0123456789");
       const int c = digit == std::string::npos ? 0 : std::atoi(name.c_str() + digit);
-      if (c > 0 &&
-          std::find(motor_channels.begin(), motor_channels.end(), c) == motor_channels.end())
-        continue;
+      const bool motor = std::any_of(where.begin(), where.end(), [&](const Output& w) {
+        return w.group == group && w.channel == c;
+      });
+      if (c > 0 && !motor) continue;
     }
     if (name.rfind("CA_ROTOR", 0) == 0 && name != "CA_ROTOR_COUNT") {
       // Another rotor index than those counted: PX4 ignores it too.
@@ -308,7 +394,7 @@ Px4Import import_px4(const Px4Parameters& params, const std::string& source_name
       ++zero;
       continue;
     }
-    std::string why = "not mapped";
+    std::string why = why_not_mapped(name, value);
     if (name == "CA_R_REV" && value != 0.0) why = "reversible motors (3D): not supported";
     if (name == "MOT_ORDERING" && value != 0.0)
       why = "outputs in another order than PX4's: set geometry.motor_order by hand";

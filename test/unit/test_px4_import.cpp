@@ -142,6 +142,63 @@ TEST(Px4Import, AParamsFileWithMotorsOnOtherOutputs) {
   EXPECT_TRUE(lists(imported.notes, "2 more mixing and output parameters at 0"));
 }
 
+// Motors on AUX outputs and on a UAVCAN ESC, the timers' protocols and
+// PX4's DShot setting: each motor's range from its own group, and every
+// output parameter not taken named with why; no spin landing on a vehicle
+// PX4 does not describe.
+TEST(Px4Import, AuxAndUavcanMotorsAndProtocolsAreTakenOrNamedWithWhy) {
+  config::Px4Parameters p;
+  p.values = {{"CA_ROTOR_COUNT", 4},   {"CA_ROTOR0_PX", 0.2},   {"CA_ROTOR0_PY", 0.2},
+              {"CA_ROTOR1_PX", -0.2},  {"CA_ROTOR1_PY", -0.2},  {"CA_ROTOR1_KM", 0.05},
+              {"CA_ROTOR2_PX", 0.2},   {"CA_ROTOR2_PY", -0.2},  {"CA_ROTOR2_KM", -0.05},
+              {"CA_ROTOR3_PX", -0.2},  {"CA_ROTOR3_PY", 0.2},   {"CA_ROTOR3_KM", -0.05},
+              {"PWM_MAIN_FUNC1", 101}, {"PWM_MAIN_FUNC2", 102}, {"PWM_MAIN_MIN1", 1080},
+              {"PWM_AUX_FUNC2", 103},  {"PWM_AUX_MIN2", 1100},  {"PWM_AUX_MAX2", 1900},
+              {"PWM_AUX_DIS2", 950},   {"PWM_AUX_MIN1", 1200},  {"UAVCAN_EC_FUNC1", 104},
+              {"PWM_MAIN_TIM0", -3},   {"PWM_AUX_TIM0", 400},   {"DSHOT_CONFIG", 600},
+              {"PWM_MAIN_TIM1", -2}};
+  const config::Px4Import imported = config::import_px4(p, "test");
+  const config::Config c = config::load_config_text(imported.yaml, "imported");
+  ASSERT_EQ(c.motors(), 4);
+  EXPECT_EQ(c.outputs[0].min, 1080.0);  // MAIN 1
+  EXPECT_EQ(c.outputs[2].min, 1100.0);  // AUX 2, not AUX 1's
+  EXPECT_EQ(c.outputs[2].max, 1900.0);
+  EXPECT_EQ(c.outputs[2].disarmed, 950.0);
+  EXPECT_EQ(c.outputs[3].min, 1000.0);  // the UAVCAN ESC: PX4's default range
+  EXPECT_TRUE(lists(imported.notes, "motor 4 is on UAVCAN ESC 1, an ESC motormix cannot drive"));
+  EXPECT_NE(imported.yaml.find("motor 3 on AUX 2"), std::string::npos) << imported.yaml;
+  EXPECT_TRUE(lists(imported.not_mapped, "PWM_MAIN_TIM0 = -3: DShot600"));
+  EXPECT_TRUE(lists(imported.not_mapped, "hardware.protocol: dshot600"));
+  EXPECT_TRUE(lists(imported.not_mapped, "PWM_MAIN_TIM1 = -2: DShot1200"));
+  EXPECT_TRUE(lists(imported.not_mapped, "PWM_AUX_TIM0 = 400: PWM at 400 Hz"));
+  EXPECT_TRUE(lists(imported.not_mapped, "DSHOT_CONFIG = 600: DShot 600"));
+  // AUX 1 drives no motor: its range is not a motor's, not named.
+  EXPECT_FALSE(lists(imported.not_mapped, "PWM_AUX_MIN1"));
+  for (const std::string& n : imported.not_mapped)
+    EXPECT_EQ(n.find(": not mapped"), std::string::npos) << n;
+  EXPECT_FALSE(c.motor_loss.has_value());
+  EXPECT_NE(c.motor_loss_off.find("off"), std::string::npos) << c.motor_loss_off;
+}
+
+// A rotor a servo tilts in flight cannot be mixed by a fixed matrix: the
+// import refuses it and says why. Control surfaces are named with why.
+TEST(Px4Import, ATiltrotorIsRefusedAndControlSurfacesNamed) {
+  config::Px4Parameters p;
+  p.values = {{"CA_ROTOR_COUNT", 1}, {"CA_ROTOR0_TILT", 1}};
+  try {
+    config::import_px4(p, "test");
+    ADD_FAILURE() << "a tiltrotor taken";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("CA_ROTOR0_TILT = 1: a rotor a servo tilts in flight"),
+              std::string::npos)
+        << e.what();
+  }
+  p.values = {{"CA_ROTOR_COUNT", 1}, {"CA_SV_CS_COUNT", 2}, {"CA_SV_CS0_TYPE", 1}};
+  const config::Px4Import imported = config::import_px4(p, "test");
+  EXPECT_TRUE(lists(imported.not_mapped, "CA_SV_CS_COUNT = 2: control surfaces"));
+  EXPECT_TRUE(lists(imported.not_mapped, "CA_SV_CS0_TYPE = 1: control surfaces"));
+}
+
 TEST(Px4Import, ABeforeControlAllocationAirframeIsAPreset) {
   config::Px4Parameters p;
   p.values = {{"SYS_AUTOSTART", 6001}, {"MC_AIRMODE", 2}};

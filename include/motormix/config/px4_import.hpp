@@ -9,13 +9,20 @@
 //     with `normalization: px4`;
 //   - MC_AIRMODE: the prioritized strategy's airmode;
 //   - THR_MDL_FAC: output.thrust_model_factor;
-//   - PWM_MAIN_MINi/MAXi/DISi of the outputs PWM_MAIN_FUNCi gives to the
-//     motors (101 is motor 1), or of outputs 1..n without FUNC parameters:
-//     the output range, one per motor when they differ;
+//   - MINi/MAXi/DISi of the outputs the PWM_MAIN_FUNCi and PWM_AUX_FUNCi
+//     parameters give to the motors (101 is motor 1), or of MAIN 1..n
+//     without FUNC parameters: the output range, one per motor when they
+//     differ (a motor on a UAVCAN ESC, which motormix cannot drive, is
+//     named and gets PX4's default range);
 //   - SYS_AUTOSTART of the common multirotor airframes, for logs from
 //     before control allocation (no CA_ROTOR_COUNT): a preset.
-// Everything else that looks like mixing or outputs (CA_*, PWM_MAIN_*,
-// MOT_ORDERING, ...) and is not mapped is listed, never dropped silently.
+// PX4 keeps no mass, inertia or thrust, so the configuration has no spin
+// landing (`motor_loss: {mode: off}`) until a measured `vehicle:` is added.
+// A rotor tilted by a servo in flight (CA_ROTORi_TILT) is refused: a fixed
+// matrix cannot mix it. Everything else that looks like mixing or outputs
+// (CA_*, PWM_MAIN_*, PWM_AUX_*, UAVCAN_EC_*, DSHOT_*, MOT_ORDERING, ...)
+// and is not mapped is listed with why (a timer's DShot speed, say, is
+// hardware.protocol with the pulse firmware), never dropped silently.
 
 #include <map>
 #include <string>
