@@ -183,7 +183,8 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     for (std::int64_t tick = 0; options.lockstep && node.take_tick(tick); node.drain()) {
       last_tick_ns = woke_ns;
       node.cycle(tick, monotonic_us());
-      if (options.max_cycles > 0 && ++cycles >= options.max_cycles) return finish(0);
+      ++cycles;
+      if (options.max_cycles > 0 && cycles >= options.max_cycles) return finish(0);
     }
     if (poll_ms >= 0 && woke_ns - last_tick_ns >= idle_ns) {
       log << "motormix: lockstep: no tick for " << options.lockstep_idle_s
@@ -207,7 +208,8 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     }
     if (run_cycle) {
       node.cycle(monotonic_us(), woke_us);
-      if (options.max_cycles > 0 && ++cycles >= options.max_cycles) return finish(0);
+      ++cycles;
+      if (options.max_cycles > 0 && cycles >= options.max_cycles) return finish(0);
     }
   }
 }

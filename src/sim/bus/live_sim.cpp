@@ -39,6 +39,8 @@ using bus::wall_us;
 
 // Lockstep: how long the simulator waits for the mixer's answer to a tick.
 constexpr double kLockstepWaitS = 5.0;
+// The first tick again this often (s) until the mixer answers one.
+constexpr double kFirstTickRepeatS = 0.25;
 
 // What the simulated ESCs last heard from the mixer. Decoding happens here,
 // inside the callback, and never throws out of it.
@@ -153,7 +155,8 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   MixerOutputs mix;
   mix.policy = &policy;
   mix.motors = config.motors();
-  std::int64_t tick_us = 0;  // lockstep: the simulated time of this cycle
+  std::int64_t tick_us = 0;    // lockstep: the simulated time of this cycle
+  bool answered_once = false;  // lockstep: the mixer has answered a tick
   if (options.lockstep) mix.lockstep_now = &tick_us;
   lcm.subscribe(config.channels.motor_pwm, &MixerOutputs::on_pwm, &mix);
   lcm.subscribe(config.channels.status, &MixerOutputs::on_status, &mix);
@@ -257,10 +260,20 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       tick.utime = tick_us;
       publish(config.channels.lockstep, tick);
       const auto asked = Clock::now();
+      auto sent = asked;
       while (!(mix.any && mix.utime == tick_us) &&
              Clock::now() - asked < std::chrono::duration<double>(kLockstepWaitS)) {
-        if (lcm.handleTimeout(100) < 0) break;
+        // Until the mixer has answered once, the tick again now and then: a
+        // mixer still starting had not subscribed when it went (it refuses
+        // a tick it already took, so a repeat costs nothing).
+        if (!answered_once &&
+            Clock::now() - sent >= std::chrono::duration<double>(kFirstTickRepeatS)) {
+          publish(config.channels.lockstep, tick);
+          sent = Clock::now();
+        }
+        if (lcm.handleTimeout(answered_once ? 100 : 20) < 0) break;
       }
+      answered_once = answered_once || (mix.any && mix.utime == tick_us);
       if (!(mix.any && mix.utime == tick_us)) {
         err << "motormix sim: no motor_pwm_t for the tick at " << t << " s within "
             << kLockstepWaitS << " s: is `motormix run --lockstep` running on this bus?\n";
