@@ -43,6 +43,7 @@
 //     the vertical speed stays near zero with little thrust asked for.
 
 #include <motormix/enum_names.hpp>
+#include <motormix/gravity.hpp>
 #include <motormix/motor_vector.hpp>
 #include <motormix/touchdown.hpp>
 
@@ -55,8 +56,6 @@
 #include <string>
 
 namespace motormix {
-
-inline constexpr double kStandardGravity = 9.80665;
 
 // The vehicle as the controller needs it (SI units, body FRD).
 struct SpinningDescentModel {

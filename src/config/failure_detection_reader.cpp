@@ -3,6 +3,7 @@
 #include "failure_detection_reader.hpp"
 
 #include <motormix/config/hover_point.hpp>
+#include <motormix/gravity.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@ namespace motormix::config {
 
 namespace {
 
-constexpr double kGravity = 9.80665;
 // The outputs-only source needs this many rotors: with fewer, the vehicle
 // does not live through the second it takes to decide.
 constexpr int kOutputsMinRotors = 6;
@@ -89,7 +89,7 @@ void rates_scale(const VehiclePhysics& v, FailureDetectorSettings& s) {
   s.inertia_kgm2 = v.inertia_kgm2;
   s.rotational_drag = v.drag_rotational_nm_per_radps;
   rotor_momentum_model(v, s);
-  const double hover = lift > 0 ? std::clamp(v.mass_kg * kGravity / lift, 0.05, 1.0) : 0.5;
+  const double hover = lift > 0 ? std::clamp(v.mass_kg * kStandardGravity / lift, 0.05, 1.0) : 0.5;
   double smallest = 0.0;
   for (Eigen::Index i = 0; i < s.torque_per_thrust.cols(); ++i) {
     const double t = s.torque_per_thrust.col(i).norm() * hover;

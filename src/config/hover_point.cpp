@@ -1,5 +1,6 @@
 #include <motormix/config/hover_point.hpp>
 
+#include <motormix/gravity.hpp>
 #include <motormix/output_stage.hpp>
 
 #include <algorithm>
@@ -9,7 +10,6 @@ namespace motormix::config {
 
 namespace {
 
-constexpr double kGravity = 9.80665;
 // Bisection on a monotonic curve of 0..1: 1e-9 of the throttle's range.
 constexpr int kBisections = 30;
 
@@ -26,7 +26,7 @@ HoverPoint hover_point(const Config& config) {
   double lift = 0.0;  // upward force at full thrust fraction, N
   for (const RotorPhysics& r : v.rotors) lift += r.max_thrust_n * -r.axis.z();
   if (!(lift > 0.0)) return h;
-  h.thrust = v.mass_kg * kGravity / lift;
+  h.thrust = v.mass_kg * kStandardGravity / lift;
   if (h.thrust >= 1.0) return h;  // cannot lift itself: no hover to gate on
   // Upward force at throttle t: each motor's output through its channel,
   // then the ESC's input fraction through its curve.

@@ -7,6 +7,8 @@
 #include "config/yaml_reader.hpp"
 #include "section_readers.hpp"
 
+#include <motormix/gravity.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -21,7 +23,6 @@ using namespace reading;
 // A rotor sits within this many metres of the centre of mass.
 constexpr double kMaxPositionM = 10.0;
 
-constexpr double kGravity = 9.80665;
 // Defaults of the 250-500 mm class: 0.3 kg per rotor (frame, motor, ESC,
 // share of battery and avionics), twice the weight in thrust.
 constexpr double kMassPerRotorKg = 0.3;
@@ -227,7 +228,7 @@ void read_vehicle_physics(MapReader vehicle, Config& config) {
     }
     v.weight_and_thrust_given = vehicle.has("mass_kg") && thrust_given;
     v.mass_kg = vehicle.number("mass_kg", kMassPerRotorKg * std::max(n, 2), 0.01, 1e4);
-    const double weight = v.mass_kg * kGravity;
+    const double weight = v.mass_kg * kStandardGravity;
     const double thrust =
         vehicle.number("max_thrust_n", n > 0 ? kThrustToWeight * weight / n : 1.0, 1e-3, 1e5);
     const double torque_ratio = vehicle.number("torque_ratio_m", kDefaultTorqueRatioM, 0.0, 1.0);

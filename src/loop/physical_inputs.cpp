@@ -3,7 +3,7 @@
 #include "loop/esc_curve.hpp"
 
 #include <motormix/config/hover_point.hpp>
-#include <motormix/spinning_descent.hpp>
+#include <motormix/gravity.hpp>
 
 #include <Eigen/LU>
 

@@ -46,11 +46,11 @@
 #include "loop/failure_set.hpp"
 #include "loop/input_samples.hpp"
 #include "loop/landing_runner.hpp"
-#include "loop/physical_inputs.hpp"
 #include "loop/latest_input.hpp"
 #include "loop/loop_state.hpp"
 #include "loop/message_checks.hpp"
 #include "loop/motor_test_runner.hpp"
+#include "loop/physical_inputs.hpp"
 #include "loop/spool_up.hpp"
 
 #include <motormix/mixer.hpp>

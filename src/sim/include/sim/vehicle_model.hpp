@@ -24,6 +24,7 @@
 #include "sim/rigid_body.hpp"
 
 #include <motormix/config/config.hpp>
+#include <motormix/gravity.hpp>
 #include <motormix/output_stage.hpp>
 
 #include <string>
@@ -31,7 +32,7 @@
 
 namespace motormix::sim {
 
-inline constexpr double kGravity = 9.80665;
+inline constexpr double kGravity = kStandardGravity;
 inline constexpr double kCrashSpeedMps = 2.0;  // hitting the ground faster than this is a crash
 
 struct Environment {
