@@ -13,6 +13,7 @@
 // Without --count it runs until SIGINT/SIGTERM.
 
 #include "frames.hpp"
+#include "options.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 #include <motormix/attitude_t.hpp>
@@ -22,7 +23,6 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdlib>
-#include <cstring>
 #include <iostream>
 #include <limits>
 #include <string>
@@ -55,35 +55,16 @@ Estimate estimate(double t) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string channel = "ATTITUDE", url;
-  double rate_hz = 500.0;
-  long count = -1;
-  const char* usage =
+  std::string channel = "ATTITUDE", url, rate = "500", how_many = "-1";
+  const int done = parse_options(
+      argc, argv,
+      {{"--channel", &channel}, {"--rate-hz", &rate}, {"--count", &how_many}, {"--lcm-url", &url}},
       "usage: attitude_publisher [--channel NAME] [--rate-hz HZ] [--count N] [--lcm-url URL]\n"
       "publishes attitude_t until Ctrl-C (or N messages); unsigned: for a configuration with\n"
-      "security.mode require, sign as examples/signed_controller does\n";
-  for (int i = 1; i < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::cout << usage;
-      return 0;
-    }
-    if (i + 1 >= argc) {
-      std::cerr << argv[i] << ": a value is missing\n" << usage;
-      return 2;
-    }
-    if (!std::strcmp(argv[i], "--channel")) {
-      channel = argv[i + 1];
-    } else if (!std::strcmp(argv[i], "--rate-hz")) {
-      rate_hz = std::atof(argv[i + 1]);
-    } else if (!std::strcmp(argv[i], "--count")) {
-      count = std::atol(argv[i + 1]);
-    } else if (!std::strcmp(argv[i], "--lcm-url")) {
-      url = argv[i + 1];
-    } else {
-      std::cerr << argv[i] << ": unknown option\n" << usage;
-      return 2;
-    }
-  }
+      "security.mode require, sign as examples/signed_controller does\n");
+  if (done >= 0) return done;
+  const double rate_hz = std::atof(rate.c_str());
+  const long count = std::atol(how_many.c_str());
   if (!(rate_hz > 0.0 && rate_hz <= 10000.0)) {
     std::cerr << "--rate-hz: 0 < rate <= 10000\n";
     return 2;

@@ -13,6 +13,8 @@
 //   esc_telemetry_publisher [--channel ESC_TELEMETRY] [--motors 4] [--rate-hz 200]
 //                           [--count N] [--lcm-url URL]
 
+#include "options.hpp"
+
 #include <lcm/lcm-cpp.hpp>
 #include <motormix/esc_telemetry_t.hpp>
 
@@ -21,7 +23,6 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdlib>
-#include <cstring>
 #include <iostream>
 #include <limits>
 #include <string>
@@ -56,39 +57,22 @@ std::vector<EscReading> read_escs(int motors) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string channel = "ESC_TELEMETRY", url;
-  double rate_hz = 200.0;
-  long count = -1;
-  int motors = 4;
-  const char* usage =
+  std::string channel = "ESC_TELEMETRY", url, rate = "200", how_many = "-1", motor_count = "4";
+  const int done = parse_options(
+      argc, argv,
+      {{"--channel", &channel},
+       {"--motors", &motor_count},
+       {"--rate-hz", &rate},
+       {"--count", &how_many},
+       {"--lcm-url", &url}},
       "usage: esc_telemetry_publisher [--channel NAME] [--motors N] [--rate-hz HZ] [--count N]\n"
       "                               [--lcm-url URL]\n"
       "publishes esc_telemetry_t until Ctrl-C (or N messages); unsigned: for a configuration\n"
-      "with security.mode require, sign as examples/signed_controller does\n";
-  for (int i = 1; i < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::cout << usage;
-      return 0;
-    }
-    if (i + 1 >= argc) {
-      std::cerr << argv[i] << ": a value is missing\n" << usage;
-      return 2;
-    }
-    if (!std::strcmp(argv[i], "--channel")) {
-      channel = argv[i + 1];
-    } else if (!std::strcmp(argv[i], "--rate-hz")) {
-      rate_hz = std::atof(argv[i + 1]);
-    } else if (!std::strcmp(argv[i], "--count")) {
-      count = std::atol(argv[i + 1]);
-    } else if (!std::strcmp(argv[i], "--motors")) {
-      motors = std::atoi(argv[i + 1]);
-    } else if (!std::strcmp(argv[i], "--lcm-url")) {
-      url = argv[i + 1];
-    } else {
-      std::cerr << argv[i] << ": unknown option\n" << usage;
-      return 2;
-    }
-  }
+      "with security.mode require, sign as examples/signed_controller does\n");
+  if (done >= 0) return done;
+  const double rate_hz = std::atof(rate.c_str());
+  const long count = std::atol(how_many.c_str());
+  const int motors = std::atoi(motor_count.c_str());
   if (!(rate_hz > 0.0 && rate_hz <= 10000.0) || motors < 1 || motors > 16) {
     std::cerr << "--rate-hz: 0 < rate <= 10000; --motors: 1..16\n";
     return 2;
