@@ -376,7 +376,7 @@ Px4Import import_px4(const Px4Parameters& params, const std::string& source_name
     // The outputs that are not motors: their function is named above. A
     // timer's protocol (TIMn) concerns the motors on it whatever its number.
     const OutputGroup* group = group_of(name);
-    if (group != nullptr && name.find("TIM") == std::string::npos) {
+    if (group != nullptr && name.find("_TIM") == std::string::npos) {
       const std::size_t digit = name.find_first_of("0123456789");
       const int c = digit == std::string::npos ? 0 : std::atoi(name.c_str() + digit);
       const bool motor = std::any_of(where.begin(), where.end(), [&](const Output& w) {
