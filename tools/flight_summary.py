@@ -48,8 +48,11 @@ def summarize(f, out=sys.stdout):
         last = f.status[-1]
         p(f"final state     {STATES.get(last.state, last.state)}; cycles {last.cycles}; "
           f"accepted {last.setpoint_received} setpoints, {last.pid_received} pid")
-        p(f"rejected        decode {last.rejected_decode}, non-finite {last.rejected_nonfinite}, "
-          f"range {last.rejected_range}, order {last.rejected_stale_order}; "
+        p(f"refused         truncated {last.rejected_truncated}, trailing bytes {last.rejected_trailing}, "
+          f"wrong type {last.rejected_wrong_type}, bad length {last.rejected_bad_length}, "
+          f"undecodable {last.rejected_undecodable}")
+        p(f"rejected        non-finite {last.rejected_nonfinite}, range {last.rejected_range}, "
+          f"order {last.rejected_stale_order}, future {last.rejected_future}, array size {last.rejected_size}; "
           f"failsafe events {last.failsafe_events}")
 
 

@@ -304,9 +304,14 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
     const bus::Refusals& r = snap.refused;
     s << "monitor   " << bus::describe(r) << " here\n";
   }
-  s << "rejected  undecodable " << st.rejected_decode << "   non-finite " << st.rejected_nonfinite
-    << "   range " << st.rejected_range << "   order " << st.rejected_stale_order << "   future "
-    << st.rejected_future << "   size " << st.rejected_size << "\n";
+  // The mixer's refusals under the bus's names (bus::Refusal), then the
+  // loop's: the words of its log and of docs/troubleshooting.md.
+  s << "refused   truncated " << st.rejected_truncated << "   trailing bytes "
+    << st.rejected_trailing << "   wrong type " << st.rejected_wrong_type << "   bad length "
+    << st.rejected_bad_length << "   undecodable " << st.rejected_undecodable << "\n";
+  s << "rejected  non-finite " << st.rejected_nonfinite << "   range " << st.rejected_range
+    << "   order " << st.rejected_stale_order << "   future " << st.rejected_future
+    << "   array size " << st.rejected_size << "\n";
   if (st.security_mode != mixer_status_t::SECURITY_OFF) {
     s << "signed    " << (st.security_mode == mixer_status_t::SECURITY_REQUIRE ? "require" : "sign")
       << "   verified " << st.signed_received << "   unsigned taken " << st.unsigned_received

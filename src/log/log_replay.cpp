@@ -5,6 +5,7 @@
 #include "log/log_writer.hpp"
 #include "log/reference_comparison.hpp"
 #include "loop/control_loop.hpp"
+#include "node/input_reader.hpp"
 #include "node/messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -21,12 +22,14 @@ namespace motormix::lcmlog {
 
 // The node's routing and message conversions: a replay feeds the loop as the
 // node does.
-using node::deliver_input;
 using node::fill_pwm_message;
 using node::fill_status_message;
+using node::hand_over;
+using node::InputAccounting;
 using node::InputKind;
+using node::InputReader;
 using node::InputRoutes;
-using node::InputSecurity;
+using node::InputSample;
 using node::LoopTiming;
 using node::size_pwm_message;
 
@@ -110,13 +113,18 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     }
     return it->second;
   };
+  // Every input the node's way (bus::receive through its channel's policy),
+  // refusals counted by reason.
+  InputReader reader;
+  InputSample sample;
   // What the mixer's status reports: the input channels' counts together.
-  const auto input_security = [&]() {
-    InputSecurity sum;
+  const auto input_accounting = [&]() {
+    InputAccounting sum;
     sum.mode = mode;
     for (const auto& [channel, policy] : policies) {
-      if (input_kind(channel)) sum.counts += policy.counts();
+      if (input_kind(channel)) sum.security += policy.counts();
     }
+    sum.refused = reader.refusals();
     return sum;
   };
 
@@ -199,7 +207,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     }
     if (t >= next_status) {
       fill_status_message(status, r, add(totals, loop->counters()), LoopTiming{}, config.hash,
-                          config.motors(), t, input_security());
+                          config.motors(), t, input_accounting());
       out.write(config.channels.status, t, status);
       next_status = t + status_period_us;
     }
@@ -250,30 +258,33 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     run_ticks_until(ev->timestamp);
     out.raw(ev->channel, ev->timestamp, ev->data.data(), static_cast<int>(ev->data.size()));
     const std::optional<InputKind> kind = input_kind(ev->channel);
-    // The signing policy sees every input event, and with --verify every
-    // event, at the time the log received it.
-    signing::Inbound verdict;
-    verdict.accept = true;
-    verdict.payload_size = ev->data.size();
-    if (kind || options.verify) {
-      verdict = policy_of(ev->channel)
-                    .check(ev->channel, ev->data.data(), ev->data.size(), ev->timestamp);
-      if (!verdict.accept && options.verify) ++summary.unverified;
-    }
     if (kind) {
       ++summary.input_events;
-      const int size = static_cast<int>(verdict.payload_size);
-      const bool accepted = verdict.accept && deliver_input(*loop, *kind, ev->data.data(), size,
-                                                            ev->timestamp, ev->timestamp);
+      // The signing policy sees every input event at the time the log
+      // received it, then the wire checks and the decoder, as in the node.
+      const bus::Refusal r = reader.read(*kind, policy_of(ev->channel), ev->channel,
+                                         ev->data.data(), ev->data.size(), ev->timestamp, sample);
+      if (r == bus::Refusal::kSignature && options.verify) ++summary.unverified;
+      const bool accepted =
+          r == bus::Refusal::kNone && hand_over(*loop, sample, ev->timestamp, ev->timestamp);
       if (cycle_on_every_input || (accepted && *kind == InputKind::kPid &&
                                    config.publish == config::PublishMode::kOnInput)) {
         cycle_at(ev->timestamp);
       }
     } else {
       ++summary.other_events;
-      // Without its signature trailer when --verify checked one.
+      // With --verify every event's signature is checked, and the reference
+      // is read without its trailer.
+      std::size_t payload = ev->data.size();
+      if (options.verify) {
+        const signing::Inbound verdict =
+            policy_of(ev->channel)
+                .check(ev->channel, ev->data.data(), ev->data.size(), ev->timestamp);
+        if (!verdict.accept) ++summary.unverified;
+        payload = verdict.payload_size;
+      }
       if (reference && ev->channel == options.reference_channel) {
-        reference->on_reference(ev->data.data(), static_cast<int>(verdict.payload_size),
+        reference->on_reference(ev->data.data(), static_cast<int>(payload),
                                 static_cast<double>(ev->timestamp - first_time) / 1e6);
       }
     }
@@ -294,8 +305,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   }
   totals = add(totals, loop->counters());
   summary.failsafe_events = totals.failsafe_events;
-  summary.rejected =
-      totals.rejected() + static_cast<std::int64_t>(input_security().counts.rejected());
+  summary.rejected = totals.rejected() + static_cast<std::int64_t>(reader.refusals().refused());
   if (options.verify) {
     for (const auto& [channel, policy] : policies) {
       summary.verification.push_back({channel, policy.counts()});

@@ -36,7 +36,7 @@ static_assert(mixer_status_t::DETECTOR_TELEMETRY == static_cast<int>(DetectorSou
 
 void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
-                         std::int64_t utime, const InputSecurity& security) {
+                         std::int64_t utime, const InputAccounting& inputs) {
   s.utime = utime;
   s.state = static_cast<int8_t>(r.state);
   s.failsafe_reason = static_cast<int8_t>(r.reason);
@@ -65,7 +65,6 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.cycles = c.cycles;
   s.setpoint_received = c.setpoint_received;
   s.pid_received = c.pid_received;
-  s.rejected_decode = c.rejected_decode;
   s.rejected_nonfinite = c.rejected_nonfinite;
   s.rejected_range = c.rejected_range;
   s.rejected_stale_order = c.rejected_out_of_order;
@@ -75,19 +74,26 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.motor_status_received = c.motor_status_received;
   s.battery_received = c.battery_received;
   s.rejected_size = c.rejected_size;
+  const auto count = [](std::uint64_t n) { return static_cast<int64_t>(n); };
+  const bus::Refusals& refused = inputs.refused;
+  s.rejected_decode = count(refused.malformed());
+  s.rejected_truncated = count(refused.truncated);
+  s.rejected_trailing = count(refused.trailing);
+  s.rejected_wrong_type = count(refused.wrong_type);
+  s.rejected_bad_length = count(refused.bad_length);
+  s.rejected_undecodable = count(refused.undecodable);
   static_assert(static_cast<int>(signing::Mode::kRequire) == mixer_status_t::SECURITY_REQUIRE &&
                 static_cast<int>(signing::Mode::kSign) == mixer_status_t::SECURITY_SIGN);
-  s.security_mode = static_cast<int8_t>(security.mode);
-  const auto count = [](std::uint64_t n) { return static_cast<int64_t>(n); };
-  s.signed_received = count(security.counts.signed_accepted);
-  s.unsigned_received = count(security.counts.unsigned_accepted);
-  s.rejected_unsigned = count(security.counts.rejected_unsigned);
-  s.rejected_bad_signature = count(security.counts.rejected_bad_signature);
-  s.rejected_replayed = count(security.counts.rejected_replayed);
+  s.security_mode = static_cast<int8_t>(inputs.mode);
+  s.signed_received = count(inputs.security.signed_accepted);
+  s.unsigned_received = count(inputs.security.unsigned_accepted);
+  s.rejected_unsigned = count(inputs.security.rejected_unsigned);
+  s.rejected_bad_signature = count(inputs.security.rejected_bad_signature);
+  s.rejected_replayed = count(inputs.security.rejected_replayed);
   // "other" (more signed channels than a verifier keeps) cannot happen in a
   // mixer, which reads fewer channels than that; counted here all the same.
   s.rejected_stale_signature =
-      count(security.counts.rejected_stale + security.counts.rejected_other);
+      count(inputs.security.rejected_stale + inputs.security.rejected_other);
   for (std::size_t i = 0; i < 4; ++i) {
     s.period_us[i] = timing.period_us[i];
     s.compute_us[i] = timing.compute_us[i];
@@ -163,77 +169,53 @@ void fill_motor_status_message(motor_status_t& msg, MotorMask failed, int motors
   for (int i = 0; i < motors; ++i) msg.failed[static_cast<std::size_t>(i)] = (failed >> i) & 1U;
 }
 
-namespace {
-// The bus's one guard: fingerprint, array length against the bytes, the
-// whole payload consumed, nothing thrown.
-template <typename Message>
-bool decode_whole(const void* data, int size, Message& msg) {
-  return size >= 0 &&
-         bus::decode_exact(data, static_cast<std::size_t>(size), msg) == bus::Refusal::kNone;
-}
-}  // namespace
-
-bool decode_setpoint(const void* data, int size, loop::SetpointSample& out) {
-  setpoint_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
-  out = loop::SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0};
-  return true;
+loop::SetpointSample to_sample(const setpoint_t& msg) {
+  return loop::SetpointSample{msg.utime, msg.throttle, msg.yaw, msg.armed != 0};
 }
 
-bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out) {
-  motor_status_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
-  out = loop::MotorStatusSample{msg.utime, msg.num_motors, 0};
-  for (int i = 0; i < msg.num_motors; ++i) {
+loop::MotorStatusSample to_sample(const motor_status_t& msg) {
+  loop::MotorStatusSample out{msg.utime, msg.num_motors, 0};
+  const int n = std::min(msg.num_motors, static_cast<int>(msg.failed.size()));
+  for (int i = 0; i < n && i < 32; ++i) {
     if (msg.failed[static_cast<std::size_t>(i)] != 0) out.failed |= std::uint32_t{1} << i;
   }
-  return true;
+  return out;
 }
 
-bool decode_battery(const void* data, int size, loop::BatterySample& out) {
-  battery_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
-  out = loop::BatterySample{msg.utime, msg.voltage};
-  return true;
+loop::BatterySample to_sample(const battery_t& msg) {
+  return loop::BatterySample{msg.utime, msg.voltage};
 }
 
-bool decode_pid(const void* data, int size, loop::PidSample& out) {
-  pid_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
-  out = loop::PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw};
-  return true;
+loop::PidSample to_sample(const pid_t& msg) {
+  return loop::PidSample{msg.utime, msg.roll, msg.pitch, msg.yaw};
 }
 
-bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out) {
+loop::EscTelemetrySample to_sample(const esc_telemetry_t& msg) {
   static_assert(bus::WireShape<esc_telemetry_t>::kMaxLength <= loop::kMaxEscReadings);
-  esc_telemetry_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
+  loop::EscTelemetrySample out;
   out.utime = msg.utime;
   out.count = msg.count;
-  for (int i = 0; i < msg.count; ++i) {
+  const int n = std::min(msg.count, static_cast<int>(msg.motor.size()));
+  for (int i = 0; i < n && i < loop::kMaxEscReadings; ++i) {
     const auto k = static_cast<std::size_t>(i);
     out.readings[k] = loop::EscReading{
         msg.motor[k],     msg.rpm[k],           msg.erpm[k],           msg.current_a[k],
         msg.voltage_v[k], msg.temperature_c[k], msg.consumption_mah[k]};
   }
-  return true;
+  return out;
 }
 
-bool decode_attitude(const void* data, int size, loop::AttitudeSample& out) {
-  attitude_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
+loop::AttitudeSample to_sample(const attitude_t& msg) {
+  loop::AttitudeSample out;
   out.utime = msg.utime;
   for (std::size_t i = 0; i < 4; ++i) out.q[i] = msg.q[i];
   for (std::size_t i = 0; i < 3; ++i) out.rates[i] = msg.rates[i];
   for (std::size_t i = 0; i < 3; ++i) out.velocity[i] = msg.velocity[i];
-  return true;
+  return out;
 }
 
-bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out) {
-  motor_test_t msg{};
-  if (!decode_whole(data, size, msg)) return false;
-  out = loop::MotorTestSample{msg.utime, msg.motor, msg.throttle, msg.duration_s};
-  return true;
+loop::MotorTestSample to_sample(const motor_test_t& msg) {
+  return loop::MotorTestSample{msg.utime, msg.motor, msg.throttle, msg.duration_s};
 }
 
 InputRoutes::InputRoutes(const config::Config& config, const loop::ControlLoop& loop) {
@@ -252,43 +234,6 @@ std::optional<InputKind> InputRoutes::kind(const std::string& channel) const {
     if (name == channel) return kind;
   }
   return std::nullopt;
-}
-
-bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, int size,
-                   std::int64_t now_us, std::int64_t wall_us) {
-  // Decodes into `sample` and hands it over with `on`; undecodable bytes are counted.
-  const auto hand_over = [&](auto sample, auto decode, auto on) {
-    if (!decode(data, size, sample)) {
-      loop.on_undecodable();
-      return false;
-    }
-    return (loop.*on)(sample, now_us, wall_us) == loop::Rejection::kNone;
-  };
-  switch (kind) {
-    case InputKind::kSetpoint:
-      return hand_over(loop::SetpointSample{}, decode_setpoint, &loop::ControlLoop::on_setpoint);
-    case InputKind::kPid:
-      return hand_over(loop::PidSample{}, decode_pid, &loop::ControlLoop::on_pid);
-    case InputKind::kMotorStatus:
-      return hand_over(loop::MotorStatusSample{}, decode_motor_status,
-                       &loop::ControlLoop::on_motor_status);
-    case InputKind::kBattery:
-      return hand_over(loop::BatterySample{}, decode_battery, &loop::ControlLoop::on_battery);
-    case InputKind::kEscTelemetry:
-      return hand_over(loop::EscTelemetrySample{}, decode_esc_telemetry,
-                       &loop::ControlLoop::on_esc_telemetry);
-    case InputKind::kAttitude:
-      return hand_over(loop::AttitudeSample{}, decode_attitude, &loop::ControlLoop::on_attitude);
-    case InputKind::kMotorTest: {
-      loop::MotorTestSample sample;
-      if (!decode_motor_test(data, size, sample)) {
-        loop.on_undecodable();
-        return false;
-      }
-      return loop.on_motor_test(sample, now_us, wall_us) == loop::MotorTestResult::kOk;
-    }
-  }
-  return false;
 }
 
 }  // namespace motormix::node

@@ -11,6 +11,7 @@
 #include "bus/sealed_publisher.hpp"
 #include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
+#include "node/input_reader.hpp"
 #include "node/messages.hpp"
 #include "node/run_log.hpp"
 #include "socket_drops.hpp"
@@ -169,16 +170,19 @@ class Node {
   // flood of bad input cannot flood the log.
   void warn_about_rejections(std::int64_t now_us) {
     const loop::Counters& c = loop_.counters();
-    const signing::PolicyCounts& sc = policy_.counts();
-    const std::int64_t total = c.rejected() + static_cast<std::int64_t>(sc.rejected());
+    const bus::Refusals& bus_refused = reader_.refusals();
+    const std::int64_t total = c.rejected() + static_cast<std::int64_t>(bus_refused.refused());
     if (total == warned_total_ || now_us - last_warning_us_ < 1'000'000) return;
+    // The names are the status' and the monitor's (docs/troubleshooting.md).
     log_ << "motormix: warning: " << total - warned_total_
-         << " input messages rejected since the last warning (totals: undecodable "
-         << c.rejected_decode << ", non-finite " << c.rejected_nonfinite << ", out of range "
-         << c.rejected_range << ", out of order " << c.rejected_out_of_order << ", from the future "
-         << c.rejected_future << ", wrong size " << c.rejected_size;
+         << " input messages rejected since the last warning (totals: on the bus "
+         << bus::describe(bus_refused) << "; by the loop: non-finite " << c.rejected_nonfinite
+         << ", out of range " << c.rejected_range << ", out of order " << c.rejected_out_of_order
+         << ", from the future " << c.rejected_future << ", array size " << c.rejected_size;
+    if (c.rejected_size > 0) log_ << " (the last on " << last_wrong_size_channel_ << ")";
     if (policy_.signs()) {
-      log_ << ", unsigned " << sc.rejected_unsigned << ", bad signature "
+      const signing::PolicyCounts& sc = policy_.counts();
+      log_ << "; signatures: unsigned " << sc.rejected_unsigned << ", bad signature "
            << sc.rejected_bad_signature << ", replayed " << sc.rejected_replayed
            << ", stale signature " << sc.rejected_stale + sc.rejected_other;
     }
@@ -255,72 +259,50 @@ class Node {
     return now_us - waited;
   }
 
-  // No exception may leave an LCM callback: verifying and decoding report
-  // failure as values, and nothing else here throws.
+  // No exception may leave an LCM callback: InputReader (bus::receive)
+  // reports a refusal as a value, counted by its reason, and nothing else
+  // here throws. The signing policy comes first: a message it refuses
+  // (unsigned under `require`, a bad signature, a replay) is never decoded.
   //
-  // The signing policy first: a message it refuses (unsigned under
-  // `require`, a bad signature, a replay) is counted there and never
-  // decoded. The payload it passes on has no signature trailer.
-  std::size_t verified_size(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
-                            std::int64_t wall) {
-    const signing::Inbound in =
-        policy_.check(channel, static_cast<const std::uint8_t*>(rbuf->data), rbuf->data_size, wall);
-    return in.accept ? in.payload_size : kRefused;
-  }
-  bool deliver(InputKind kind, const lcm::ReceiveBuffer* rbuf, std::size_t size,
-               std::int64_t wall) {
-    return deliver_input(loop_, kind, rbuf->data, static_cast<int>(size),
-                         clock_.lockstep ? clock_.sim_us : received_us(rbuf, clock_.mono(), wall),
-                         wall);
-  }
   // Every input channel's callback: routed by the one table the replay
   // uses too (InputRoutes).
   void on_input(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const std::optional<InputKind> kind = routes_.kind(channel);
-    if (!kind) return;
+    if (!kind || rbuf == nullptr) return;
     const std::int64_t wall = clock_.wall();
-    const std::size_t size = verified_size(rbuf, channel, wall);
-    // A request the signing policy refuses (unsigned under `require`) is
+    // A request refused on the bus (unsigned under `require`, malformed) is
     // not answered: only its sender could take the answer for its own.
-    if (size == kRefused) return;
-    switch (*kind) {
-      case InputKind::kPid:
-        if (deliver(*kind, rbuf, size, wall)) new_pid_ = true;
-        return;
-      case InputKind::kMotorStatus: {
-        // Our own motor_status comes back to us over the bus: it is what the
-        // detector already holds, and taken as a report it would outlive the
-        // disarming that clears the detector's declarations.
-        loop::MotorStatusSample sample;
-        if (decode_motor_status(rbuf->data, static_cast<int>(size), sample) &&
-            std::find(own_status_utimes_.begin(), own_status_utimes_.end(), sample.utime) !=
-                own_status_utimes_.end()) {
-          return;
-        }
-        deliver(*kind, rbuf, size, wall);
-        return;
-      }
-      case InputKind::kMotorTest:
-        deliver(*kind, rbuf, size, wall);
-        motor_test_answer_due_ = true;  // answered by the next status, whatever the status rate
-        return;
-      default:
-        deliver(*kind, rbuf, size, wall);
-        return;
+    if (reader_.read(*kind, policy_, channel, rbuf->data, rbuf->data_size, wall, sample_) !=
+        bus::Refusal::kNone)
+      return;
+    // Our own motor_status comes back to us over the bus: it is what the
+    // detector already holds, and taken as a report it would outlive the
+    // disarming that clears the detector's declarations.
+    if (const auto* status = std::get_if<loop::MotorStatusSample>(&sample_);
+        status != nullptr && std::find(own_status_utimes_.begin(), own_status_utimes_.end(),
+                                       status->utime) != own_status_utimes_.end()) {
+      return;
     }
+    const std::int64_t wrong_sizes = loop_.counters().rejected_size;
+    const std::int64_t now =
+        clock_.lockstep ? clock_.sim_us : received_us(rbuf, clock_.mono(), wall);
+    const bool taken = hand_over(loop_, sample_, now, wall);
+    if (loop_.counters().rejected_size != wrong_sizes) last_wrong_size_channel_ = channel;
+    if (*kind == InputKind::kPid && taken) new_pid_ = true;
+    // Answered by the next status, whatever the status rate.
+    if (*kind == InputKind::kMotorTest) motor_test_answer_due_ = true;
   }
 
   // A tick: verified as any input, then taken only if later than the last
   // (a repeated or older one, a second simulator, is counted and dropped).
   void on_lockstep(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const std::size_t size = verified_size(rbuf, channel, clock_.wall());
-    lockstep_t tick{};
-    if (size == kRefused || bus::decode_exact(rbuf->data, size, tick) != bus::Refusal::kNone ||
-        tick.utime <= clock_.sim_us) {
+    if (bus::receive(policy_, rbuf, channel, clock_.wall(), tick_, lockstep_refusals_) !=
+            bus::Refusal::kNone ||
+        tick_.utime <= clock_.sim_us) {
       ++lockstep_refused_;
       return;
     }
-    clock_.sim_us = tick.utime;
+    clock_.sim_us = tick_.utime;
     tick_pending_ = true;
   }
 
@@ -350,11 +332,10 @@ class Node {
     timing.kernel_drops = drops_.latest();
     timing.wall_minus_loop_clock_us = clock_.wall() - clock_.mono();
     fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
-                        clock_.wall(), InputSecurity{policy_.mode(), policy_.counts()});
+                        clock_.wall(),
+                        InputAccounting{policy_.mode(), policy_.counts(), reader_.refusals()});
     publisher_.publish(config_.channels.status, status_msg_);
   }
-
-  static constexpr std::size_t kRefused = static_cast<std::size_t>(-1);
 
   const config::Config& config_;
   signing::Policy policy_;
@@ -364,6 +345,11 @@ class Node {
   std::ostream& log_;
   loop::ControlLoop loop_;
   const InputRoutes routes_;  // which input each subscribed channel carries
+  InputReader reader_;        // every input through bus::receive, refusals by reason
+  InputSample sample_;        // the latest input read (kept: no allocation per message)
+  lockstep_t tick_{};
+  bus::Refusals lockstep_refusals_;
+  std::string last_wrong_size_channel_;  // named in the rejection warning
   motor_pwm_t pwm_msg_;
   mixer_status_t status_msg_;
   motor_status_t motor_status_msg_;

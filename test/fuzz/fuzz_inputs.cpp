@@ -15,6 +15,7 @@
 
 #include "fuzz_checks.hpp"
 #include "loop/control_loop.hpp"
+#include "node/input_reader.hpp"
 #include "node/messages.hpp"
 
 #include <motormix/config/build_mixer.hpp>
@@ -57,46 +58,34 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   loop::ControlLoop loop(fuzz_config(), config::build_mixer(fuzz_config()));
   std::int64_t now = 1'000'000;
   const std::int64_t wall_offset = 1'764'000'000'000'000;
+  // Every message the node's way: bus::receive, then the loop.
+  signing::Policy policy;
+  node::InputReader reader;
+  node::InputSample sample;
+  std::uint64_t reads = 0;
+  const auto deliver = [&](node::InputKind kind, const std::uint8_t* bytes, std::size_t n) {
+    ++reads;
+    if (reader.read(kind, policy, "FUZZ", bytes, n, now + wall_offset, sample) ==
+        bus::Refusal::kNone) {
+      node::hand_over(loop, sample, now, now + wall_offset);
+    }
+  };
   std::size_t at = 0;
   while (at < size) {
     const std::size_t len = std::min<std::size_t>(data[at], size - at - 1);
     const std::uint8_t* msg = data + at + 1;
     at += 1 + len;
 #ifdef MOTORMIX_FUZZ_SETPOINT
-    loop::SetpointSample s;
-    if (node::decode_setpoint(msg, static_cast<int>(len), s)) {
-      loop.on_setpoint(s, now, now + wall_offset);
-    } else {
-      loop.on_undecodable();
-    }
+    deliver(node::InputKind::kSetpoint, msg, len);
     loop::PidSample p;
     p.utime = now + wall_offset;
     p.roll = len > 0 ? (msg[0] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #elif defined(MOTORMIX_FUZZ_FAILURES)
-    const auto deliver = [&](auto sample, auto decode, auto on) {
-      if (decode(msg, static_cast<int>(len), sample)) {
-        (loop.*on)(sample, now, now + wall_offset);
-      } else {
-        loop.on_undecodable();
-      }
-    };
-    switch (at % 4) {
-      case 0:
-        deliver(loop::MotorStatusSample{}, node::decode_motor_status,
-                &loop::ControlLoop::on_motor_status);
-        break;
-      case 1:
-        deliver(loop::BatterySample{}, node::decode_battery, &loop::ControlLoop::on_battery);
-        break;
-      case 2:
-        deliver(loop::EscTelemetrySample{}, node::decode_esc_telemetry,
-                &loop::ControlLoop::on_esc_telemetry);
-        break;
-      default:
-        deliver(loop::AttitudeSample{}, node::decode_attitude, &loop::ControlLoop::on_attitude);
-        break;
-    }
+    constexpr node::InputKind kKinds[] = {node::InputKind::kMotorStatus, node::InputKind::kBattery,
+                                          node::InputKind::kEscTelemetry,
+                                          node::InputKind::kAttitude};
+    deliver(kKinds[at % 4], msg, len);
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
     loop::PidSample p;
     p.utime = now + wall_offset;
@@ -104,12 +93,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p.pitch = len > 4 ? (msg[4] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #else
-    loop::PidSample p;
-    if (node::decode_pid(msg, static_cast<int>(len), p)) {
-      loop.on_pid(p, now, now + wall_offset);
-    } else {
-      loop.on_undecodable();
-    }
+    deliver(node::InputKind::kPid, msg, len);
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
 #endif
     now += len > 2 && msg[2] == 0xFF ? 200'000 : 2'500;  // sometimes long enough to go stale
@@ -117,6 +101,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     motormix::fuzz::check_outputs(loop.mixer(), r.mix);
     const loop::Counters& c = loop.counters();
     if (c.rejected() < 0 || c.cycles <= 0) std::abort();
+    const bus::Refusals& refused = reader.refusals();
+    if (refused.taken + refused.refused() != reads) std::abort();  // each read counted once
   }
   return 0;
 }

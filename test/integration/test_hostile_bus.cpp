@@ -253,11 +253,12 @@ TEST_F(HostileMixer, RunStaysDisarmedCountsEveryRefusalAndStillArms) {
   for (std::size_t i = pwm_before; i < pwm.size(); ++i)
     ASSERT_FALSE(pwm[i].armed) << "armed output " << i << " during the hostile messages";
 
-  // Every malformed message counted as undecodable; the poison values
-  // (NaN, inf: non-finite; 1e30: out of range) by the loop's checks.
-  std::uint64_t malformed = 0;
-  for (const auto* vs : {&setpoints, &pids, &statuses, &tests})
-    malformed += expected_refusals(*vs).malformed();
+  // Every malformed message counted by its reason, as every other process
+  // counts it; the poison values (NaN, inf: non-finite; 1e30: out of
+  // range) by the loop's checks.
+  bus::Refusals expected;
+  for (const auto* vs : {&setpoints, &pids, &statuses, &tests}) expected += expected_refusals(*vs);
+  const std::uint64_t malformed = expected.malformed();
   ASSERT_TRUE(bus_->wait_until(
       [&](const auto&, const auto& status) {
         return !status.empty() &&
@@ -266,6 +267,14 @@ TEST_F(HostileMixer, RunStaysDisarmedCountsEveryRefusalAndStillArms) {
       3s));
   const mixer_status_t last = bus_->status().back();
   EXPECT_EQ(static_cast<std::uint64_t>(last.rejected_decode), malformed);
+  const auto counted = [](std::int64_t v) { return static_cast<std::uint64_t>(v); };
+  EXPECT_EQ(counted(last.rejected_truncated), expected.truncated);
+  EXPECT_EQ(counted(last.rejected_trailing), expected.trailing);
+  EXPECT_EQ(counted(last.rejected_wrong_type), expected.wrong_type);
+  EXPECT_EQ(counted(last.rejected_bad_length), expected.bad_length);
+  EXPECT_EQ(counted(last.rejected_undecodable), expected.undecodable);
+  EXPECT_GT(expected.truncated * expected.trailing * expected.wrong_type * expected.bad_length, 0U)
+      << "the hostile variants cover every reason";
   EXPECT_EQ(last.rejected_nonfinite, 2 * 2 * kRepeats);  // setpoint and pid, NaN and inf
   EXPECT_EQ(last.rejected_range, 2 * kRepeats);          // 1e30 in each
   EXPECT_EQ(last.setpoint_received, 0);

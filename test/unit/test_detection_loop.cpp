@@ -5,6 +5,7 @@
 
 #include "loop/control_loop.hpp"
 #include "node/describe.hpp"
+#include "node/input_reader.hpp"
 #include "node/messages.hpp"
 #include "test_support.hpp"
 
@@ -522,15 +523,25 @@ TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
   ASSERT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
             static_cast<int>(bytes.size()));
-  loop::EscTelemetrySample out;
-  ASSERT_TRUE(node::decode_esc_telemetry(bytes.data(), static_cast<int>(bytes.size()), out));
+  // Read as the node reads it: bus::receive, no signing.
+  signing::Policy policy;
+  node::InputReader reader;
+  node::InputSample in;
+  const auto read = [&]() {
+    return reader.read(node::InputKind::kEscTelemetry, policy, "ESC_TELEMETRY", bytes.data(),
+                       bytes.size(), 0, in);
+  };
+  ASSERT_EQ(read(), bus::Refusal::kNone);
+  const auto& out = std::get<loop::EscTelemetrySample>(in);
   EXPECT_EQ(out.count, 2);
   EXPECT_EQ(out.readings[1].motor, 2);
   EXPECT_EQ(out.readings[1].rpm, 2.0);
   bytes[16] = 0x7F;  // count: two billion
-  EXPECT_FALSE(node::decode_esc_telemetry(bytes.data(), static_cast<int>(bytes.size()), out));
+  EXPECT_EQ(read(), bus::Refusal::kBadLength);
   bytes.resize(10);
-  EXPECT_FALSE(node::decode_esc_telemetry(bytes.data(), static_cast<int>(bytes.size()), out));
+  EXPECT_EQ(read(), bus::Refusal::kTruncated);
+  EXPECT_EQ(reader.refusals().taken, 1U);
+  EXPECT_EQ(reader.refusals().malformed(), 2U);
 }
 
 }  // namespace

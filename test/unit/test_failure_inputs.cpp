@@ -3,6 +3,7 @@
 // compensation), their decoders against hostile bytes, and their config keys.
 
 #include "loop/control_loop.hpp"
+#include "node/input_reader.hpp"
 #include "node/messages.hpp"
 #include "test_support.hpp"
 
@@ -169,46 +170,62 @@ std::vector<std::uint8_t> encode_status(int n, std::vector<std::int8_t> failed) 
   return buf;
 }
 
+// Reads bytes as an input of `kind` the node's way (bus::receive, no
+// signing); the sample in `out` when taken.
+template <typename Sample>
+bus::Refusal read_input(node::InputKind kind, const std::uint8_t* data, std::size_t size,
+                        Sample& out) {
+  signing::Policy policy;
+  node::InputReader reader;
+  node::InputSample in;
+  const bus::Refusal r = reader.read(kind, policy, "INPUT", data, size, 0, in);
+  if (r == bus::Refusal::kNone) out = std::get<Sample>(in);
+  return r;
+}
+
 TEST(MotorStatusDecoder, AcceptsWholeMessagesOnly) {
+  constexpr auto kStatus = node::InputKind::kMotorStatus;
   MotorStatusSample s;
   std::vector<std::uint8_t> ok = encode_status(6, {0, 0, 1, 0, 0, 1});
-  ASSERT_TRUE(node::decode_motor_status(ok.data(), static_cast<int>(ok.size()), s));
+  ASSERT_EQ(read_input(kStatus, ok.data(), ok.size(), s), bus::Refusal::kNone);
   EXPECT_EQ(s.num_motors, 6);
   EXPECT_EQ(s.failed, 0b100100U);
-  EXPECT_FALSE(node::decode_motor_status(ok.data(), static_cast<int>(ok.size()) - 1, s));
+  EXPECT_EQ(read_input(kStatus, ok.data(), ok.size() - 1, s), bus::Refusal::kTruncated);
   ok.push_back(0);
-  EXPECT_FALSE(node::decode_motor_status(ok.data(), static_cast<int>(ok.size()), s));
-  EXPECT_FALSE(node::decode_motor_status(ok.data(), 3, s));
-  EXPECT_FALSE(node::decode_motor_status(nullptr, 0, s));
+  EXPECT_EQ(read_input(kStatus, ok.data(), ok.size(), s), bus::Refusal::kTrailing);
+  EXPECT_EQ(read_input(kStatus, ok.data(), 3, s), bus::Refusal::kTruncated);
+  EXPECT_EQ(read_input(kStatus, nullptr, 0, s), bus::Refusal::kTruncated);
 }
 
 TEST(MotorStatusDecoder, HostileLengthIsRefusedBeforeDecoding) {
   // num_motors = 2^31 - 1 in a 21-byte message: the generated decoder would
   // size its array first; ours refuses it from the header.
+  constexpr auto kStatus = node::InputKind::kMotorStatus;
   std::vector<std::uint8_t> bad = encode_status(1, {1});
   bad[16] = 0x7f;
   bad[17] = bad[18] = bad[19] = 0xff;
   MotorStatusSample s;
-  EXPECT_FALSE(node::decode_motor_status(bad.data(), static_cast<int>(bad.size()), s));
+  EXPECT_EQ(read_input(kStatus, bad.data(), bad.size(), s), bus::Refusal::kBadLength);
   bad[16] = 0x80;  // negative
   bad[17] = bad[18] = bad[19] = 0x00;
-  EXPECT_FALSE(node::decode_motor_status(bad.data(), static_cast<int>(bad.size()), s));
+  EXPECT_EQ(read_input(kStatus, bad.data(), bad.size(), s), bus::Refusal::kBadLength);
   // 17 motors: more than any mixer has.
   std::vector<std::uint8_t> big = encode_status(17, std::vector<std::int8_t>(17, 0));
-  EXPECT_FALSE(node::decode_motor_status(big.data(), static_cast<int>(big.size()), s));
+  EXPECT_EQ(read_input(kStatus, big.data(), big.size(), s), bus::Refusal::kBadLength);
 }
 
-TEST(BatteryDecoder, WrongTypeIsUndecodable) {
+TEST(BatteryDecoder, WrongTypeIsRefused) {
   battery_t b{};
   b.utime = 7;
   b.voltage = 15.5F;
   std::vector<std::uint8_t> buf(static_cast<std::size_t>(b.getEncodedSize()));
   b.encode(buf.data(), 0, static_cast<int>(buf.size()));
   BatterySample s;
-  ASSERT_TRUE(node::decode_battery(buf.data(), static_cast<int>(buf.size()), s));
+  ASSERT_EQ(read_input(node::InputKind::kBattery, buf.data(), buf.size(), s), bus::Refusal::kNone);
   EXPECT_EQ(s.voltage, 15.5);
   const std::vector<std::uint8_t> status = encode_status(6, std::vector<std::int8_t>(6, 0));
-  EXPECT_FALSE(node::decode_battery(status.data(), static_cast<int>(status.size()), s));
+  EXPECT_EQ(read_input(node::InputKind::kBattery, status.data(), status.size(), s),
+            bus::Refusal::kWrongType);
 }
 
 void expect_config_error(const std::string& yaml, const std::string& needle) {

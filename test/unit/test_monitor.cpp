@@ -33,6 +33,8 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   st.battery_voltage = 14.5F;
   st.thrust_gain = 1.158F;
   st.rejected_size = 7;
+  st.rejected_bad_length = 3;
+  st.rejected_wrong_type = 2;
   st.overruns = 2;
   motor_pwm_t pwm{};
   pwm.num_motors = 3;
@@ -53,7 +55,8 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   EXPECT_TRUE(has(view, "1000.0 us  FAILED")) << view;
   EXPECT_TRUE(has(view, "yaw -0.250!")) << view;
   EXPECT_TRUE(has(view, "14.50 V, thrust x1.158")) << view;
-  EXPECT_TRUE(has(view, "size 7")) << view;
+  EXPECT_TRUE(has(view, "array size 7")) << view;
+  EXPECT_TRUE(has(view, "wrong type 2   bad length 3")) << view;
   EXPECT_TRUE(has(view, "overruns 2")) << view;
   EXPECT_FALSE(has(view, "\x1b")) << "no escape codes in the view itself";
 }

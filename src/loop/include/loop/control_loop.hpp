@@ -130,7 +130,6 @@ class ControlLoop {
   bool reads_attitude() const {
     return (detection_ && detection_->uses_rates()) || landing_.has_value();
   }
-  void on_undecodable() { ++counters_.rejected_decode; }
 
   // One control cycle at time now_us. The returned reference stays valid
   // until the next call.

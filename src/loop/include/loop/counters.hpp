@@ -1,6 +1,7 @@
 #pragma once
 // What the loop counted since start: cycles, accepted messages, rejections
-// by reason, failsafes, refusals. Reported in mixer_status_t and summed over
+// by reason (of what a message says: its bytes were the bus's to refuse,
+// bus::Refusals), failsafes, refusals. Reported in mixer_status_t and summed over
 // the stretches of a replayed log.
 
 #include <array>
@@ -12,7 +13,6 @@ struct Counters {
   std::int64_t cycles = 0;
   std::int64_t setpoint_received = 0;
   std::int64_t pid_received = 0;
-  std::int64_t rejected_decode = 0;
   std::int64_t rejected_nonfinite = 0;
   std::int64_t rejected_range = 0;
   std::int64_t rejected_out_of_order = 0;
@@ -28,8 +28,8 @@ struct Counters {
   std::int64_t attitude_received = 0;
 
   std::int64_t rejected() const {
-    return rejected_decode + rejected_nonfinite + rejected_range + rejected_out_of_order +
-           rejected_future + rejected_size;
+    return rejected_nonfinite + rejected_range + rejected_out_of_order + rejected_future +
+           rejected_size;
   }
 
   // Every counter once: the sum below walks this list, and the
@@ -38,7 +38,6 @@ struct Counters {
   static constexpr std::array kAll = {&Counters::cycles,
                                       &Counters::setpoint_received,
                                       &Counters::pid_received,
-                                      &Counters::rejected_decode,
                                       &Counters::rejected_nonfinite,
                                       &Counters::rejected_range,
                                       &Counters::rejected_out_of_order,

@@ -5,6 +5,7 @@
 
 #include <motormix/config/config.hpp>
 #include <motormix/signing_policy.hpp>
+#include "bus/receive.hpp"
 #include "loop/control_loop.hpp"
 
 #include <motormix/attitude_t.hpp>
@@ -42,28 +43,28 @@ struct LoopTiming {
 void size_pwm_message(motor_pwm_t& msg, int motors);
 
 void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t utime);
-// What the signing policy decided about the inputs (security:).
-struct InputSecurity {
+// What the bus decided about the input messages before the loop saw them:
+// the signing policy's mode and counts (security:), and every refusal by
+// its reason (bus::receive), the signature's included.
+struct InputAccounting {
   signing::Mode mode = signing::Mode::kOff;
-  signing::PolicyCounts counts;
+  signing::PolicyCounts security;
+  bus::Refusals refused;
 };
 
 void fill_status_message(mixer_status_t& msg, const loop::CycleResult& r, const loop::Counters& c,
                          const LoopTiming& timing, std::uint64_t config_hash, int motors,
-                         std::int64_t utime, const InputSecurity& security = InputSecurity{});
+                         std::int64_t utime, const InputAccounting& inputs = InputAccounting{});
 
-// Decoded inputs, or nothing when the bytes are not a whole message of the
-// type: each goes through the bus's guard (bus/receive.hpp), so a wrong
-// fingerprint, an array length that is negative, over the type's largest or
-// not what the bytes hold, a truncated message or trailing bytes decode as
-// nothing, before any array is sized, and nothing throws.
-bool decode_setpoint(const void* data, int size, loop::SetpointSample& out);
-bool decode_pid(const void* data, int size, loop::PidSample& out);
-bool decode_motor_status(const void* data, int size, loop::MotorStatusSample& out);
-bool decode_battery(const void* data, int size, loop::BatterySample& out);
-bool decode_motor_test(const void* data, int size, loop::MotorTestSample& out);
-bool decode_esc_telemetry(const void* data, int size, loop::EscTelemetrySample& out);
-bool decode_attitude(const void* data, int size, loop::AttitudeSample& out);
+// Decoded input messages as the loop's samples (InputReader decodes them
+// through the bus's guard first, so every array holds what its count says).
+loop::SetpointSample to_sample(const setpoint_t& msg);
+loop::PidSample to_sample(const pid_t& msg);
+loop::MotorStatusSample to_sample(const motor_status_t& msg);
+loop::BatterySample to_sample(const battery_t& msg);
+loop::MotorTestSample to_sample(const motor_test_t& msg);
+loop::EscTelemetrySample to_sample(const esc_telemetry_t& msg);
+loop::AttitudeSample to_sample(const attitude_t& msg);
 
 // The samples as messages, for publishers (the simulator's vehicle).
 void fill_esc_telemetry_message(esc_telemetry_t& msg, const loop::EscTelemetrySample& s);
@@ -100,11 +101,5 @@ class InputRoutes {
  private:
   std::vector<std::pair<std::string, InputKind>> channels_;
 };
-
-// Decodes one input message of `kind` and hands it to the loop, which counts
-// it if it does not decode or is rejected. True when the loop accepted it.
-// Shared by the live node and the offline replay, so both read inputs alike.
-bool deliver_input(loop::ControlLoop& loop, InputKind kind, const void* data, int size,
-                   std::int64_t now_us, std::int64_t wall_us);
 
 }  // namespace motormix::node
