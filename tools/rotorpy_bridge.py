@@ -27,7 +27,8 @@ sim` plays them (src/sim/include/sim/motor_health.hpp): stop (commanded
 speed 0: the rotor brakes with the motor's time constant, as RotorPy's
 motors do), half_thrust, intermittent (150 ms off in every 500 ms), desync
 (spins down over 200 ms), telemetry (the ESC's readings stop), prop_lost
-(no thrust or drag; the unloaded motor runs 1.33x faster, 5x quicker),
+(no thrust or drag; the unloaded motor runs 1.33x faster, 5x quicker, and
+past the loaded motor's top speed, where RotorPy would hold it),
 prop_damaged (45 % less thrust, 1.11x faster). The bridge does not tell
 motormix: its detector has to find the motor.
 
@@ -351,6 +352,11 @@ def main():
             command = np.where(pwm >= rotorpy_config.ESC_MIN, x * w_max, 0.0) * drive
             vehicle.prop = prop
             vehicle.tau_m = vehicle.tau_nominal * lag
+            # RotorPy caps every rotor at the loaded motor's top speed; a
+            # motor without its prop (or with less of one) is not held there:
+            # unloaded, it runs on toward its no-load speed at full command.
+            # The healthy rotors' commands never exceed the cap (x <= 1).
+            vehicle.rotor_speed_max = w_max * max(1.0, float(np.max(drive)))
             state["wind"] = wind.update(t, state["x"])
             before = {k: np.array(v, dtype=float) for k, v in state.items()}
             state = vehicle.step(state, {"cmd_motor_speeds": command}, dt)

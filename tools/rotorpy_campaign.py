@@ -136,7 +136,7 @@ def table(results):
             f"| {v} | {kind} | {wind} | {len(rs)} | {len(right)} | "
             + (f"{pct(times, 0.5):.1f} / {max(times):.1f}" if times else "-")
             + f" | {len(wrong)} | {len(landed)} | " + (f"{max(speeds):.2f}" if speeds else "-")
-            + f" | {max(tilts):.0f} | " + (f"{pct(yaws, 0.5):.0f}" if yaws else "-") + f" | {hs} |"
+            + " | " + (f"{max(tilts):.0f}" if tilts else "-") + " | " + (f"{pct(yaws, 0.5):.0f}" if yaws else "-") + f" | {hs} |"
             + ("" if len(ok) == len(rs) else f" ({len(rs) - len(ok)} errors)"))
     return "\n".join(rows)
 

@@ -320,8 +320,16 @@ std::string render_monitor(const MonitorSnapshot& snap, const MonitorOptions& o,
       << st.rejected_stale_signature << "\n";
   }
   s << "events    failsafe " << st.failsafe_events << "   arming refused " << st.arming_refused
-    << "   motor tests " << st.motor_tests_started << " (refused " << st.motor_tests_refused
-    << ")\n";
+    << " (throttle " << st.arming_refused_throttle << ", not disarmed first "
+    << st.arming_refused_not_disarmed_first << ")   motor tests " << st.motor_tests_started
+    << " (refused " << st.motor_tests_refused << ")\n";
+  // Why the latest armed request did not arm, until the mixer arms: the
+  // run log's words (loop::Arming).
+  if (st.arming_refusal == mixer_status_t::ARMING_REFUSAL_THROTTLE) {
+    s << "ARMING REFUSED: throttle above inputs.arm_max_throttle: lower it, then ask again\n";
+  } else if (st.arming_refusal == mixer_status_t::ARMING_REFUSAL_NOT_DISARMED_FIRST) {
+    s << "ARMING REFUSED: no setpoint with armed false came first: send armed false, then true\n";
+  }
   s << output_lines(snap, o);
   return s.str();
 }

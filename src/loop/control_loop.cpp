@@ -308,8 +308,15 @@ const CycleResult& ControlLoop::cycle(std::int64_t now_us) {
   in.throttle = setpoint.throttle;
   const Arming::Events events = arming_.update(in, now_us);
   if (events.failsafe_entered) ++counters_.failsafe_events;
-  if (events.arming_refused) ++counters_.arming_refused;
+  if (events.arming_refused) {
+    ++counters_.arming_refused;
+    ++(events.refusal == Arming::Refusal::kThrottleHigh
+           ? counters_.arming_refused_throttle
+           : counters_.arming_refused_not_disarmed_first);
+    result_.last_arming_refusal = events.refusal;
+  }
   result_.arming_refused = events.refusal;
+  if (arming_.state() == LoopState::kArmed) result_.last_arming_refusal = Arming::Refusal::kNone;
 
   // The spool-up ramp runs from arming; a failsafe that keeps mixing (hold
   // the last inputs, idle) keeps it, so no output jumps up on the way down.

@@ -71,6 +71,14 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
   s.rejected_future = c.rejected_future;
   s.failsafe_events = c.failsafe_events;
   s.arming_refused = c.arming_refused;
+  s.arming_refused_throttle = c.arming_refused_throttle;
+  s.arming_refused_not_disarmed_first = c.arming_refused_not_disarmed_first;
+  static_assert(static_cast<int>(loop::Arming::Refusal::kThrottleHigh) ==
+                        mixer_status_t::ARMING_REFUSAL_THROTTLE &&
+                    static_cast<int>(loop::Arming::Refusal::kNotDisarmedFirst) ==
+                        mixer_status_t::ARMING_REFUSAL_NOT_DISARMED_FIRST,
+                "the status' ARMING_REFUSAL_* are the loop's refusals");
+  s.arming_refusal = static_cast<int8_t>(r.last_arming_refusal);
   s.motor_status_received = c.motor_status_received;
   s.battery_received = c.battery_received;
   s.rejected_size = c.rejected_size;

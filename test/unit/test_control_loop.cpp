@@ -212,8 +212,13 @@ TEST(ArmingCheck, ArmedWithoutADisarmedSetpointFirstIsRefusedWithItsReason) {
   const auto& r = loop.cycle(0);
   EXPECT_EQ(r.state, LoopState::kDisarmed);
   EXPECT_EQ(r.arming_refused, loop::Arming::Refusal::kNotDisarmedFirst);
-  EXPECT_EQ(loop.cycle(1 * kMs).arming_refused, loop::Arming::Refusal::kNone) << "said once";
+  const auto& later = loop.cycle(1 * kMs);
+  EXPECT_EQ(later.arming_refused, loop::Arming::Refusal::kNone) << "said once";
+  EXPECT_EQ(later.last_arming_refusal, loop::Arming::Refusal::kNotDisarmedFirst)
+      << "the status keeps saying why";
   EXPECT_EQ(loop.counters().arming_refused, 1);
+  EXPECT_EQ(loop.counters().arming_refused_not_disarmed_first, 1);
+  EXPECT_EQ(loop.counters().arming_refused_throttle, 0);
 }
 
 TEST(ArmingCheck, RefusedWithThrottleUp) {
@@ -226,9 +231,13 @@ TEST(ArmingCheck, RefusedWithThrottleUp) {
   EXPECT_EQ(loop.cycle(1 * kMs).state, LoopState::kDisarmed);
   EXPECT_EQ(loop.cycle(2 * kMs).state, LoopState::kDisarmed);
   EXPECT_EQ(loop.counters().arming_refused, 1);  // counted once per request
+  EXPECT_EQ(loop.counters().arming_refused_throttle, 1);
+  EXPECT_EQ(loop.cycle(2 * kMs).last_arming_refusal, loop::Arming::Refusal::kThrottleHigh);
   loop.on_setpoint(SetpointSample{3, 0.05, 0, true}, 3 * kMs, kWall);
   loop.on_pid(PidSample{3, 0, 0, 0}, 3 * kMs, kWall);
-  EXPECT_EQ(loop.cycle(3 * kMs).state, LoopState::kArmed);
+  const auto& armed = loop.cycle(3 * kMs);
+  EXPECT_EQ(armed.state, LoopState::kArmed);
+  EXPECT_EQ(armed.last_arming_refusal, loop::Arming::Refusal::kNone) << "cleared once armed";
 }
 
 TEST_F(ControlLoopTest, MessagesFromTheFutureAreRejected) {

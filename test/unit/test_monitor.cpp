@@ -33,6 +33,9 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   st.battery_voltage = 14.5F;
   st.thrust_gain = 1.158F;
   st.rejected_size = 7;
+  st.arming_refused = 3;
+  st.arming_refused_not_disarmed_first = 3;
+  st.arming_refusal = mixer_status_t::ARMING_REFUSAL_NOT_DISARMED_FIRST;
   st.rejected_bad_length = 3;
   st.rejected_wrong_type = 2;
   st.overruns = 2;
@@ -56,6 +59,8 @@ TEST(MonitorView, ShowsStateFailuresMotorsAndCounters) {
   EXPECT_TRUE(has(view, "yaw -0.250!")) << view;
   EXPECT_TRUE(has(view, "14.50 V, thrust x1.158")) << view;
   EXPECT_TRUE(has(view, "array size 7")) << view;
+  EXPECT_TRUE(has(view, "arming refused 3 (throttle 0, not disarmed first 3)")) << view;
+  EXPECT_TRUE(has(view, "ARMING REFUSED: no setpoint with armed false came first")) << view;
   EXPECT_TRUE(has(view, "wrong type 2   bad length 3")) << view;
   EXPECT_TRUE(has(view, "overruns 2")) << view;
   EXPECT_FALSE(has(view, "\x1b")) << "no escape codes in the view itself";

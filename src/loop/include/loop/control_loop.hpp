@@ -71,6 +71,8 @@ struct CycleResult {
   // A setpoint asked to arm and was refused in this cycle, and why (once
   // per request: the node logs it).
   Arming::Refusal arming_refused = Arming::Refusal::kNone;
+  // The latest request's refusal, until the loop arms (the status says it).
+  Arming::Refusal last_arming_refusal = Arming::Refusal::kNone;
   bool setpoint_stale = true;
   bool pid_stale = true;
   std::int64_t setpoint_utime = 0;  // utime of the setpoint in force, 0 if none

@@ -18,7 +18,9 @@ struct Counters {
   std::int64_t rejected_out_of_order = 0;
   std::int64_t rejected_future = 0;
   std::int64_t failsafe_events = 0;
-  std::int64_t arming_refused = 0;  // armed requests refused by the arming check
+  std::int64_t arming_refused = 0;                     // armed requests refused by the arming check
+  std::int64_t arming_refused_throttle = 0;            // ... the throttle above arm_max_throttle
+  std::int64_t arming_refused_not_disarmed_first = 0;  // ... no armed=false first
   std::int64_t motor_status_received = 0;
   std::int64_t battery_received = 0;
   std::int64_t rejected_size = 0;  // wrong array sizes
@@ -44,6 +46,8 @@ struct Counters {
                                       &Counters::rejected_future,
                                       &Counters::failsafe_events,
                                       &Counters::arming_refused,
+                                      &Counters::arming_refused_throttle,
+                                      &Counters::arming_refused_not_disarmed_first,
                                       &Counters::motor_status_received,
                                       &Counters::battery_received,
                                       &Counters::rejected_size,
