@@ -16,7 +16,12 @@
   run as written, through the shell (so `$PWD`, `&&` and redirections are the
   reader's), and must exit 0; `mkdir` lines are carried out too;
 - every `scripts/...`, `tools/...` or `python3 tools/...` line names a file
-  that exists.
+  that exists;
+- the safety facts (docs/safety.md) hold everywhere: each fact there carries,
+  in a comment, the words that mention it and the patterns that contradict
+  it; a page whose prose (outside code blocks and tables) mentions a fact
+  must link to docs/safety.md, and a sentence matching a contradiction
+  fails, wherever it is.
 
 Synopsis lines (with `[`, `|` or `...`) are reference, not commands, and are
 skipped. A YAML block whose first line is `# NAME.yaml` is written to NAME.yaml
@@ -120,6 +125,62 @@ def run_as_written(motormix, scratch, words, where, line=None):
     return []
 
 
+FACT = re.compile(r"<!-- fact: ([\w-]+)\n(.*?)-->", re.S)
+
+
+def safety_facts(root):
+    """(name, anchor-less mention regex, [contradiction regexes]) of each fact
+    in docs/safety.md; none when the page is missing."""
+    path = os.path.join(root, "docs", "safety.md")
+    if not os.path.exists(path):
+        return []
+    facts = []
+    for name, body in FACT.findall(open(path).read()):
+        mentions, contradicts = None, []
+        for line in body.strip().split("\n"):
+            key, _, value = line.partition(":")
+            if key.strip() == "mentions":
+                mentions = re.compile(value.strip(), re.I)
+            elif key.strip() == "contradicts":
+                contradicts.append(re.compile(value.strip(), re.I))
+        facts.append((name, mentions, contradicts))
+    return facts
+
+
+def sentences(text):
+    """The prose of a page (no code blocks, headings or table rows), one
+    sentence at a time, with the line its paragraph starts on."""
+    out, paragraph, start = [], [], 0
+    for n, line in enumerate(outside_blocks(text).split("\n") + [""], 1):
+        prose = line.strip() and not line.lstrip().startswith(("|", "#", "<!--"))
+        if prose:
+            if not paragraph:
+                start = n
+            paragraph.append(line.strip())
+        elif paragraph:
+            out += [(start, t) for t in re.split(r"(?<=[.!?])\s+", " ".join(paragraph)) if t]
+            paragraph = []
+    return out
+
+
+def check_safety_facts(name, text, facts):
+    failures = []
+    if name == os.path.join("docs", "safety.md"):
+        return failures
+    links_here = any(os.path.basename(t.partition("#")[0]) == "safety.md"
+                     for t in LINK.findall(outside_blocks(text)))
+    told = set()
+    for line, sentence in sentences(text):
+        for fact, mentions, contradicts in facts:
+            for c in contradicts:
+                if c.search(sentence):
+                    failures.append(f"{name}:{line}: contradicts docs/safety.md ({fact}): '{sentence[:120]}'")
+            if mentions is not None and mentions.search(sentence) and not links_here and fact not in told:
+                told.add(fact)
+                failures.append(f"{name}:{line}: mentions {fact} but does not link to docs/safety.md")
+    return failures
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--motormix", required=True)
@@ -131,6 +192,9 @@ def main():
     motormix = os.path.abspath(args.motormix)
     pages = [os.path.join(root, "README.md")] + sorted(glob.glob(os.path.join(root, "docs", "*.md")))
     failures, links, commands, skipped = [], 0, 0, 0
+    facts = safety_facts(root)
+    if not facts:
+        failures.append("docs/safety.md: no safety facts found")
     with tempfile.TemporaryDirectory() as scratch:
         for d in ("config", "scenarios", "test", "tools", "scripts", "examples"):
             os.symlink(os.path.join(root, d), os.path.join(scratch, d))
@@ -138,6 +202,7 @@ def main():
         for page in pages:
             name = os.path.relpath(page, root)
             text = open(page).read()
+            failures += check_safety_facts(name, text, facts)
             for n, line in enumerate(text.split("\n"), 1):
                 if len(line) >= 200:
                     failures.append(f"{name}:{n}: a line of {len(line)} characters (at most 199)")
