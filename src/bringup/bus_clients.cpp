@@ -3,6 +3,7 @@
 #include "bringup/motor_test_client.hpp"
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
+#include "bus/process.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
 
@@ -113,11 +114,9 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
                              std::ostream& out, std::ostream& err) {
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "motor-test", err);
   if (!policy) return ClientOutcome::kBusError;
-  lcm::LCM lcm(lcm_url);
-  if (!lcm.good()) {
-    err << "motormix motor-test: cannot open the LCM bus\n";
-    return ClientOutcome::kBusError;
-  }
+  const std::unique_ptr<lcm::LCM> bus_open = bus::open_bus("motormix motor-test", lcm_url, err);
+  if (!bus_open) return ClientOutcome::kBusError;
+  lcm::LCM& lcm = *bus_open;
   bus::SealedPublisher publisher(lcm, *policy);
   StatusWatch watch;
   watch.policy = &*policy;
@@ -171,11 +170,9 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
                                   std::ostream& err) {
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "esc-calibrate", err);
   if (!policy) return ClientOutcome::kBusError;
-  lcm::LCM lcm(lcm_url);
-  if (!lcm.good()) {
-    err << "motormix esc-calibrate: cannot open the LCM bus\n";
-    return ClientOutcome::kBusError;
-  }
+  const std::unique_ptr<lcm::LCM> bus_open = bus::open_bus("motormix esc-calibrate", lcm_url, err);
+  if (!bus_open) return ClientOutcome::kBusError;
+  lcm::LCM& lcm = *bus_open;
   // Nothing else may drive the outputs: any status, or any motor_pwm_t
   // heard before this process publishes its own, is a mixer.
   // Any status at all means a mixer runs, signed or not: here every one
@@ -213,8 +210,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       std::chrono::duration<double>(1.0 / config.loop_rate_hz));
   auto next = Clock::now();
   while (calibration.outcome() == EscCalibration::Outcome::kRunning) {
-    while (lcm.handleTimeout(0) > 0) {
-    }
+    bus::drain(lcm);
     if (watch.statuses > 0 || foreign_pwm > 0) calibration.on_mixer_heard();
     if (signals.requested()) calibration.on_interrupt();
     if (calibration.phase() == EscCalibration::Phase::kMaximum) {
@@ -251,8 +247,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       publisher.publish(config.channels.motor_pwm, msg);
       // Our own outputs come back on the same channel: from now on only a
       // status betrays another mixer.
-      while (lcm.handleTimeout(0) > 0) {
-      }
+      bus::drain(lcm);
       foreign_pwm = 0;
       next += period;
       std::this_thread::sleep_until(next);
@@ -345,11 +340,9 @@ ClientOutcome run_esc_command(const config::Config& config, const EscCommand& co
                               const std::string& lcm_url, std::ostream& out, std::ostream& err) {
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "esc-command", err);
   if (!policy) return ClientOutcome::kBusError;
-  lcm::LCM lcm(lcm_url);
-  if (!lcm.good()) {
-    err << "motormix esc-command: cannot open the LCM bus\n";
-    return ClientOutcome::kBusError;
-  }
+  const std::unique_ptr<lcm::LCM> bus_open = bus::open_bus("motormix esc-command", lcm_url, err);
+  if (!bus_open) return ClientOutcome::kBusError;
+  lcm::LCM& lcm = *bus_open;
   bus::SealedPublisher publisher(lcm, *policy);
   OutputStatusWatch watch;
   watch.policy = &*policy;

@@ -1,7 +1,7 @@
 #include "bringup/monitor.hpp"
 
 #include "bus/clock.hpp"
-#include "bus/shutdown_signals.hpp"
+#include "bus/process.hpp"
 #include "loop/control_loop.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -409,17 +409,9 @@ class Listener {
 }  // namespace
 
 int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
-  bus::ShutdownSignals signals;
-  if (!signals.good()) {
-    log << "motormix monitor: " << signals.error() << "\n";
-    return 1;
-  }
-  lcm::LCM lcm(o.lcm_url);
-  if (!lcm.good()) {
-    log << "motormix monitor: cannot open LCM" << (o.lcm_url.empty() ? "" : " at " + o.lcm_url)
-        << " (see docs/troubleshooting.md)\n";
-    return 1;
-  }
+  bus::Process process("motormix monitor", o.lcm_url, log);
+  if (!process.good()) return 1;
+  lcm::LCM& lcm = process.lcm();
   signing::Policy off;  // no key: a trailer is cut off unread
   Listener listener(o.policy ? o.policy.get() : &off);
   lcm.subscribe(o.status_channel, &Listener::on_status, &listener);
@@ -449,14 +441,9 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
       next_draw = now + std::chrono::duration_cast<Clock::duration>(refresh);
     }
     if (!o.once && o.duration_s > 0.0 && elapsed >= o.duration_s) break;
-    pollfd fds[2] = {{lcm.getFileno(), POLLIN, 0}, {signals.fd(), POLLIN, 0}};
-    if (poll(fds, 2, 20) > 0) {
-      if (fds[0].revents & POLLIN) {
-        for (int i = 0; i < 1000 && lcm.handleTimeout(0) > 0; ++i) {
-        }
-      }
-      if ((fds[1].revents & POLLIN) && signals.take() != 0) break;
-    }
+    const bus::Woke woke = process.wait(20);
+    if (woke.bus) bus::drain(lcm);
+    if (woke.signal) break;
   }
   return rc;
 }

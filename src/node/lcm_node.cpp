@@ -3,8 +3,8 @@
 #include <nlohmann/json.hpp>
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
+#include "bus/process.hpp"
 #include "bus/sealed_publisher.hpp"
-#include "bus/shutdown_signals.hpp"
 #include "node.hpp"
 
 #include <motormix/config/build_mixer.hpp>
@@ -26,7 +26,6 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <poll.h>
 #include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
@@ -80,27 +79,13 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "run", log);
   if (!policy) return 1;
   // Signals arrive through a descriptor so shutdown happens in the loop, not
-  // in an async handler.
-  bus::ShutdownSignals signals;
-  if (!signals.good()) {
-    log << "motormix run: " << signals.error() << std::endl;
-    return 1;
-  }
+  // in an async handler; the bus opened, or one message and exit status 1.
+  bus::Process process("motormix run", options.lcm_url, log);
+  if (!process.good()) return 1;
+  lcm::LCM& lcm = process.lcm();
   Fd timer_fd(timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC));
   if (timer_fd.get() < 0) {
     log << "motormix: cannot create the loop's timer descriptor: " << std::strerror(errno)
-        << std::endl;
-    return 1;
-  }
-
-  lcm::LCM lcm(options.lcm_url);
-  if (!lcm.good()) {
-    // No retry loop: a supervisor (systemd's Restart=) decides when to try
-    // again, and a configuration or network error is reported once.
-    log << "motormix: cannot open LCM" << (options.lcm_url.empty() ? "" : " at " + options.lcm_url)
-        << ". For UDP multicast the host needs an interface up and a multicast route "
-           "(on a host with only loopback: ip link set lo up; ip route add 224.0.0.0/4 dev lo); "
-           "see docs/troubleshooting.md"
         << std::endl;
     return 1;
   }
@@ -133,10 +118,8 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return 1;
   }
 
-  // In lockstep the timer is left out (poll skips a negative descriptor).
-  pollfd fds[3] = {{lcm.getFileno(), POLLIN, 0},
-                   {options.lockstep ? -1 : timer_fd.get(), POLLIN, 0},
-                   {signals.fd(), POLLIN, 0}};
+  // In lockstep the timer is left out (a negative descriptor is skipped).
+  const int timer = options.lockstep ? -1 : timer_fd.get();
   long long cycles = 0;
   std::int64_t ticks = 0;  // timer periods elapsed
   // Lockstep: when the last tick (or the start) came, and how long poll may
@@ -161,20 +144,20 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return code;
   };
   while (true) {
-    if (poll(fds, 3, poll_ms) < 0) {
-      if (errno == EINTR) continue;
-      log << "motormix: poll failed: " << std::strerror(errno) << std::endl;
+    const bus::Woke woke = process.wait(poll_ms, timer);
+    if (woke.error != 0) {
+      log << "motormix: poll failed: " << std::strerror(woke.error) << std::endl;
       return finish(1);
     }
-    if ((fds[2].revents & POLLIN) && signals.take() != 0) {
-      log << "motormix: signal " << signals.last_signal()
+    if (woke.signal) {
+      log << "motormix: signal " << process.signals().last_signal()
           << ", publishing disarmed outputs and exiting" << std::endl;
       return finish(0);
     }
     const std::int64_t woke_ns = monotonic_ns();
     const std::int64_t woke_us = woke_ns / 1000;
     bool run_cycle = false;
-    if (fds[0].revents & POLLIN) {
+    if (woke.bus) {
       node.drain();
       run_cycle = config.publish == config::PublishMode::kOnInput && node.take_new_pid();
     }
@@ -191,7 +174,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
           << " s: the simulator is gone; publishing disarmed outputs and exiting" << std::endl;
       return finish(kExitLockstepIdle);
     }
-    if (fds[1].revents & POLLIN) {
+    if (woke.own[0]) {
       std::uint64_t expirations = 0;
       if (read(timer_fd.get(), &expirations, sizeof expirations) == sizeof expirations) {
         if (expirations > 1) node.add_overruns(expirations - 1);

@@ -6,6 +6,7 @@
 // LCM callback.
 
 #include "bus/clock.hpp"
+#include "bus/process.hpp"
 #include "bus/realtime.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
@@ -36,13 +37,6 @@
 #include <utility>
 
 namespace motormix::node {
-
-// Per-subscription receive queue: deep enough for bursts from a log player
-// running faster than real time, small enough to bound memory.
-inline constexpr int kQueueCapacity = 1000;
-// Messages handled per wake-up before the timer gets its turn again, so a
-// flood on the inputs cannot starve the output.
-inline constexpr int kMaxMessagesPerDrain = 1000;
 
 // The node's time: the machine's clocks, or in lockstep the simulator's
 // (both "monotonic" and "wall" are then the tick's utime).
@@ -81,11 +75,11 @@ class Node {
 
   void subscribe() {
     for (const auto& [channel, kind] : routes_.channels())
-      lcm_.subscribe(channel, &Node::on_input, this)->setQueueCapacity(kQueueCapacity);
+      lcm_.subscribe(channel, &Node::on_input, this)->setQueueCapacity(bus::kQueueCapacity);
   }
 
   void drain() {
-    for (int i = 0; i < kMaxMessagesPerDrain; ++i) {
+    for (int i = 0; i < bus::kMaxMessagesPerDrain; ++i) {
       // In lockstep a tick ends the drain: what comes after it belongs to
       // the next cycle.
       if (tick_pending_ || lcm_.handleTimeout(0) <= 0) break;
@@ -99,7 +93,7 @@ class Node {
   void use_lockstep() {
     clock_.lockstep = true;
     lcm_.subscribe(config_.channels.lockstep, &Node::on_lockstep, this)
-        ->setQueueCapacity(kQueueCapacity);
+        ->setQueueCapacity(bus::kQueueCapacity);
   }
   // The tick to cycle at, once (false: none pending).
   bool take_tick(std::int64_t& utime) {

@@ -9,6 +9,7 @@
 
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
+#include "bus/process.hpp"
 #include "bus/realtime.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
@@ -48,10 +49,9 @@ constexpr double kStatusEveryS = 5.0;
 constexpr double kReopenEveryS = 0.5;  // a lost serial device is tried again this often
 // LCM's receive queue keeps 30 messages by default and drops the newest
 // when full: for the process that moves the pins the newest is the one that
-// matters. Deep enough for any burst, and drained whole at every wake-up
-// (bounded, so a flood cannot starve the failsafe timer).
-constexpr int kQueueCapacity = 1000;
-constexpr int kMaxMessagesPerDrain = 1000;
+// matters. bus::kQueueCapacity is deep enough for any burst, and the queue
+// is drained at every wake-up (bounded by bus::kMaxMessagesPerDrain, so a
+// flood cannot starve the failsafe timer).
 
 using bus::monotonic_s;
 using bus::wall_us;
@@ -93,9 +93,9 @@ class OutputNode {
 
   void subscribe() {
     lcm_.subscribe(config_.channels.motor_pwm, &OutputNode::on_motor_pwm, this)
-        ->setQueueCapacity(kQueueCapacity);
+        ->setQueueCapacity(bus::kQueueCapacity);
     lcm_.subscribe(config_.channels.esc_command, &OutputNode::on_esc_command, this)
-        ->setQueueCapacity(kQueueCapacity);
+        ->setQueueCapacity(bus::kQueueCapacity);
   }
 
   // Decides and writes when something changed or the hardware is due.
@@ -326,11 +326,12 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
         << std::endl;
     return 1;
   }
-  bus::ShutdownSignals signals;  // from here on SIGTERM is read in the loop
-  if (!signals.good()) {
-    log << "motormix output: " << signals.error() << std::endl;
-    return 1;
-  }
+  // From here on SIGTERM is read in the loop; the bus opened, or one
+  // message and exit status 1 before any pin is touched.
+  bus::Process process("motormix output", options.lcm_url, log);
+  if (!process.good()) return 1;
+  lcm::LCM& lcm = process.lcm();
+  bus::ShutdownSignals& signals = process.signals();
   // Before any pulse: a bad key file stops here.
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "output", log);
   if (!policy) return 1;
@@ -351,12 +352,6 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   const auto close_wires = [&] {
     for (TelemetryWire& w : wires) ::close(w.fd);
   };
-  lcm::LCM lcm(options.lcm_url);
-  if (!lcm.good()) {
-    log << "motormix output: cannot open LCM; see docs/troubleshooting.md" << std::endl;
-    close_wires();
-    return 1;
-  }
   OutputNode node(config, std::move(*policy), lcm, *driver, log);
   // Subscribed before the first disarmed write: nothing is handled until
   // the loop below, and a publisher that sees the pins disarmed knows its
@@ -424,10 +419,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
           << ", writing disarmed pulses and exiting" << std::endl;
       break;
     }
-    if (fds[0].revents & POLLIN) {
-      for (int i = 0; i < kMaxMessagesPerDrain && lcm.handleTimeout(0) > 0; ++i) {
-      }
-    }
+    if (fds[0].revents & POLLIN) bus::drain(lcm);
     const double now = monotonic_s();
     node.write_taken(now);
     if (driver != nullptr) driver->send_waiting();

@@ -2,9 +2,9 @@
 
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
+#include "bus/process.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
-#include "bus/shutdown_signals.hpp"
 #include "node/messages.hpp"
 #include "sim/bus/sim_log.hpp"
 #include "sim/period.hpp"
@@ -124,18 +124,13 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
   if (!maybe_policy) return false;
   signing::Policy& policy = *maybe_policy;
   // SIGTERM / Ctrl-C end the flight early; its result is still written.
-  bus::ShutdownSignals signals;
-  if (!signals.good()) {
-    err << "motormix sim: " << signals.error() << "\n";
+  bus::Process process("motormix sim", options.lcm_url, err);
+  if (!process.good()) {
+    if (process.signals().good()) result.bus_ok = false;  // the bus it is, not the signals
     return false;
   }
-  lcm::LCM lcm(options.lcm_url);
-  if (!lcm.good()) {
-    err << "motormix sim: cannot open the LCM bus"
-        << (options.lcm_url.empty() ? "" : " '" + options.lcm_url + "'") << "\n";
-    result.bus_ok = false;
-    return false;
-  }
+  lcm::LCM& lcm = process.lcm();
+  bus::ShutdownSignals& signals = process.signals();
   const bool wheeled = config.thrust_range() == ThrustRange::kBipolar;
   Plant plant(config, scenario, options.sim.realism, options.sim.seed);
   const VehicleModel& vehicle = plant.vehicle();
@@ -194,13 +189,11 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
       if (ms >= 1) {
         if (lcm.handleTimeout(static_cast<int>(ms)) < 0) break;
       } else {
-        while (lcm.handleTimeout(0) > 0) {
-        }
+        bus::drain(lcm);
         std::this_thread::sleep_until(due);
       }
     }
-    while (lcm.handleTimeout(0) > 0) {
-    }
+    bus::drain(lcm);
     const double t = periods.start_of(k);
     tick_us = kEpochUs + std::llround(t * 1e6);
     const std::int64_t now = options.lockstep ? tick_us : wall_us();

@@ -1,0 +1,71 @@
+#pragma once
+// What every motormix process on the bus starts with and waits on: its
+// shutdown signals (blocked, read as a descriptor), the LCM instance opened
+// with one message when it cannot be, one wait over the bus, the signals and
+// the process' own descriptors, and one bound on the messages handled per
+// wake-up. `run`, `output`, `monitor`, `sim --lcm` and the bring-up clients
+// are built on it; what each does between two waits is its own.
+
+#include "bus/shutdown_signals.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <array>
+#include <memory>
+#include <ostream>
+#include <string>
+
+namespace motormix::bus {
+
+// Per-subscription receive queue: deep enough for bursts from a log player
+// running faster than real time, small enough to bound memory.
+inline constexpr int kQueueCapacity = 1000;
+// Messages handled per wake-up before the process' own work gets its turn
+// again, so a flood on the bus cannot starve the outputs.
+inline constexpr int kMaxMessagesPerDrain = 1000;
+
+// The bus at `url` (empty: LCM_DEFAULT_URL), or nullptr after one message
+// on `log`, for every process alike: "<who>: cannot open LCM at <url>",
+// what a multicast bus needs, where to read more. No retry: a supervisor
+// decides when to try again.
+std::unique_ptr<lcm::LCM> open_bus(const std::string& who, const std::string& url,
+                                   std::ostream& log);
+
+// Hands queued messages to their handlers, at most `max`, without waiting;
+// how many were handled.
+int drain(lcm::LCM& lcm, int max = kMaxMessagesPerDrain);
+
+// What one wait found ready.
+struct Woke {
+  bool bus = false;           // messages to drain
+  bool signal = false;        // a shutdown signal was taken (signals().last_signal())
+  std::array<bool, 2> own{};  // the process' own descriptors, in the order given
+  int error = 0;              // poll's errno, 0 when it did not fail
+};
+
+class Process {
+ public:
+  // Blocks the shutdown signals, then opens the bus; `who` ("motormix
+  // run") names the process in its messages. Check good() before use.
+  Process(std::string who, const std::string& url, std::ostream& log);
+  Process(const Process&) = delete;
+  Process& operator=(const Process&) = delete;
+
+  // False when either failed; the reason is already on the log.
+  bool good() const { return lcm_ != nullptr; }
+  const std::string& who() const { return who_; }
+  lcm::LCM& lcm() { return *lcm_; }
+  ShutdownSignals& signals() { return signals_; }
+
+  // Waits at most `timeout_ms` (-1: for ever) for the bus, a shutdown
+  // signal, or one of the process' own descriptors (-1: none). An
+  // interrupted wait comes back with nothing ready.
+  Woke wait(int timeout_ms, int own0 = -1, int own1 = -1);
+
+ private:
+  std::string who_;
+  ShutdownSignals signals_;
+  std::unique_ptr<lcm::LCM> lcm_;
+};
+
+}  // namespace motormix::bus
