@@ -125,7 +125,7 @@ std::string output_lines(const MonitorSnapshot& snap, const MonitorOptions& o) {
                                                       : "?")
     << "   pins " << pins_name(out.pins) << "   age " << fixed(snap.output_age_s * 1e3, 0)
     << " ms   taken " << out.taken << "   refused: signature " << out.refused_signature
-    << "   malformed " << out.refused_malformed << "   size " << out.refused_wrong_size
+    << "   malformed " << out.refused_malformed << "   array size " << out.refused_wrong_size
     << "   non-finite " << out.refused_not_finite << "   range " << out.refused_out_of_range
     << "   clamped " << out.clamped << "   stale " << out.stale_events << "   write failures "
     << out.write_failures;

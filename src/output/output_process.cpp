@@ -145,7 +145,7 @@ class OutputNode {
   void status_line() {
     const GateCounters& c = gate_.counters();
     log_ << "motormix output: " << to_string(state_) << "; motor_pwm_t: " << c.accepted
-         << " taken, " << bus::describe(refusals_) << "; " << c.wrong_size << " wrong size, "
+         << " taken, " << bus::describe(refusals_) << "; " << c.wrong_size << " array size, "
          << c.out_of_range << " out of range, " << c.not_finite << " not finite, " << c.clamped
          << " values clamped, " << c.stale_events << " times stale, " << c.bringup_refused
          << " motor tests refused; ";
