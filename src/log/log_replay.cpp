@@ -5,8 +5,8 @@
 #include "log/log_writer.hpp"
 #include "log/reference_comparison.hpp"
 #include "loop/control_loop.hpp"
-#include "node/input_reader.hpp"
-#include "node/messages.hpp"
+#include "messages/input_reader.hpp"
+#include "messages/messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -22,16 +22,16 @@ namespace motormix::lcmlog {
 
 // The node's routing and message conversions: a replay feeds the loop as the
 // node does.
-using node::fill_pwm_message;
-using node::fill_status_message;
-using node::hand_over;
-using node::InputAccounting;
-using node::InputKind;
-using node::InputReader;
-using node::InputRoutes;
-using node::InputSample;
-using node::LoopTiming;
-using node::size_pwm_message;
+using messages::fill_pwm_message;
+using messages::fill_status_message;
+using messages::hand_over;
+using messages::InputAccounting;
+using messages::InputKind;
+using messages::InputReader;
+using messages::InputRoutes;
+using messages::InputSample;
+using messages::LoopTiming;
+using messages::size_pwm_message;
 
 namespace {
 

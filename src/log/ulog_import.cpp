@@ -1,5 +1,7 @@
 #include "log/ulog_import.hpp"
 
+#include "messages/esc_telemetry.hpp"
+
 #include <motormix/attitude_t.hpp>
 #include <motormix/config/ulog.hpp>
 #include <motormix/esc_telemetry_t.hpp>
@@ -252,7 +254,7 @@ class Importer {
     constexpr std::size_t kPerReport = 5;
     for (const auto& r : ulog_.samples("esc_status", fields)) {
       esc_telemetry_t m{};
-      m.utime = static_cast<std::int64_t>(r[0]);
+      messages::start_esc_telemetry(m, static_cast<std::int64_t>(r[0]));
       const int count = std::min(static_cast<int>(r[1]), kPx4EscReportsMax);
       for (int i = 0; i < count; ++i) {
         const std::size_t at = 2 + kPerReport * static_cast<std::size_t>(i);
@@ -261,18 +263,16 @@ class Importer {
         if (motor < 1 || motor > motors_) continue;  // not one of this vehicle's motors
         if (std::find(m.motor.begin(), m.motor.end(), motor) != m.motor.end()) continue;
         const auto finite_or_nan = [](double v, double lo, double hi) {
-          return static_cast<float>(std::isfinite(v) && v >= lo && v <= hi ? v : kNaN);
+          return std::isfinite(v) && v >= lo && v <= hi ? v : kNaN;
         };
-        m.motor.push_back(static_cast<std::int8_t>(motor));
         const auto field = [&](std::size_t k) { return present[k] ? r[at + k] : kNaN; };
-        m.rpm.push_back(finite_or_nan(std::abs(field(0)), 0.0, 1e6));
-        m.current_a.push_back(finite_or_nan(field(1), -50.0, 1000.0));
-        m.voltage_v.push_back(finite_or_nan(field(2), 0.0, 100.0));
-        m.temperature_c.push_back(finite_or_nan(field(3), -60.0, 250.0));
-        m.erpm.push_back(static_cast<float>(kNaN));
-        m.consumption_mah.push_back(static_cast<float>(kNaN));
+        loop::EscReading reading = messages::unknown_reading(motor);
+        reading.rpm = finite_or_nan(std::abs(field(0)), 0.0, 1e6);
+        reading.current_a = finite_or_nan(field(1), -50.0, 1000.0);
+        reading.voltage_v = finite_or_nan(field(2), 0.0, 100.0);
+        reading.temperature_c = finite_or_nan(field(3), -60.0, 250.0);
+        messages::add_esc_reading(m, reading);
       }
-      m.count = static_cast<std::int32_t>(m.motor.size());
       if (m.count == 0) continue;
       add(encode(m.utime, 0, options_.channels.esc_telemetry, m));
     }

@@ -14,7 +14,7 @@
 #include "bus/realtime.hpp"
 #include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
 #include "node/run_log.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"

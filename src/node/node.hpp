@@ -12,8 +12,8 @@
 #include "bus/sealed_publisher.hpp"
 #include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
-#include "node/input_reader.hpp"
-#include "node/messages.hpp"
+#include "messages/input_reader.hpp"
+#include "messages/messages.hpp"
 #include "node/run_log.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"
@@ -37,6 +37,19 @@
 #include <utility>
 
 namespace motormix::node {
+
+// The messages library's conversions, routing and reader, by their names.
+using messages::fill_motor_status_message;
+using messages::fill_pwm_message;
+using messages::fill_status_message;
+using messages::hand_over;
+using messages::InputAccounting;
+using messages::InputKind;
+using messages::InputReader;
+using messages::InputRoutes;
+using messages::InputSample;
+using messages::LoopTiming;
+using messages::size_pwm_message;
 
 // The node's time: the machine's clocks, or in lockstep the simulator's
 // (both "monotonic" and "wall" are then the tick's utime).

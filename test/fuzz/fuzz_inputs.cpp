@@ -15,8 +15,8 @@
 
 #include "fuzz_checks.hpp"
 #include "loop/control_loop.hpp"
-#include "node/input_reader.hpp"
-#include "node/messages.hpp"
+#include "messages/input_reader.hpp"
+#include "messages/messages.hpp"
 
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
@@ -60,14 +60,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::int64_t wall_offset = 1'764'000'000'000'000;
   // Every message the node's way: bus::receive, then the loop.
   signing::Policy policy;
-  node::InputReader reader;
-  node::InputSample sample;
+  messages::InputReader reader;
+  messages::InputSample sample;
   std::uint64_t reads = 0;
-  const auto deliver = [&](node::InputKind kind, const std::uint8_t* bytes, std::size_t n) {
+  const auto deliver = [&](messages::InputKind kind, const std::uint8_t* bytes, std::size_t n) {
     ++reads;
     if (reader.read(kind, policy, "FUZZ", bytes, n, now + wall_offset, sample) ==
         bus::Refusal::kNone) {
-      node::hand_over(loop, sample, now, now + wall_offset);
+      messages::hand_over(loop, sample, now, now + wall_offset);
     }
   };
   std::size_t at = 0;
@@ -76,15 +76,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::uint8_t* msg = data + at + 1;
     at += 1 + len;
 #ifdef MOTORMIX_FUZZ_SETPOINT
-    deliver(node::InputKind::kSetpoint, msg, len);
+    deliver(messages::InputKind::kSetpoint, msg, len);
     loop::PidSample p;
     p.utime = now + wall_offset;
     p.roll = len > 0 ? (msg[0] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #elif defined(MOTORMIX_FUZZ_FAILURES)
-    constexpr node::InputKind kKinds[] = {node::InputKind::kMotorStatus, node::InputKind::kBattery,
-                                          node::InputKind::kEscTelemetry,
-                                          node::InputKind::kAttitude};
+    constexpr messages::InputKind kKinds[] = {
+        messages::InputKind::kMotorStatus, messages::InputKind::kBattery,
+        messages::InputKind::kEscTelemetry, messages::InputKind::kAttitude};
     deliver(kKinds[at % 4], msg, len);
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
     loop::PidSample p;
@@ -93,7 +93,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p.pitch = len > 4 ? (msg[4] - 128) / 128.0 : 0.0;
     loop.on_pid(p, now, now + wall_offset);
 #else
-    deliver(node::InputKind::kPid, msg, len);
+    deliver(messages::InputKind::kPid, msg, len);
     loop.on_setpoint(setpoint_from(msg, len, now + wall_offset), now, now + wall_offset);
 #endif
     now += len > 2 && msg[2] == 0xFF ? 200'000 : 2'500;  // sometimes long enough to go stale

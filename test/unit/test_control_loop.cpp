@@ -2,7 +2,7 @@
 // failsafe, recovery and rejection accounting.
 
 #include "loop/control_loop.hpp"
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -304,7 +304,7 @@ TEST(ControlLoopStatus, ADisarmedStatusReportsNoSaturation) {
   send(1 * kMs, true, 1.0, 1.0);
   const auto status_of = [&](const loop::CycleResult& r) {
     mixer_status_t s;
-    node::fill_status_message(s, r, loop_.counters(), node::LoopTiming{}, 0, 4, 0);
+    messages::fill_status_message(s, r, loop_.counters(), messages::LoopTiming{}, 0, 4, 0);
     return s;
   };
   const mixer_status_t armed = status_of(loop_.cycle(1 * kMs));

@@ -4,9 +4,9 @@
 // the failure set and cleared on disarming; its configuration section.
 
 #include "loop/control_loop.hpp"
+#include "messages/input_reader.hpp"
+#include "messages/messages.hpp"
 #include "node/describe.hpp"
-#include "node/input_reader.hpp"
-#include "node/messages.hpp"
 #include "test_support.hpp"
 
 #include <motormix/config/build_mixer.hpp>
@@ -380,7 +380,8 @@ TEST_F(DetectionLoopTest, ReportsItsSourcesAndTheTelemetrysAge) {
   EXPECT_DOUBLE_EQ(loop_.cycle(17500).esc_telemetry_age_ms, 12.5);
 
   mixer_status_t s{};
-  node::fill_status_message(s, loop_.cycle(20000), loop_.counters(), node::LoopTiming{}, 0, 6, 0);
+  messages::fill_status_message(s, loop_.cycle(20000), loop_.counters(), messages::LoopTiming{}, 0,
+                                6, 0);
   EXPECT_EQ(s.detector_sources, mixer_status_t::DETECTOR_TELEMETRY);
   EXPECT_FLOAT_EQ(s.esc_telemetry_age_ms, 15.0F);
   EXPECT_FALSE(s.motor_loss_on);
@@ -525,10 +526,10 @@ TEST(DetectionMessages, HostileLengthsDecodeAsNothing) {
             static_cast<int>(bytes.size()));
   // Read as the node reads it: bus::receive, no signing.
   signing::Policy policy;
-  node::InputReader reader;
-  node::InputSample in;
+  messages::InputReader reader;
+  messages::InputSample in;
   const auto read = [&]() {
-    return reader.read(node::InputKind::kEscTelemetry, policy, "ESC_TELEMETRY", bytes.data(),
+    return reader.read(messages::InputKind::kEscTelemetry, policy, "ESC_TELEMETRY", bytes.data(),
                        bytes.size(), 0, in);
   };
   ASSERT_EQ(read(), bus::Refusal::kNone);

@@ -692,8 +692,8 @@ TEST(FailureDetector, TheRatesFilterTakesTheVibrationDownAsConfigured) {
   const double peak = std::sqrt(2.0 * sum_sq / n);
   const double omega_t = 2.0 * kPi * kVibrationHz * kCycleS;
   const double a = 1.0 - std::exp(-kCycleS * 2.0 * kPi * s.rates_filter_hz);
-  const double stage = a / std::abs(std::complex<double>(1.0) -
-                                    (1.0 - a) * std::polar(1.0, -omega_t));
+  const double stage =
+      a / std::abs(std::complex<double>(1.0) - (1.0 - a) * std::polar(1.0, -omega_t));
   const double difference = 2.0 * std::sin(omega_t / 2.0) / kCycleS;
   const double expected = s.inertia_kgm2.x() * difference * stage * stage * kAmplitude;
   EXPECT_NEAR(peak, expected, kWithin * expected);
@@ -733,7 +733,8 @@ TEST(FailureDetector, TheLearnedTorqueScaleStaysWithinItsBounds) {
       // pitch and yaw torques all moving, the body rocking.
       MotorVector command = hover(6);
       for (int i = 0; i < 6; ++i)
-        command[i] += 0.1 * kHover * std::sin(2.0 * 3.14159265358979 * 0.7 * static_cast<double>(t) / 1e6 + i);
+        command[i] += 0.1 * kHover *
+                      std::sin(2.0 * 3.14159265358979 * 0.7 * static_cast<double>(t) / 1e6 + i);
       body.step(d, command, Eigen::Vector3d::Zero(), t);
       d.update(command, 0, true, t);
     }

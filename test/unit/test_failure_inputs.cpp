@@ -3,8 +3,8 @@
 // compensation), their decoders against hostile bytes, and their config keys.
 
 #include "loop/control_loop.hpp"
-#include "node/input_reader.hpp"
-#include "node/messages.hpp"
+#include "messages/input_reader.hpp"
+#include "messages/messages.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -173,18 +173,18 @@ std::vector<std::uint8_t> encode_status(int n, std::vector<std::int8_t> failed) 
 // Reads bytes as an input of `kind` the node's way (bus::receive, no
 // signing); the sample in `out` when taken.
 template <typename Sample>
-bus::Refusal read_input(node::InputKind kind, const std::uint8_t* data, std::size_t size,
+bus::Refusal read_input(messages::InputKind kind, const std::uint8_t* data, std::size_t size,
                         Sample& out) {
   signing::Policy policy;
-  node::InputReader reader;
-  node::InputSample in;
+  messages::InputReader reader;
+  messages::InputSample in;
   const bus::Refusal r = reader.read(kind, policy, "INPUT", data, size, 0, in);
   if (r == bus::Refusal::kNone) out = std::get<Sample>(in);
   return r;
 }
 
 TEST(MotorStatusDecoder, AcceptsWholeMessagesOnly) {
-  constexpr auto kStatus = node::InputKind::kMotorStatus;
+  constexpr auto kStatus = messages::InputKind::kMotorStatus;
   MotorStatusSample s;
   std::vector<std::uint8_t> ok = encode_status(6, {0, 0, 1, 0, 0, 1});
   ASSERT_EQ(read_input(kStatus, ok.data(), ok.size(), s), bus::Refusal::kNone);
@@ -200,7 +200,7 @@ TEST(MotorStatusDecoder, AcceptsWholeMessagesOnly) {
 TEST(MotorStatusDecoder, HostileLengthIsRefusedBeforeDecoding) {
   // num_motors = 2^31 - 1 in a 21-byte message: the generated decoder would
   // size its array first; ours refuses it from the header.
-  constexpr auto kStatus = node::InputKind::kMotorStatus;
+  constexpr auto kStatus = messages::InputKind::kMotorStatus;
   std::vector<std::uint8_t> bad = encode_status(1, {1});
   bad[16] = 0x7f;
   bad[17] = bad[18] = bad[19] = 0xff;
@@ -221,10 +221,11 @@ TEST(BatteryDecoder, WrongTypeIsRefused) {
   std::vector<std::uint8_t> buf(static_cast<std::size_t>(b.getEncodedSize()));
   b.encode(buf.data(), 0, static_cast<int>(buf.size()));
   BatterySample s;
-  ASSERT_EQ(read_input(node::InputKind::kBattery, buf.data(), buf.size(), s), bus::Refusal::kNone);
+  ASSERT_EQ(read_input(messages::InputKind::kBattery, buf.data(), buf.size(), s),
+            bus::Refusal::kNone);
   EXPECT_EQ(s.voltage, 15.5);
   const std::vector<std::uint8_t> status = encode_status(6, std::vector<std::int8_t>(6, 0));
-  EXPECT_EQ(read_input(node::InputKind::kBattery, status.data(), status.size(), s),
+  EXPECT_EQ(read_input(messages::InputKind::kBattery, status.data(), status.size(), s),
             bus::Refusal::kWrongType);
 }
 

@@ -1,4 +1,4 @@
-// The one routing of input channels (node::InputRoutes), which the node's
+// The one routing of input channels (messages::InputRoutes), which the node's
 // subscriptions and the offline replay share: attitude_t reaches the loop
 // whenever the loop reads it, for the spin landing as for the detector. A
 // spin landing replayed without the detector used to lose its attitude (the
@@ -9,7 +9,7 @@
 #include "log/log_replay.hpp"
 #include "log/log_writer.hpp"
 #include "loop/control_loop.hpp"
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
 #include "test_support.hpp"
 
 #include <motormix/config/build_mixer.hpp>
@@ -32,10 +32,10 @@ TEST(InputRoutes, TheLoopsReadersAreRoutedAndNothingElse) {
   ASSERT_FALSE(config.failure_detection);
   const loop::ControlLoop loop(config, config::build_mixer(config));
   ASSERT_TRUE(loop.reads_attitude()) << "quad_x lands on three motors: it reads attitude_t";
-  const node::InputRoutes routes(config, loop);
-  EXPECT_EQ(routes.kind("ATTITUDE"), node::InputKind::kAttitude);
-  EXPECT_EQ(routes.kind("SETPOINT"), node::InputKind::kSetpoint);
-  EXPECT_EQ(routes.kind("MOTOR_TEST"), node::InputKind::kMotorTest);
+  const messages::InputRoutes routes(config, loop);
+  EXPECT_EQ(routes.kind("ATTITUDE"), messages::InputKind::kAttitude);
+  EXPECT_EQ(routes.kind("SETPOINT"), messages::InputKind::kSetpoint);
+  EXPECT_EQ(routes.kind("MOTOR_TEST"), messages::InputKind::kMotorTest);
   EXPECT_FALSE(routes.kind("ESC_TELEMETRY").has_value()) << "no detector: telemetry unread";
   EXPECT_FALSE(routes.kind("BATTERY").has_value()) << "no battery: section";
   EXPECT_FALSE(routes.kind("MOTOR_PWM").has_value());

@@ -5,7 +5,7 @@
 #include "bus/process.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
 #include "sim/bus/sim_log.hpp"
 #include "sim/period.hpp"
 #include "sim/plant.hpp"
@@ -227,10 +227,10 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     if (!wheeled) {
       const loop::EscTelemetrySample& esc = plant.esc_telemetry(t, now, clock.health(t));
       if (esc.count > 0) {
-        node::fill_esc_telemetry_message(esc_msg, esc);
+        messages::fill_esc_telemetry_message(esc_msg, esc);
         publish(config.channels.esc_telemetry, esc_msg);
       }
-      node::fill_attitude_message(attitude_msg, plant.attitude(now));
+      messages::fill_attitude_message(attitude_msg, plant.attitude(now));
       publish(config.channels.attitude, attitude_msg);
     }
     const MotorMask detected =

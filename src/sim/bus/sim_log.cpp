@@ -30,7 +30,7 @@ void fill_vehicle_state(vehicle_state_t& msg, const VehicleModel& vehicle, std::
 
 SimLogWriter::SimLogWriter(const std::string& path, const config::Config& config)
     : log_(std::make_unique<lcm::LogFile>(path, "w")), config_(config) {
-  node::size_pwm_message(pwm_, config.motors());
+  messages::size_pwm_message(pwm_, config.motors());
 }
 
 template <typename Message>
@@ -73,11 +73,11 @@ void SimLogWriter::write(const SimFrame& f, const loop::Counters& counters) {
     for (int i = 0; i < m.num_motors; ++i) m.failed.push_back((f.motor_status->failed >> i) & 1U);
     event(ch.motor_status, f.utime, m);
   }
-  node::fill_pwm_message(pwm_, *f.cycle, f.utime);
+  messages::fill_pwm_message(pwm_, *f.cycle, f.utime);
   event(ch.motor_pwm, f.utime, pwm_);
   if (f.utime >= next_status_us_) {
-    node::fill_status_message(status_, *f.cycle, counters, node::LoopTiming{}, config_.hash,
-                              config_.motors(), f.utime);
+    messages::fill_status_message(status_, *f.cycle, counters, messages::LoopTiming{}, config_.hash,
+                                  config_.motors(), f.utime);
     event(ch.status, f.utime, status_);
     next_status_us_ =
         f.utime + static_cast<std::int64_t>(std::llround(1e6 / config_.status_rate_hz));

@@ -6,7 +6,7 @@
 // as the event time. lcm-logplayer, `motormix replay` and the plot tool
 // read it.
 
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
 #include "sim/lockstep.hpp"
 
 #include <motormix/vehicle_state_t.hpp>

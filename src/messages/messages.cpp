@@ -1,10 +1,12 @@
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
+
+#include "messages/esc_telemetry.hpp"
 
 #include "bus/receive.hpp"
 
 #include <algorithm>
 
-namespace motormix::node {
+namespace motormix::messages {
 
 void size_pwm_message(motor_pwm_t& msg, int motors) {
   msg.num_motors = motors;
@@ -140,26 +142,9 @@ void fill_status_message(mixer_status_t& s, const loop::CycleResult& r, const lo
 }
 
 void fill_esc_telemetry_message(esc_telemetry_t& msg, const loop::EscTelemetrySample& s) {
-  msg.utime = s.utime;
-  msg.count = s.count;
-  const auto n = static_cast<std::size_t>(std::max(s.count, 0));
-  msg.motor.resize(n);
-  msg.rpm.resize(n);
-  msg.erpm.resize(n);
-  msg.current_a.resize(n);
-  msg.voltage_v.resize(n);
-  msg.temperature_c.resize(n);
-  msg.consumption_mah.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const loop::EscReading& r = s.readings[i];
-    msg.motor[i] = static_cast<int8_t>(r.motor);
-    msg.rpm[i] = static_cast<float>(r.rpm);
-    msg.erpm[i] = static_cast<float>(r.erpm);
-    msg.current_a[i] = static_cast<float>(r.current_a);
-    msg.voltage_v[i] = static_cast<float>(r.voltage_v);
-    msg.temperature_c[i] = static_cast<float>(r.temperature_c);
-    msg.consumption_mah[i] = static_cast<float>(r.consumption_mah);
-  }
+  start_esc_telemetry(msg, s.utime);
+  for (int i = 0; i < std::min(s.count, loop::kMaxEscReadings); ++i)
+    add_esc_reading(msg, s.readings[static_cast<std::size_t>(i)]);
 }
 
 void fill_attitude_message(attitude_t& msg, const loop::AttitudeSample& s) {
@@ -244,4 +229,4 @@ std::optional<InputKind> InputRoutes::kind(const std::string& channel) const {
   return std::nullopt;
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::messages

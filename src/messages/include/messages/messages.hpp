@@ -25,7 +25,7 @@
 #include <utility>
 #include <vector>
 
-namespace motormix::node {
+namespace motormix::messages {
 
 struct LoopTiming {
   std::array<float, 4> period_us{};        // min, mean, max, p99
@@ -102,4 +102,4 @@ class InputRoutes {
   std::vector<std::pair<std::string, InputKind>> channels_;
 };
 
-}  // namespace motormix::node
+}  // namespace motormix::messages

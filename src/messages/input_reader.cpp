@@ -1,8 +1,8 @@
-#include "node/input_reader.hpp"
+#include "messages/input_reader.hpp"
 
 #include <type_traits>
 
-namespace motormix::node {
+namespace motormix::messages {
 
 template <typename Message, typename Sample>
 bus::Refusal InputReader::take(Message& msg, signing::Policy& policy, const std::string& channel,
@@ -67,4 +67,4 @@ bool hand_over(loop::ControlLoop& loop, const InputSample& sample, std::int64_t 
       sample);
 }
 
-}  // namespace motormix::node
+}  // namespace motormix::messages

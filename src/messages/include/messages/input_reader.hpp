@@ -8,7 +8,7 @@
 #include "bus/receive.hpp"
 #include "loop/control_loop.hpp"
 #include "loop/input_samples.hpp"
-#include "node/messages.hpp"
+#include "messages/messages.hpp"
 
 #include <motormix/signing_policy.hpp>
 
@@ -17,7 +17,7 @@
 #include <string>
 #include <variant>
 
-namespace motormix::node {
+namespace motormix::messages {
 
 // One input, converted: which alternative is held follows its InputKind.
 using InputSample = std::variant<loop::SetpointSample, loop::PidSample, loop::MotorStatusSample,
@@ -56,4 +56,4 @@ class InputReader {
 bool hand_over(loop::ControlLoop& loop, const InputSample& sample, std::int64_t now_us,
                std::int64_t wall_us);
 
-}  // namespace motormix::node
+}  // namespace motormix::messages
