@@ -81,7 +81,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   }
   // Which input, if any, a channel carries: the node's routing, for a loop
   // of this configuration (each segment's loop reads the same channels).
-  const InputRoutes routes(config, loop::ControlLoop(config, config::build_mixer(config)));
+  const InputRoutes routes(config);
   const auto input_kind = [&routes](const std::string& channel) { return routes.kind(channel); };
   // Signatures: one policy per channel (a verifier keeps timestamps for a
   // bounded number of channels; a log may hold more).

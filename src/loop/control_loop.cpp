@@ -43,6 +43,17 @@ ControlLoop::ControlLoop(const config::Config& config, Mixer mixer)
   record_vehicle_state(0);
 }
 
+bool ControlLoop::reads_esc_telemetry(const config::Config& config) {
+  return config.failure_detection && (config.failure_detection->detector.sources &
+                                      static_cast<std::uint8_t>(DetectorSources::kTelemetry)) != 0;
+}
+
+bool ControlLoop::reads_attitude(const config::Config& config) {
+  return (config.failure_detection && (config.failure_detection->detector.sources &
+                                       static_cast<std::uint8_t>(DetectorSources::kRates)) != 0) ||
+         config.motor_loss.has_value();
+}
+
 void ControlLoop::count(Rejection rejection) {
   switch (rejection) {
     case Rejection::kNone:

@@ -211,14 +211,16 @@ loop::MotorTestSample to_sample(const motor_test_t& msg) {
   return loop::MotorTestSample{msg.utime, msg.motor, msg.throttle, msg.duration_s};
 }
 
-InputRoutes::InputRoutes(const config::Config& config, const loop::ControlLoop& loop) {
+InputRoutes::InputRoutes(const config::Config& config) {
   const config::Channels& c = config.channels;
   channels_ = {{c.setpoint, InputKind::kSetpoint},
                {c.pid, InputKind::kPid},
                {c.motor_status, InputKind::kMotorStatus}};
   if (config.battery) channels_.emplace_back(c.battery, InputKind::kBattery);
-  if (loop.reads_esc_telemetry()) channels_.emplace_back(c.esc_telemetry, InputKind::kEscTelemetry);
-  if (loop.reads_attitude()) channels_.emplace_back(c.attitude, InputKind::kAttitude);
+  if (loop::ControlLoop::reads_esc_telemetry(config))
+    channels_.emplace_back(c.esc_telemetry, InputKind::kEscTelemetry);
+  if (loop::ControlLoop::reads_attitude(config))
+    channels_.emplace_back(c.attitude, InputKind::kAttitude);
   channels_.emplace_back(c.motor_test, InputKind::kMotorTest);
 }
 

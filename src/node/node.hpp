@@ -71,7 +71,7 @@ class Node {
         publisher_(lcm, policy_),
         log_(log),
         loop_(config, config::build_mixer(config)),
-        routes_(config, loop_),
+        routes_(config),
         period_stats_(window_capacity(config)),
         compute_stats_(window_capacity(config)),
         wake_stats_(window_capacity(config)) {

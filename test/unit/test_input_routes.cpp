@@ -32,13 +32,42 @@ TEST(InputRoutes, TheLoopsReadersAreRoutedAndNothingElse) {
   ASSERT_FALSE(config.failure_detection);
   const loop::ControlLoop loop(config, config::build_mixer(config));
   ASSERT_TRUE(loop.reads_attitude()) << "quad_x lands on three motors: it reads attitude_t";
-  const messages::InputRoutes routes(config, loop);
+  const messages::InputRoutes routes(config);
   EXPECT_EQ(routes.kind("ATTITUDE"), messages::InputKind::kAttitude);
   EXPECT_EQ(routes.kind("SETPOINT"), messages::InputKind::kSetpoint);
   EXPECT_EQ(routes.kind("MOTOR_TEST"), messages::InputKind::kMotorTest);
   EXPECT_FALSE(routes.kind("ESC_TELEMETRY").has_value()) << "no detector: telemetry unread";
   EXPECT_FALSE(routes.kind("BATTERY").has_value()) << "no battery: section";
   EXPECT_FALSE(routes.kind("MOTOR_PWM").has_value());
+}
+
+// The routing is taken from the configuration alone (the replay builds no
+// loop for it): it must say what a loop of that configuration reads, for
+// every bundled configuration and the detector's source sets.
+TEST(InputRoutes, TheConfigurationAloneSaysWhatTheLoopReads) {
+  int checked = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::source_path("config"))) {
+    if (entry.path().extension() != ".yaml") continue;
+    for (const std::vector<std::string>& sets :
+         {std::vector<std::string>{},
+          {"failure_detection.enabled=true", "failure_detection.sources=[telemetry]"},
+          {"failure_detection.enabled=true", "failure_detection.sources=[rates]"},
+          {"failure_detection.enabled=true", "failure_detection.sources=[telemetry, rates]"},
+          {"motor_loss.mode=off"}}) {
+      config::Config config;
+      try {
+        config = config::load_config_file(entry.path().string(), sets);
+      } catch (const std::exception&) {
+        continue;  // an override this configuration refuses (a key file, a ground robot)
+      }
+      SCOPED_TRACE(entry.path().filename().string() + " " + testing::PrintToString(sets));
+      const loop::ControlLoop loop(config, config::build_mixer(config));
+      EXPECT_EQ(loop::ControlLoop::reads_esc_telemetry(config), loop.reads_esc_telemetry());
+      EXPECT_EQ(loop::ControlLoop::reads_attitude(config), loop.reads_attitude());
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 20);
 }
 
 TEST(InputRoutes, ASpinLandingReplayedWithoutTheDetectorKeepsItsAttitude) {

@@ -128,6 +128,12 @@ class ControlLoop {
   Rejection on_esc_telemetry(const EscTelemetrySample& sample, std::int64_t now_us,
                              std::int64_t wall_us);
   Rejection on_attitude(const AttitudeSample& sample, std::int64_t now_us, std::int64_t wall_us);
+  // Which optional inputs a loop of `config` reads, from the configuration
+  // alone (the routing of its channels follows them: messages::InputRoutes):
+  // ESC telemetry for the detector's telemetry source, the attitude for its
+  // rates source or the spin landing.
+  static bool reads_esc_telemetry(const config::Config& config);
+  static bool reads_attitude(const config::Config& config);
   bool reads_esc_telemetry() const { return detection_ && detection_->uses_telemetry(); }
   bool reads_attitude() const {
     return (detection_ && detection_->uses_rates()) || landing_.has_value();

@@ -94,7 +94,7 @@ enum class InputKind : std::uint8_t {
 // still answered). Built once; kind() allocates nothing.
 class InputRoutes {
  public:
-  InputRoutes(const config::Config& config, const loop::ControlLoop& loop);
+  explicit InputRoutes(const config::Config& config);
   std::optional<InputKind> kind(const std::string& channel) const;
   const std::vector<std::pair<std::string, InputKind>>& channels() const { return channels_; }
 
