@@ -4,12 +4,12 @@
 
 namespace motormix::messages {
 
-template <typename Message, typename Sample>
+template <typename Message>
 bus::Refusal InputReader::take(Message& msg, signing::Policy& policy, const std::string& channel,
                                const void* data, std::size_t size, std::int64_t wall_us,
                                InputSample& out) noexcept {
   const bus::Refusal r = bus::receive(policy, channel, data, size, wall_us, msg, refusals_);
-  if (r == bus::Refusal::kNone) out.template emplace<Sample>(to_sample(msg));
+  if (r == bus::Refusal::kNone) out = to_sample(msg);  // the sample type follows the message
   return r;
 }
 
@@ -18,25 +18,19 @@ bus::Refusal InputReader::read(InputKind kind, signing::Policy& policy, const st
                                InputSample& out) noexcept {
   switch (kind) {
     case InputKind::kSetpoint:
-      return take<setpoint_t, loop::SetpointSample>(setpoint_, policy, channel, data, size, wall_us,
-                                                    out);
+      return take(setpoint_, policy, channel, data, size, wall_us, out);
     case InputKind::kPid:
-      return take<pid_t, loop::PidSample>(pid_, policy, channel, data, size, wall_us, out);
+      return take(pid_, policy, channel, data, size, wall_us, out);
     case InputKind::kMotorStatus:
-      return take<motor_status_t, loop::MotorStatusSample>(motor_status_, policy, channel, data,
-                                                           size, wall_us, out);
+      return take(motor_status_, policy, channel, data, size, wall_us, out);
     case InputKind::kBattery:
-      return take<battery_t, loop::BatterySample>(battery_, policy, channel, data, size, wall_us,
-                                                  out);
+      return take(battery_, policy, channel, data, size, wall_us, out);
     case InputKind::kMotorTest:
-      return take<motor_test_t, loop::MotorTestSample>(motor_test_, policy, channel, data, size,
-                                                       wall_us, out);
+      return take(motor_test_, policy, channel, data, size, wall_us, out);
     case InputKind::kEscTelemetry:
-      return take<esc_telemetry_t, loop::EscTelemetrySample>(esc_telemetry_, policy, channel, data,
-                                                             size, wall_us, out);
+      return take(esc_telemetry_, policy, channel, data, size, wall_us, out);
     case InputKind::kAttitude:
-      return take<attitude_t, loop::AttitudeSample>(attitude_, policy, channel, data, size, wall_us,
-                                                    out);
+      return take(attitude_, policy, channel, data, size, wall_us, out);
   }
   refusals_.count(bus::Refusal::kWrongType);  // no such input: not reached
   return bus::Refusal::kWrongType;

@@ -36,7 +36,7 @@ class InputReader {
   const bus::Refusals& refusals() const { return refusals_; }
 
  private:
-  template <typename Message, typename Sample>
+  template <typename Message>
   bus::Refusal take(Message& msg, signing::Policy& policy, const std::string& channel,
                     const void* data, std::size_t size, std::int64_t wall_us,
                     InputSample& out) noexcept;
