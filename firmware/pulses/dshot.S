@@ -3,7 +3,8 @@
 ; channels whose bit is 0 low, then all low. Assembly because DShot is
 ; timing: each write's cycle is fixed by the instruction count below (the
 ; bit period and the two high times), with interrupts off for the frame
-; (27 us at DShot600, 53 at DShot300, 107 at DShot150).
+; (27 us at DShot600, 53 at DShot300, 107 at DShot150, which reads the
+; UART itself).
 ;
 ; At 16 MHz, cycles per bit, high for a 0, high for a 1 (the protocol:
 ; 1/rate, 37.5 % and 75 % of it):
@@ -59,7 +60,52 @@
   .section .text
   DSHOT_SENDER mm_dshot_send600, 10, 20, 27
   DSHOT_SENDER mm_dshot_send300, 20, 40, 53
-  DSHOT_SENDER mm_dshot_send150, 40, 80, 107
+
+; uint8_t mm_dshot_send150(const uint8_t* ports, uint8_t high, uint8_t low,
+;                          uint8_t* uart);
+; A DShot150 frame (107 us) is longer than the chip's receiver holds bytes
+; back to back (two byte times, 80 us), so it reads the UART itself once a
+; bit, in the same 10 cycles whether a byte came or not, into uart (three
+; at most); returns their number in r24. Per bit as the others, with the
+; read in the low part:
+;   byte:    lds 2, sbrs 2 (skips), lds 2, st 2, rjmp 2
+;   no byte: lds 2, sbrs 1, rjmp 2, DELAY 5
+; Its error flags are not looked at: the link's CRC-32 finds a bad byte.
+  .global mm_dshot_send150
+mm_dshot_send150:
+  push r28
+  push r29
+  movw r26, r24          ; X: the port values
+  movw r28, r18          ; Y: where the UART's bytes go
+  mov r25, r18           ; its start (low byte): the count at the end
+  ldi r18, 16
+  in r21, _SFR_IO_ADDR(SREG)
+  cli
+1:
+  out _SFR_IO_ADDR(PORTD), r22   ; t = 0: every channel high
+  ld r19, X+
+  DELAY (40 - 3)
+  out _SFR_IO_ADDR(PORTD), r19   ; t = 40: the channels sending 0 fall
+  DELAY (80 - 40 - 1)
+  out _SFR_IO_ADDR(PORTD), r20   ; t = 80: every channel low
+  lds r23, UCSR0A
+  sbrs r23, RXC0
+  rjmp 2f
+  lds r23, UDR0
+  st Y+, r23
+  rjmp 3f
+2:
+  DELAY 5
+3:
+  DELAY (107 - 80 - 4 - 10)
+  dec r18
+  brne 1b
+  out _SFR_IO_ADDR(SREG), r21
+  mov r24, r28
+  sub r24, r25
+  pop r29
+  pop r28
+  ret
 
 ; Port D sampled for bidirectional DShot replies (dshot_reply.c), n
 ; samples into buffer, interrupts off, as for a frame.

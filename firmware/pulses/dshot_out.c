@@ -11,7 +11,7 @@
 
 void mm_dshot_send600(const uint8_t* ports, uint8_t high, uint8_t low);
 void mm_dshot_send300(const uint8_t* ports, uint8_t high, uint8_t low);
-void mm_dshot_send150(const uint8_t* ports, uint8_t high, uint8_t low);
+uint8_t mm_dshot_send150(const uint8_t* ports, uint8_t high, uint8_t low, uint8_t* uart);
 #define DSHOT_MIN_THROTTLE 48u
 #define DSHOT_THROTTLE_STEPS 1999u /* 48..2047 */
 
@@ -48,10 +48,11 @@ void mm_dshot_start(const mm_link_config* c) {
     g_dshot_pins = (uint8_t)(g_dshot_pins | d);
   }
   /* Bidirectional: the lines idle high, which tells the ESCs to answer;
-   * the UART read by its interrupt while the replies are decoded. */
+   * frames to the host sent by the UART's interrupt while the replies are
+   * decoded. */
   if (g_bidir) {
     PORTD = (uint8_t)(PORTD | g_dshot_pins);
-    mm_serial_interrupts(1);
+    mm_serial_send_interrupt(1);
   }
   g_replies_waiting = 0;
   g_tlm.readings = 0;
@@ -180,7 +181,15 @@ void mm_dshot_send(void) {
   } else if (g_dshot == MM_LINK_PROTOCOL_DSHOT300) {
     mm_dshot_send300(g_dshot_ports, g_dshot_high, g_dshot_low);
   } else {
-    mm_dshot_send150(g_dshot_ports, g_dshot_high, g_dshot_low);
+    /* The bytes the UART received during the frame, read by the sender,
+     * go into the ring before the receive interrupt may put a later one
+     * there (and the ring's head is the interrupt's otherwise). */
+    uint8_t uart[4];
+    const uint8_t sreg = SREG;
+    cli();
+    const uint8_t n = mm_dshot_send150(g_dshot_ports, g_dshot_high, g_dshot_low, uart);
+    for (uint8_t k = 0; k < n; ++k) mm_serial_put(uart[k]);
+    SREG = sreg;
   }
   ++g_frame_count;
   ++g_periods; /* the watchdog's sign of life, as a pulse period is */
@@ -203,6 +212,7 @@ void mm_dshot_decode_replies(void) {
     ++g_tlm.first;
   }
   if (g_tlm.readings == 0u) g_tlm.first = (uint16_t)(g_frame_count - 1u);
+  mm_reply_find_starts();
   for (uint8_t ch = 0; ch < g_config.count; ++ch)
     g_tlm.period_us[g_tlm.readings][ch] = mm_reply_decode(ch);
   ++g_tlm.readings;

@@ -39,12 +39,12 @@ uint8_t mm_dshot_sample300(uint8_t* buffer, uint8_t n, uint8_t* uart);
 /* At DShot300 the bytes the UART received while sampling go after the
  * samples: one a sample at most, so they can never overrun it. */
 #define SAMPLES_300 115u /* 100.6 us */
-#define PADDING 8u       /* see find_falls */
+#define PADDING 8u       /* see mm_reply_find_starts */
 #define BUFFER \
   (SAMPLES_300 * 2u > MM_REPLY_SAMPLES + PADDING ? SAMPLES_300 * 2u : MM_REPLY_SAMPLES + PADDING)
 static uint8_t g_samples[BUFFER];
 static uint8_t g_count; /* samples in the last capture */
-static void find_falls(uint8_t pins);
+static uint8_t g_pins;  /* the channels sampled */
 
 #define TICKS_PER_US 2u /* Timer1 at clk/8 */
 #define WAIT_US 2u
@@ -68,7 +68,7 @@ void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*ta
   }
   poll();
   DDRD = (uint8_t)(DDRD | pins); /* PORTD still high there: idle */
-  find_falls(pins);
+  g_pins = pins;
 }
 
 /* GCR code -> nibble; 0xFF: not a code. */
@@ -81,12 +81,12 @@ static const uint8_t kGcr[32] = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,
 static uint8_t g_fall[MM_LINK_MAX_BIDIR_CHANNELS];
 void mm_reply_falls(const uint8_t* samples, uint8_t pins, uint8_t* falls);
 
-static void find_falls(uint8_t pins) {
+void mm_reply_find_starts(void) {
   /* After the window: a sentinel (every line low) that ends the search,
    * and idle (high) lines that a late reply's resync may read into. */
   g_samples[g_count] = 0;
   for (uint8_t k = 1; k < PADDING; ++k) g_samples[g_count + k] = 0xFFu;
-  mm_reply_falls(g_samples, pins, g_fall);
+  mm_reply_falls(g_samples, g_pins, g_fall);
 }
 
 /* A reply bit in samples: 3.048 both ways (21.333 cycles over 7 at

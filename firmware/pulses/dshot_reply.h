@@ -12,10 +12,15 @@
 
 /* Right after a frame, with interrupts still off: releases `pins` (port
  * D bits, idle high) to the ESCs, samples port D for the replies (speed:
- * MM_LINK_PROTOCOL_DSHOT300 or 600), drives the pins high again, then finds
- * where the replies start. poll() takes a byte the UART holds (before and
- * after the window); take() each byte the window itself read (DShot300). */
+ * MM_LINK_PROTOCOL_DSHOT300 or 600) and drives the pins high again. poll()
+ * takes the bytes the UART holds (before and after the window); take()
+ * each byte the window itself read (DShot300). */
 void mm_reply_capture(uint8_t speed, uint8_t pins, void (*poll)(void), void (*take)(uint8_t byte));
+
+/* Where each reply of the last capture starts, with interrupts on (a pass
+ * over every sample: too long to hold the UART's interrupt off). Once per
+ * capture, before mm_reply_decode. */
+void mm_reply_find_starts(void);
 
 /* The reply of a channel (0..3: D2..D5) in the last capture: the eRPM
  * period in microseconds (mantissa << exponent), or MM_LINK_NO_REPLY. */

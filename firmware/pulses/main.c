@@ -14,10 +14,10 @@
  *   the last frame (the host died, was killed, or the cable came out);
  * - if the main loop or the pulse interrupt stops, the hardware watchdog
  *   resets the chip within 60 ms: no pulse at all, as at power-up.
- * The serial port is polled, not interrupt-driven, so nothing but the pulse
- * interrupt can delay an edge (with bidirectional DShot, where no pulse
- * interrupt runs, its receive interrupt fills a ring instead: decoding the
- * replies takes longer than the UART's two bytes last).
+ * The serial port's receive interrupt fills a ring (serial.h: the chip's
+ * receiver holds two bytes and a third in its shift register, far less
+ * than this loop's longest turn); the pulse interrupt is entered early
+ * enough to let it run and still write each edge on its tick.
  *
  * With DShot (CONFIG's protocol: 150, 300 or 600) the same states hold with
  * DShot frames on D2..D7 instead of pulses: no signal before a
@@ -82,7 +82,14 @@ void early_init(void) {
 /* A 32-bit tick clock from Timer1, extended here: the loop runs far more
  * often than the timer wraps (32.8 ms). */
 uint32_t mm_now_ticks(void) {
+  /* Interrupts off for the two byte reads: the timer's 16-bit registers
+   * share one high-byte latch, and the pulse interrupt's write of OCR1A
+   * between them would hand this read its compare's high byte (a clock
+   * leap of up to 32.8 ms, a link timeout called early). */
+  const uint8_t sreg = SREG;
+  cli();
   const uint16_t t = TCNT1;
+  SREG = sreg;
   if (t < g_last_tcnt) g_now_high += 0x10000UL;
   g_last_tcnt = t;
   return g_now_high | t;
@@ -90,9 +97,8 @@ uint32_t mm_now_ticks(void) {
 
 static void apply_config(const mm_link_config* c) {
   mm_pulses_stop();
-  /* Polled unless bidirectional (a frame being sent is finished by the loop). */
-  mm_serial_interrupts(0);
-  mm_serial_read(&g_parser);
+  /* Sent by the loop unless bidirectional (which turns the interrupt on). */
+  mm_serial_send_interrupt(0);
   g_config = *c;
   g_period_ticks = (uint16_t)(c->period_us * MM_TICKS_PER_US);
   /* Disarmed outputs start within the timeout of the last frame: the link
@@ -180,16 +186,15 @@ static void take_frame(uint8_t type, const mm_link_frame* f, uint32_t now) {
 }
 
 /* The host's bytes, up to `steps` of them: those to be searched again after
- * a bad frame first, then (with bidirectional DShot, whose UART interrupt
- * fills a ring) the ring's, each straight into the parser. A frame taken
- * ends it (a PULSES frame is to be prepared). */
-static void host_bytes(uint32_t now, uint8_t steps, uint8_t from_ring) {
+ * a bad frame first, then the ring's, each straight into the parser. A
+ * frame taken ends it (a PULSES frame is to be prepared). */
+static void host_bytes(uint32_t now, uint8_t steps) {
   do {
     mm_link_frame frame;
     uint8_t type;
     if (mm_link_pending(&g_parser)) {
       type = mm_link_poll(&g_parser, &frame);
-    } else if (from_ring && mm_serial_waiting()) {
+    } else if (mm_serial_waiting()) {
       type = mm_link_step(&g_parser, mm_serial_next(&g_parser), &frame);
     } else {
       return;
@@ -223,7 +228,7 @@ static void bidir_turn(uint32_t now) {
   } else if (g_dshot_dirty) {
     mm_dshot_prepare();
   } else {
-    host_bytes(now, SEARCH_STEPS, 1);
+    host_bytes(now, SEARCH_STEPS);
     g_bytes_owed = 0;
   }
 }
@@ -262,24 +267,14 @@ int main(void) {
     const uint32_t now = mm_now_ticks();
     if (g_bidir) {
       bidir_turn(now);
-    } else if (mm_serial_waiting()) {
-      /* A received byte first, else one step of the search: a step takes a
-       * few microseconds, a byte 40, so the UART's two-byte buffer never
-       * overruns, even while the parser searches again after a bad frame. */
-      mm_serial_read(&g_parser);
     } else if (g_dshot && g_configured && !g_dshot_dirty && mm_dshot_frame_due(now)) {
-      /* A DShot frame right after a look at the UART: its 27-107 us with
-       * interrupts off fit in the three bytes the UART holds. */
       mm_dshot_send();
     } else if (g_dshot && g_dshot_dirty) {
       mm_dshot_prepare();
-    } else if (mm_link_pending(&g_parser)) {
-      /* Bytes of the search: a step takes some 7 us and a turn of this
-       * loop as much; three steps between two looks at the UART (a byte
-       * comes every 40 us, the UART holds two): after a bad frame the
-       * search goes over its bytes again, and at the wire's full rate one
-       * step a turn fell behind. */
-      host_bytes(now, 3u, 0);
+    } else if (mm_link_pending(&g_parser) || mm_serial_waiting()) {
+      /* A few steps of the parser (some 7 us each) a turn, so that a frame
+       * due is never held long: a byte comes every 40 us at most. */
+      host_bytes(now, 3u);
     }
     if (g_link_ok && (int32_t)(now - g_deadline) >= 0) {
       g_link_ok = 0;

@@ -55,7 +55,9 @@ void mm_schedule_build(const uint16_t* width_ticks, uint8_t count, mm_schedule* 
     f->at = at;
     f->port_d = d;
     f->port_b = b;
-    f->polled = (uint8_t)(out->n > 1u && (uint16_t)(at - last_at) < MM_POLL_GAP_TICKS);
+    const uint16_t gap = (uint16_t)(at - last_at);
+    f->polled = (uint8_t)(out->n > 1u && gap < MM_POLL_GAP_TICKS);
+    f->take_uart = (uint8_t)(f->polled && gap >= MM_TAKE_GAP_TICKS);
     last_at = at;
   }
 }

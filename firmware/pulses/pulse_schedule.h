@@ -30,14 +30,21 @@ extern "C" {
 #define MM_MIN_GAP_TICKS 3u
 /* Edges closer than this to the one before are waited for inside the
  * interrupt rather than by leaving it and being called again (leaving and
- * re-entering takes about 11 us). */
+ * entering again, MM_ENTRY_LEAD_TICKS before the edge, with a receive
+ * interrupt in between: about 12 us). */
 #define MM_POLL_GAP_TICKS 32u
+/* An edge waited for inside the interrupt this far from the one before has
+ * the UART looked at first (a byte into the ring, some 30 cycles with the
+ * way there): a chain of edges then holds the UART unread for at most
+ * seven gaps shorter than this (28 us), not for the whole chain. */
+#define MM_TAKE_GAP_TICKS 8u
 
 typedef struct {
   uint16_t at;    /* ticks after the period start */
   uint8_t port_d; /* PORTD and PORTB once this edge is written */
   uint8_t port_b;
-  uint8_t polled; /* 1: waited for inside the interrupt */
+  uint8_t polled;    /* 1: waited for inside the interrupt */
+  uint8_t take_uart; /* polled, and a UART byte taken before it */
 } mm_fall;
 
 typedef struct {

@@ -10,7 +10,7 @@
 typedef struct {
   uint8_t port_d;
   uint8_t port_b;
-  uint16_t next_compare;
+  uint16_t next_at; /* the next edge's tick */
   uint8_t flags;
 } mm_isr_edge;
 mm_isr_edge mm_isr_rise;
@@ -48,19 +48,22 @@ void mm_isr_period_start(void) {
     e->port_b = s->fall[k].port_b;
     if (k + 1u < s->n) {
       const mm_fall* next = &s->fall[k + 1u];
-      e->next_compare =
-          (uint16_t)(start + next->at - (next->polled ? 0u : (uint16_t)MM_ENTRY_LEAD_TICKS));
-      e->flags = next->polled ? (uint8_t)(1u << MM_EDGE_NEXT_POLLED) : 0u;
+      e->next_at = (uint16_t)(start + next->at);
+      e->flags = next->take_uart ? (uint8_t)(1u << MM_EDGE_NEXT_TAKE)
+                 : next->polled  ? (uint8_t)(1u << MM_EDGE_NEXT_POLLED)
+                                 : 0u;
     } else {
-      e->next_compare = (uint16_t)(start + g_period_ticks - MM_ENTRY_LEAD_TICKS);
+      e->next_at = (uint16_t)(start + g_period_ticks);
       e->flags = (uint8_t)(1u << MM_EDGE_NEXT_RISE);
     }
   }
-  OCR1A = (uint16_t)(start + s->fall[0].at - MM_ENTRY_LEAD_TICKS);
-  /* The interrupt wrote the rise's (meaningless) next compare before
-   * calling here; a match of it in between must not fire the first fall
-   * early. The first fall is at least 500 us away, so no real match is lost. */
-  TIFR1 = _BV(OCF1A);
+  const uint16_t first = (uint16_t)(start + s->fall[0].at);
+  OCR1B = first;
+  OCR1A = (uint16_t)(first - MM_ENTRY_LEAD_TICKS);
+  /* The interrupt wrote the rise's (meaningless) next ticks before calling
+   * here; a match of them in between must not fire the first fall early.
+   * The first fall is at least 500 us away, so no real match is lost. */
+  TIFR1 = _BV(OCF1A) | _BV(OCF1B);
   mm_isr_next = &mm_isr_active[0];
 }
 
@@ -73,7 +76,7 @@ void mm_pulses_pins_low(void) {
 
 void mm_pulses_stop(void) {
   TIMSK1 = 0;
-  TIFR1 = _BV(OCF1A);
+  TIFR1 = _BV(OCF1A) | _BV(OCF1B);
   mm_pulses_pins_low();
 }
 
@@ -94,14 +97,17 @@ void mm_pulses_start(const mm_link_config* c) {
   g_ready = g_current = 0;
   mm_rise_ports(c->count, &mm_isr_rise.port_d, &mm_isr_rise.port_b);
   mm_isr_rise.flags = (uint8_t)(1u << MM_EDGE_RISE);
-  /* The rise's next compare is never used: mm_isr_period_start sets the
-   * first fall's compare itself. */
-  mm_isr_rise.next_compare = 0;
+  /* The rise's next tick is never used: mm_isr_period_start sets the
+   * first fall's compares itself. */
+  mm_isr_rise.next_at = 0;
   mm_isr_next = &mm_isr_rise;
-  /* The first rise a little ahead; the interrupt takes it from there. */
+  /* The first rise a little ahead; the interrupt takes it from there.
+   * (The pulse interrupt is off: the timer's registers are this code's.) */
   g_rise_at = (uint16_t)(TCNT1 + 400u - g_period_ticks);
-  OCR1A = (uint16_t)(g_rise_at + g_period_ticks - MM_ENTRY_LEAD_TICKS);
-  TIFR1 = _BV(OCF1A);
+  const uint16_t rise = (uint16_t)(g_rise_at + g_period_ticks);
+  OCR1B = rise;
+  OCR1A = (uint16_t)(rise - MM_ENTRY_LEAD_TICKS);
+  TIFR1 = _BV(OCF1A) | _BV(OCF1B);
   TIMSK1 = _BV(OCIE1A);
 }
 

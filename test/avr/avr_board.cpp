@@ -12,7 +12,9 @@ extern "C" {
 #include <avr_uart.h>
 #include <sim_avr.h>
 #include <sim_elf.h>
+#include <sim_interrupts.h>
 #include <sim_irq.h>
+#include <sim_regbit.h>
 }
 
 namespace motormix::avr {
@@ -79,6 +81,13 @@ AvrBoard::AvrBoard(const std::string& elf_path, unsigned baud)
   avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON),
                           uart_xon, this);
   uart_in_ = avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
+  for (avr_io_t* io = avr_->io_port; io != nullptr; io = io->next) {
+    if (io->kind != nullptr && std::string(io->kind) == "uart" &&
+        reinterpret_cast<avr_uart_t*>(io)->name == '0') {
+      uart_ = reinterpret_cast<avr_uart_t*>(io);
+    }
+  }
+  if (uart_ == nullptr) throw std::runtime_error("simavr's atmega328p has no UART0");
   for (int ch = 0; ch < kChannels; ++ch) {
     const char port = ch < 6 ? 'D' : 'B';
     const int bit = ch < 6 ? ch + 2 : ch - 6;
@@ -109,8 +118,54 @@ std::uint64_t AvrBoard::cycle() const { return avr_->cycle; }
 
 void AvrBoard::feed_due_bytes() {
   while (!xoff_ && !rx_.empty() && rx_.front().cycle <= avr_->cycle) {
+    // simavr sets RXC one of its byte times after the byte is raised, and
+    // counts a parity bit 8N1 does not have (11 bits): the wire's 10 here,
+    // so that RXC comes when the chip's would.
+    uart_->cycles_per_byte = byte_cycles_;
+    note_reads();
+    const std::uint64_t now = avr_->cycle;
+    // This byte's start bit: the bytes complete by now and unread fill the
+    // chip's receiver, or not.
+    const auto complete = static_cast<int>(
+        std::count_if(unread_.begin(), unread_.end(), [&](std::uint64_t c) { return c <= now; }));
+    if (complete >= kReceiveDepth) ++overruns_;
     avr_raise_irq(uart_in_, rx_.front().byte);
     rx_.pop_front();
+    ++injected_;
+    unread_.push_back(now + byte_cycles_);
+  }
+}
+
+void AvrBoard::note_reads() {
+  // simavr's FIFO (64 entries; its cursors as in its fifo_declare.h): what
+  // it holds is what the firmware has not read.
+  const auto& in = uart_->input;
+  const std::uint64_t held = static_cast<std::uint64_t>((in.write + uart_fifo_fifo_size - in.read) &
+                                                        (uart_fifo_fifo_size - 1));
+  const std::uint64_t now = avr_->cycle;
+  while (unread_.size() > held) {
+    const std::uint64_t rxc = unread_.front();
+    unread_.pop_front();
+    if (now > rxc) longest_unread_ = std::max(longest_unread_, now - rxc);
+  }
+  // RXC as the chip's: set while a complete byte waits, clear otherwise.
+  // simavr raises it a byte time after the first byte and then lets the
+  // firmware read no faster than one byte a byte time on average since; a
+  // firmware catching up after a long wait then reads the bytes the chip
+  // would hand it at once a byte time late each, and could read a byte
+  // still being shifted in when one waits behind a complete one.
+  if (unread_.empty()) return;
+  const bool complete = unread_.front() <= now;
+  const bool raised = avr_regbit_get(avr_, uart_->rxc.raised) != 0;
+  uart_->rx_cnt = 0;  // its pacing off: this model paces
+  if (complete && (!raised || !uart_->rxc.pending)) {
+    // Level-triggered on the chip: with RXC still set after an interrupt
+    // (a byte behind the one it read), the interrupt comes again at once;
+    // simavr would wait for its next pacing tick.
+    avr_raise_interrupt(avr_, &uart_->rxc);
+  } else if (!complete && raised) {
+    avr_clear_interrupt(avr_, &uart_->rxc);
+    avr_regbit_clear(avr_, uart_->rxc.raised);  // sticky: not cleared by the call above
   }
 }
 
@@ -149,6 +204,7 @@ bool AvrBoard::run_until(std::uint64_t cycle) {
     const std::size_t word = avr_->pc / 2u;
     const std::uint64_t before = avr_->cycle;
     const int state = avr_run(avr_);
+    if (!unread_.empty()) note_reads();
     if (word < profile_.size()) profile_[word] += avr_->cycle - before;
     if (state == cpu_Done || state == cpu_Crashed) return false;
   }
@@ -158,8 +214,8 @@ bool AvrBoard::run_until(std::uint64_t cycle) {
 void AvrBoard::send(const std::uint8_t* bytes, std::size_t n) {
   std::uint64_t t = std::max<std::uint64_t>(rx_free_at_, avr_->cycle);
   for (std::size_t i = 0; i < n; ++i) {
-    t += byte_cycles_;  // the byte is in the receiver once its stop bit is
-    rx_.push_back({t, bytes[i]});
+    rx_.push_back({t, bytes[i]});  // its start bit: complete a byte time later
+    t += byte_cycles_;
   }
   rx_free_at_ = t;
 }

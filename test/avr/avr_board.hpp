@@ -15,6 +15,7 @@
 
 struct avr_t;
 struct avr_irq_t;
+struct avr_uart_t;
 
 namespace motormix::avr {
 
@@ -52,7 +53,8 @@ class AvrBoard {
   double now_us() const { return static_cast<double>(cycle()) / 16.0; }
 
   // Bytes to the firmware's RX pin, after those already queued, one per
-  // byte time (10 bits).
+  // byte time (10 bits): each is complete (its stop bit sampled, RXC set)
+  // one byte time after its start bit, as on the chip.
   void send(const std::uint8_t* bytes, std::size_t n);
   void send(const std::vector<std::uint8_t>& bytes) { send(bytes.data(), bytes.size()); }
   bool sending() const { return !rx_.empty(); }
@@ -96,6 +98,21 @@ class AvrBoard {
   void on_xoff(bool off);
   // Times simavr's receiver was full (bytes then wait, as behind RTS).
   int xoffs() const { return xoffs_; }
+
+  // The ATmega328P's receiver, which simavr does not model (its FIFO holds
+  // 64 bytes): two complete bytes in the receive buffer and a third in the
+  // shift register; a start bit that comes while all three wait unread is
+  // a data overrun, and the byte in the shift register is lost on the chip
+  // (datasheet, USART: DOR). Counted here at every start bit; a test that
+  // sees one fails: on the chip a frame would have been lost.
+  static constexpr int kReceiveDepth = 3;
+  int overruns() const { return overruns_; }
+  // The longest a complete byte waited before the firmware read it, in
+  // microseconds (from its RXC to the read of UDR0). Over about two and a
+  // half byte times (100 us at 250000 baud) the next start bit can find the
+  // receiver full.
+  double longest_unread_us() const { return static_cast<double>(longest_unread_) / 16.0; }
+  void reset_longest_unread() { longest_unread_ = 0; }
   // Where the cycles went: with MOTORMIX_AVR_PROFILE=FILE set, every
   // instruction's cycles (an interrupt's entry counted on the one it
   // followed) are added up by program address and appended to FILE as
@@ -108,6 +125,7 @@ class AvrBoard {
     std::uint8_t byte;
   };
   void feed_due_bytes();
+  void note_reads();
   void apply_due_drives();
   struct Drive {
     std::uint64_t cycle;
@@ -134,6 +152,11 @@ class AvrBoard {
   std::uint64_t byte_cycles_;
   std::deque<Pending> rx_;
   std::uint64_t rx_free_at_ = 0;
+  ::avr_uart_t* uart_ = nullptr;
+  std::uint64_t injected_ = 0;
+  std::deque<std::uint64_t> unread_;  // RXC cycles of the bytes not read yet
+  int overruns_ = 0;
+  std::uint64_t longest_unread_ = 0;
   std::vector<std::uint8_t> tx_;
   std::vector<PinEdge> edges_;
   std::vector<Pulse> pulses_;

@@ -22,11 +22,22 @@ namespace motormix::avr {
 // The bound for a pulse against the width asked for.
 constexpr double kPulseToleranceUs = 1.0;
 constexpr double kLinkTimeoutMs = 100.0;
+// The longest a received byte may wait unread: two and a half byte times
+// at 250000 baud, when the next start bit can find the receiver full.
+constexpr double kLongestUnreadUs = 100.0;
 
 class Host {
  public:
   // Past the C start-up and the first report, which names the session.
   Host() : board(MOTORMIX_FIRMWARE_ELF) { learn_session(); }
+  // Every test's traffic at the chip's receive depth: a byte the chip's
+  // receiver could not have held fails the test it came in.
+  ~Host() {
+    std::printf("receiver: longest unread %.1f us, overruns %d (depth %d)\n",
+                board.longest_unread_us(), board.overruns(), AvrBoard::kReceiveDepth);
+    EXPECT_EQ(board.overruns(), 0) << "bytes a real ATmega328P's receiver would have lost";
+    EXPECT_LT(board.longest_unread_us(), kLongestUnreadUs);
+  }
 
   // Runs until a report names a session other than the one known (bounded),
   // as a host does: frames go for the chip's current session.

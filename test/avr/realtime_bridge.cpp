@@ -68,6 +68,15 @@ void RealtimeBridge::stop() {
         absent_ms, life_ms, 100.0 * absent_ms / life_ms, life_max_lag_us_ / 1000.0, cost());
 }
 
+RealtimeBridge::Receiver RealtimeBridge::receiver() {
+  stop();
+  const Receiver r{board_.overruns(), board_.longest_unread_us()};
+  std::printf("receiver: longest unread %.1f us, overruns %d (depth %d), %llu bytes in\n",
+              r.longest_unread_us, r.overruns, AvrBoard::kReceiveDepth,
+              static_cast<unsigned long long>(bytes_in()));
+  return r;
+}
+
 void RealtimeBridge::wait_chip_time(std::int64_t from_us, double chip_ms) {
   const auto chip_us = static_cast<std::int64_t>(chip_ms * 1000.0);
   while (true) {

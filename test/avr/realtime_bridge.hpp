@@ -83,6 +83,14 @@ class RealtimeBridge {
   // not judge real time (test/avr/retry_when_busy.py runs such a failed
   // test again). A quiet machine: at most 0.8 % absent and 4.6 ms behind.
   void stop();
+  // The chip's receiver over the whole run, at its real depth
+  // (AvrBoard::overruns, longest_unread_us); stops the simulation first,
+  // and prints them.
+  struct Receiver {
+    int overruns;
+    double longest_unread_us;
+  };
+  Receiver receiver();
   static constexpr double kBusyShare = 0.02;
   static constexpr double kBusyStallUs = 5000.0;
 

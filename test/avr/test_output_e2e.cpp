@@ -49,6 +49,14 @@
 namespace motormix::test {
 namespace {
 
+// The chip's receiver kept up with what motormix output sent, at the real
+// ATmega328P's depth (AvrBoard::kReceiveDepth): no byte a real chip would
+// have lost.
+void expect_receiver_kept_up(avr::RealtimeBridge& bridge) {
+  const avr::RealtimeBridge::Receiver rx = bridge.receiver();
+  EXPECT_EQ(rx.overruns, 0) << "bytes a real ATmega328P's receiver would have lost";
+}
+
 using avr::steady_us;
 using avr::TimedPulse;
 
@@ -423,7 +431,7 @@ TEST(OutputEndToEnd, PulsesFollowMotorPwmAndFailSafeWhenEitherProcessDies) {
       output_gone_ms, bridge.max_lag_us() / 1000.0);
   EXPECT_LE(output_gone_ms, kOutputDeathBoundMs + absent_ms(bridge, killed, output_gone_ms));
   EXPECT_GT(output_gone_ms, 0.0);
-  bridge.stop();
+  expect_receiver_kept_up(bridge);
   std::remove(config.c_str());
 }
 
@@ -597,7 +605,7 @@ TEST(OutputEndToEnd, DshotFramesFollowMotorPwmAndStopWhenEitherProcessDies) {
   EXPECT_TRUE(armed_before_kill);
   EXPECT_LE(killed_stop_ms, kOutputDeathBoundMs + absent_ms(bridge, killed, killed_stop_ms));
   EXPECT_GT(killed_stop_ms, 0.0);
-  bridge.stop();
+  expect_receiver_kept_up(bridge);
   std::remove(config.c_str());
 }
 
@@ -726,6 +734,7 @@ TEST(OutputEndToEnd, TheTeamQuadFlightThroughMixerOutputAndFirmware) {
   EXPECT_GT(armed_periods, static_cast<int>(ran_ms / kFlightPeriodMs * 0.9));
   EXPECT_GE(matched, armed_periods * kMatchedShare);
   EXPECT_LE(gone_ms, kMixerDeathBoundMs + absent_ms(bridge, killed, gone_ms));
+  expect_receiver_kept_up(bridge);
 }
 
 // Bring-up through the output (issue 49): the mixer's motor test reaches

@@ -3,7 +3,8 @@
 // crowded and spread, every channel falls within one tick (0.5 us) of its
 // width, at the edge that clears its pin; consecutive edges are at least
 // MM_MIN_GAP_TICKS apart (what the interrupt's waiting loop can write) and
-// marked polled exactly when closer than MM_POLL_GAP_TICKS.
+// marked polled exactly when closer than MM_POLL_GAP_TICKS, with a UART
+// byte taken before those at least MM_TAKE_GAP_TICKS from the one before.
 
 #include "pulse_schedule.h"
 
@@ -17,6 +18,7 @@ namespace {
 
 constexpr int kScheduleCases = 100000;
 constexpr int kMaxErrorTicks = 1;
+constexpr int kMaxBlindTicks = (MM_LINK_MAX_CHANNELS - 1) * static_cast<int>(MM_TAKE_GAP_TICKS);
 
 TEST(PulseSchedule, EveryChannelFallsWithinATickAndEdgesKeepTheirGap) {
   std::mt19937 rng(3737);
@@ -45,6 +47,16 @@ TEST(PulseSchedule, EveryChannelFallsWithinATickAndEdgesKeepTheirGap) {
       const int gap = s.fall[k].at - s.fall[k - 1].at;
       EXPECT_GE(gap, static_cast<int>(MM_MIN_GAP_TICKS)) << "case " << c;
       EXPECT_EQ(s.fall[k].polled, gap < static_cast<int>(MM_POLL_GAP_TICKS) ? 1 : 0);
+      EXPECT_EQ(s.fall[k].take_uart,
+                s.fall[k].polled && gap >= static_cast<int>(MM_TAKE_GAP_TICKS) ? 1 : 0);
+    }
+    // Inside the interrupt, the UART waits unread only across polled edges
+    // without a take: at most seven gaps shorter than MM_TAKE_GAP_TICKS.
+    int blind = 0;
+    for (int k = 1; k < s.n; ++k) {
+      blind =
+          s.fall[k].polled && !s.fall[k].take_uart ? blind + (s.fall[k].at - s.fall[k - 1].at) : 0;
+      EXPECT_LT(blind, kMaxBlindTicks) << "case " << c;
     }
     EXPECT_EQ(s.fall[0].polled, 0);
     EXPECT_EQ(s.fall[s.n - 1].port_d, 0);  // every pin low after the last edge
