@@ -14,12 +14,6 @@ constexpr double kMaxVoltageV = 80.0;
 
 std::uint16_t be16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
 
-void put_be16(std::uint8_t* p, double value) {
-  const auto v = static_cast<std::uint16_t>(std::clamp(std::lround(value), 0L, 65535L));
-  p[0] = static_cast<std::uint8_t>(v >> 8);
-  p[1] = static_cast<std::uint8_t>(v & 0xFF);
-}
-
 }  // namespace
 
 std::uint8_t kiss_crc8(const std::uint8_t* data, std::size_t len) {
@@ -61,17 +55,6 @@ bool KissTelemetryParser::feed(std::uint8_t byte, std::int64_t now_us, KissReadi
   ++frames_;
   out = r;
   return true;
-}
-
-std::array<std::uint8_t, KissTelemetryParser::kFrameBytes> kiss_frame(const KissReading& r) {
-  std::array<std::uint8_t, KissTelemetryParser::kFrameBytes> f{};
-  f[0] = static_cast<std::uint8_t>(std::clamp(std::lround(r.temperature_c), 0L, 255L));
-  put_be16(&f[1], r.voltage_v * 100.0);
-  put_be16(&f[3], r.current_a * 100.0);
-  put_be16(&f[5], r.consumption_mah);
-  put_be16(&f[7], r.erpm / 100.0);
-  f[9] = kiss_crc8(f.data(), 9);
-  return f;
 }
 
 }  // namespace motormix::output

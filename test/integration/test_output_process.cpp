@@ -17,6 +17,7 @@
 
 #include "integration/process.hpp"
 #include "integration/sysfs_pwm_tree.hpp"
+#include "kiss_esc_frame.hpp"
 #include "motormix_link.h"
 #include "output/kiss_telemetry.hpp"
 #include "test_paths.hpp"
@@ -391,7 +392,7 @@ TEST_F(OutputProcess, KissTelemetryIsAskedInTurnAndEachAnswerComesOutForItsMotor
       r.current_a = 5.0 + (sent % 50) / 10.0;
       r.consumption_mah = 100 + sent;
       r.erpm = 20000 + 100 * sent;
-      auto frame = output::kiss_frame(r);
+      auto frame = kiss_esc_frame(r);
       if (sent % 3 == 2) {
         frame[rng() % frame.size()] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
       } else {

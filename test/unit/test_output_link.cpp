@@ -6,6 +6,7 @@
 // telemetry frame: decoded, found in a stream by its CRC, corrupt frames
 // refused and counted.
 
+#include "kiss_esc_frame.hpp"
 #include "output/kiss_telemetry.hpp"
 
 #include "motormix_link.h"
@@ -410,7 +411,7 @@ TEST(KissTelemetry, DecodesAFrameAsKissDocumentsIt) {
   r.current_a = 12.5;
   r.consumption_mah = 734;
   r.erpm = 123400;
-  const auto frame = output::kiss_frame(r);
+  const auto frame = kiss_esc_frame(r);
   EXPECT_EQ(frame[0], 41);
   EXPECT_EQ(frame[1], 0x06);  // 1632 = 0x0660
   EXPECT_EQ(frame[2], 0x60);
@@ -440,7 +441,7 @@ TEST(KissTelemetry, FindsFramesInAStreamAndRefusesCorruptOnes) {
     r.current_a = (k % 300) / 10.0;
     r.consumption_mah = k % 5000;
     r.erpm = 100.0 * (k % 600);
-    auto frame = output::kiss_frame(r);
+    auto frame = kiss_esc_frame(r);
     const bool corrupt = k % 3 == 0;
     if (corrupt) frame[rng() % frame.size()] ^= static_cast<std::uint8_t>(1U << (rng() % 8));
     if (!corrupt) ++sent_good;

@@ -51,8 +51,4 @@ class KissTelemetryParser {
   std::uint64_t frames_ = 0, rejected_ = 0;
 };
 
-// Builds a frame (for tests and simulated ESCs); values are rounded and
-// clamped to what the frame can carry.
-std::array<std::uint8_t, KissTelemetryParser::kFrameBytes> kiss_frame(const KissReading& r);
-
 }  // namespace motormix::output
