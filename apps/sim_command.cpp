@@ -157,6 +157,10 @@ int sim(const SimCommand& cmd) {
       if (log) observer = [&log](const sim::SimFrame& f) { log->write(f, *f.counters); };
       const sim::SimResult r =
           sim::run_lockstep(*config, config::build_mixer(*config), *scenario, options, observer);
+      if (log && !log->close()) {
+        std::cerr << "motormix sim: cannot write " << cmd.log_path << " (disk full or I/O error)\n";
+        return kExitRuntime;
+      }
       j = sim::result_json(r, wheeled);
       j["mode"] = "lockstep";
       sim::add_detections(j, r, *config);

@@ -8,8 +8,10 @@
 ;
 ; At 16 MHz, cycles per bit, high for a 0, high for a 1 (the protocol:
 ; 1/rate, 37.5 % and 75 % of it):
-;   DShot600: 27 (1.6875 us, +1.25 %), 10 (0.625 us), 20 (1.25 us)
-;   DShot300: 53 (3.3125 us, -0.6 %), 20 (1.25 us), 40 (2.5 us)
+;   DShot600: 27 and every third 26 (a frame's mean 26.67, 1.6667 us
+;             exact), 10 (0.625 us), 20 (1.25 us)
+;   DShot300: 53 and every third 54 (mean 53.33, 3.3333 us exact),
+;             20 (1.25 us), 40 (2.5 us)
 ;   DShot150: 107 (6.6875 us, +0.3 %), 40 (2.5 us), 80 (5.0 us)
 ; An ESC decides a bit by its high time against half a bit (AM32, Bluejay):
 ; these are 1.5 (0) and 2.4 (1) tenths of a bit from that threshold.
@@ -32,34 +34,52 @@
   .endif
 .endm
 
-; One sender: t0h and t1h the cycles from the rise to the falls of a 0 and
-; a 1, bit the cycles per bit. Per bit: out (1), ld (2), DELAY n1, out (1),
-; DELAY n2, out (1), DELAY n3, dec (1), brne (2): the rise of the next bit
-; is `bit` cycles after this one's; the last brne falls through in 1.
-.macro DSHOT_SENDER name, t0h, t1h, bit
-  .global \name
-\name:
-  movw r26, r24          ; X: the port values
-  ldi r18, 16
-  in r21, _SFR_IO_ADDR(SREG)
-  cli
-1:
+; One bit of a frame: rise, the 0s' fall at t0h, every fall at t1h, then
+; low until `len` cycles after the rise (the next bit's rise; none after the
+; last bit, whose low part is the caller's). Per bit: out (1), ld (2),
+; DELAY n1, out (1), DELAY n2, out (1), DELAY n3.
+.macro DSHOT_BIT t0h, t1h, len, last
   out _SFR_IO_ADDR(PORTD), r22   ; t = 0: every channel high
   ld r19, X+
   DELAY (\t0h - 3)
   out _SFR_IO_ADDR(PORTD), r19   ; t = t0h: the channels sending 0 fall
   DELAY (\t1h - \t0h - 1)
   out _SFR_IO_ADDR(PORTD), r20   ; t = t1h: every channel low
-  DELAY (\bit - \t1h - 4)
-  dec r18
-  brne 1b
+  .if \last == 0
+  DELAY (\len - \t1h - 1)
+  .endif
+.endm
+
+; One sender, its 16 bits unrolled: t0h and t1h the cycles from the rise to
+; the falls of a 0 and a 1, `bit` the cycles of most bits and `third` those
+; of every third (bits 2, 5, 8, 11, 14): 16 MHz has no whole number of
+; cycles within 0.5 % of a DShot600 or DShot300 bit (26.67, 53.33), so ten
+; bits of one count and five of the next make the 15 rise-to-rise spans of
+; a frame exactly the protocol's (400 and 800 cycles), each bit within one
+; cycle of it.
+.macro DSHOT_SENDER name, t0h, t1h, bit, third
+  .global \name
+\name:
+  movw r26, r24          ; X: the port values
+  in r21, _SFR_IO_ADDR(SREG)
+  cli
+  .set i, 0
+  .rept 15
+  .if (i % 3) == 2
+  DSHOT_BIT \t0h, \t1h, \third, 0
+  .else
+  DSHOT_BIT \t0h, \t1h, \bit, 0
+  .endif
+  .set i, i + 1
+  .endr
+  DSHOT_BIT \t0h, \t1h, \bit, 1
   out _SFR_IO_ADDR(SREG), r21
   ret
 .endm
 
   .section .text
-  DSHOT_SENDER mm_dshot_send600, 10, 20, 27
-  DSHOT_SENDER mm_dshot_send300, 20, 40, 53
+  DSHOT_SENDER mm_dshot_send600, 10, 20, 27, 26
+  DSHOT_SENDER mm_dshot_send300, 20, 40, 53, 54
 
 ; uint8_t mm_dshot_send150(const uint8_t* ports, uint8_t high, uint8_t low,
 ;                          uint8_t* uart);

@@ -1,53 +1,9 @@
 #pragma once
-// Finds a motor that stopped producing thrust when nobody reports it. Pure:
-// time is passed in, nothing is allocated after construction, no I/O. Three
-// sources, each on its own or together:
-//
-// - telemetry: each ESC's rpm (or, without rpm, its current) against what
-//   its command should give. rpm grows as the square root of thrust and
-//   current as thrust^1.5; the scale (kv, pack voltage, prop) is not needed:
-//   each motor's ratio is compared with the median ratio of the motors
-//   reporting, so a sagging battery moves them all and triggers nothing.
-//   A motor following its command through the configured time constants is
-//   never too slow, whether the lag acts on its thrust or on its speed (as
-//   in most simulators: its thrust then falls twice as fast).
-//   One ESC going silent while the others keep reporting is a failure too,
-//   but only where stopping that motor costs nothing the vehicle needs
-//   (silence_declares: six rotors or more, which keep every axis without
-//   it) and the rates source does not run. A dead telemetry wire is not a
-//   dead motor: on a quad, stopping a working motor hands a healthy vehicle
-//   to the spin landing (or to the ground), so there silence is flagged
-//   (telemetry_silent) and never declared, whatever the sources; with the
-//   rates source the rates decide.
-// - rates: the angular acceleration the body rates show, times the inertia,
-//   against the torque the commanded thrusts give (each motor's thrust
-//   followed through the motor's lag, minus the rotational drag and the
-//   gyroscopic term w x Iw), scaled by what healthy flight shows the model
-//   to be worth (a sagging battery, a different ESC curve: learned over
-//   seconds while manoeuvring, frozen while anything is suspected). A motor
-//   that stops leaves a residual of minus
-//   its own torque column times its thrust: the motor whose column the
-//   residual lines up with, by about its thrust, is the one. The scale
-//   (inertia, torque per unit thrust, lag) comes from the vehicle's physics
-//   (the configuration's `vehicle:` section); only one overall factor is
-//   learned in flight: a whole model learned in flight needs excitation a
-//   hover does not give, and drifts with whatever it was fitted on.
-//   Ambiguity left: with rates alone, an outside torque as large as most of
-//   one motor's torque and lined up with it (a hard gust on one arm) looks
-//   like that motor failing; min_loss and the persistence set how large and
-//   how long it must be. With the telemetry source beside it, a motor whose
-//   ESC reports the speed its command asks for is never declared by the
-//   rates.
-// - outputs: for six rotors or more, as the slow last resort, and only for
-//   the first failure: a motor whose low-passed command sits near full
-//   while the median is far below it is the one the controller keeps asking
-//   for thrust it does not get. Opt-in: it is slower than a hexa falls.
-//
-// Every source decides with hysteresis: a suspicion accumulates time while
-// the evidence holds and loses it twice as fast while it does not, and only
-// a suspicion held for the source's persistence is declared. Nothing is
-// judged while the caller says detection is not allowed (disarmed, spooling
-// up, motor test, low throttle), or from a stream that went stale.
+// Finds a motor that stopped producing thrust when nobody reports it, from
+// ESC telemetry, body rates or the controller's outputs, each source with
+// hysteresis. Pure: time is passed in, nothing is allocated after
+// construction, no I/O. How each source decides and what it cannot tell
+// apart: docs/failure-detection.md, "How each source decides".
 
 #include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>
@@ -89,6 +45,11 @@ enum class DetectorSources : std::uint8_t {
   kTelemetry = 1,
   kRates = 2,
   kOutputs = 4,
+};
+inline constexpr EnumName<DetectorSources> kDetectorSourcesNames[] = {
+    {DetectorSources::kTelemetry, "telemetry"},
+    {DetectorSources::kRates, "rates"},
+    {DetectorSources::kOutputs, "outputs"},
 };
 
 struct FailureDetectorSettings {

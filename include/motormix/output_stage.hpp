@@ -7,6 +7,8 @@
 
 #include <motormix/motor_vector.hpp>
 
+#include <motormix/enum_names.hpp>
+
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -18,6 +20,12 @@ enum class OutputMode : std::uint8_t {
   kCentered,            // command -1..1 -> min..center..max
   kMagnitudeDirection,  // |command| 0..1 -> min..max, sign -> direction (+1/-1, 0 at rest)
 };
+inline constexpr EnumName<OutputMode> kOutputModeNames[] = {
+    {OutputMode::kUnipolar, "unipolar"},
+    {OutputMode::kCentered, "centered"},
+    {OutputMode::kMagnitudeDirection, "magnitude_direction"},
+};
+inline const char* to_string(OutputMode value) { return name_in(kOutputModeNames, value); }
 
 struct OutputChannel {
   OutputMode mode = OutputMode::kUnipolar;

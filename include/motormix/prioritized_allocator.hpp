@@ -1,39 +1,10 @@
 #pragma once
-// Strategy `prioritized`: sequential desaturation. Roll and pitch come
-// first, then thrust, then yaw. Each step moves all motors along one axis's
-// column by the gain that best removes the saturation the previous steps
-// left, so a lower-priority axis gives way before a higher one.
-//
-// Airmode decides what may happen to thrust:
-// - off: thrust may only be lowered to make room (at low throttle, roll and
-//   pitch are reduced instead);
-// - roll_pitch: thrust may also be raised so roll and pitch are kept at low
-//   throttle; yaw is still mixed last and gives way first;
-// - roll_pitch_yaw: as roll_pitch, with yaw mixed in from the start.
-// Yaw may use `yaw_headroom` (fraction of the range) above the top before it
-// is cut, and thrust is lowered afterwards to pay for it: at full thrust yaw
-// keeps some authority instead of none.
-//
-// A demand whose linear mix already fits is returned as is. If the sequence
-// above still leaves a motor out of range, a final repair keeps the promise
-// of the priorities exactly: thrust moves first (only downward without
-// airmode), then yaw is scaled down, and roll and pitch only when yaw alone
-// cannot make room. Nothing is clipped that a lower priority could have paid
-// for. The plain clip of the sequence's result (what PX4 does) is kept
-// unless the repair delivers the demand better in that same priority order
-// (it need not: scaling keeps the torque's direction, clipping does not), so
-// the result is never worse than sequential desaturation with a clip.
-//
-// "Better" has a tie tolerance (`tie_tolerance`, normalized demand units,
-// the same on each key of the order: roll/pitch, thrust, yaw). The repair
-// replaces the clip only when it loses no key by more than the tolerance
-// before a key it wins: a roll/pitch gain smaller than the tolerance never
-// buys itself with thrust or yaw. 1e-3 (a thousandth of full roll) is below
-// what a pilot or a rate loop can feel, and far below the thrust and yaw
-// such a gain could cost. Where every key ties, the repair still needs to
-// win one by more than kGainThatCounts (or the tolerance, if smaller): below
-// that the two differ by rounding, not by priorities. A tolerance of 0 is
-// the strict lexicographic order.
+// Strategy `prioritized`: sequential desaturation (roll and pitch first,
+// then thrust, then yaw), airmode off / roll_pitch / roll_pitch_yaw, yaw
+// headroom, and an exact repair that keeps the priorities where the
+// sequence still leaves a motor out of range, never worse than the
+// sequence's plain clip. What each step does and why, and what
+// `tie_tolerance` means: docs/strategies.md, "prioritized, step by step".
 
 #include <motormix/allocation.hpp>
 #include <motormix/allocation_settings.hpp>
@@ -44,7 +15,9 @@ namespace motormix {
 
 class PrioritizedAllocator final : public MatrixAllocator {
  public:
-  // The default tie tolerance, and the least gain that counts (see above).
+  // The default tie tolerance, and the least gain that counts (where every
+  // key ties, the repair must win one by this much: below it the two differ
+  // by rounding, not by priorities).
   static constexpr double kDefaultTieTolerance = motormix::kDefaultTieTolerance;
   static constexpr double kGainThatCounts = 1e-5;
 

@@ -6,6 +6,7 @@
 #include "bus/process.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
+#include "bus/wire_shape.hpp"
 
 #include <motormix/config/security.hpp>
 #include <motormix/esc_command_t.hpp>
@@ -199,10 +200,7 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
   const auto start = Clock::now();
   EscCalibration calibration(config, t, 0.0);
   motor_pwm_t msg;
-  msg.num_motors = config.motors();
-  msg.direction.assign(static_cast<std::size_t>(msg.num_motors), 0);
-  msg.pwm.resize(static_cast<std::size_t>(msg.num_motors));
-  msg.command.resize(static_cast<std::size_t>(msg.num_motors));
+  bus::WireShape<motor_pwm_t>::size(msg, config.motors());
   msg.setpoint_utime = 0;
   msg.pid_utime = 0;
   msg.failed_motors = 0;

@@ -2,9 +2,6 @@
 
 #include "strategies.hpp"
 
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/yaw_yielding_allocator.hpp>
-
 #include <motormix/motor_failure.hpp>
 
 #include <memory>
@@ -16,10 +13,6 @@ CommandRange command_range(const Config& config) {
 }
 
 namespace {
-
-// `optimal` after a failure that leaves yaw one-sided (FailureMixing::
-// yaw_free): yaw's weight times this.
-constexpr double kFailedYawWeightShare = 0.01;
 
 // The configured strategy on one basis (the healthy matrix or a failure's).
 std::unique_ptr<const Allocator> make_allocator(const Config& config, const MixingBasis& basis) {
@@ -37,27 +30,12 @@ AxisVector authority_at_half_thrust(const Config& config, const MixingMatrix& mi
 FailurePlan failure_plan(const Config& config) {
   const bool aircraft = config.thrust_range() == ThrustRange::kUnipolar;
   FailureAllocatorFactory make;
-  if (strategy_entry(config.strategy).reallocates) {
-    make = [&config](const FailureMixing& f, const MixingBasis& basis) {
-      if (config.strategy == Strategy::kPrioritized && f.yaw_free) {
-        return std::unique_ptr<const Allocator>(std::make_unique<YawYieldingAllocator>(
-            basis, *f.yaw_free, command_range(config), config.airmode, config.yaw_headroom,
-            config.tie_tolerance));
-      }
-      if (config.strategy == Strategy::kOptimal && f.yaw_free) {
-        // Yaw gives way as it does for `prioritized`: with these motors out,
-        // holding the demanded yaw at hover can leave no room for roll and
-        // pitch, and the controller's yaw demand grows while the vehicle
-        // turns; at the configured weight the trade kept roll and pitch
-        // 10-17 degrees off on a hexa with one motor out (yaw 0.2 of
-        // roll's). At a hundredth, yaw still decides between equally good
-        // answers.
-        OptimalSettings settings = config.optimal;
-        settings.weights[index(Axis::kYaw)] *= kFailedYawWeightShare;
-        return std::unique_ptr<const Allocator>(
-            std::make_unique<OptimalAllocator>(basis, command_range(config), settings));
-      }
-      return make_allocator(config, basis);
+  const StrategyEntry& entry = strategy_entry(config.strategy);
+  if (entry.reallocates) {
+    make = [&config, &entry](const FailureMixing& f, const MixingBasis& basis) {
+      if (entry.make_after_failure)
+        return entry.make_after_failure(config, f, basis, command_range(config));
+      return entry.make(config, basis, command_range(config));
     };
   }
   return prepare_failures(config.mixing, command_range(config), aircraft ? 0.5 : 0.0, make);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 namespace motormix::config {
@@ -42,19 +43,17 @@ std::uint8_t read_sources(MapReader& section) {
   const YAML::Node node = section.raw("sources");
   if (!node.IsDefined() || node.IsNull()) return fallback;
   const std::string path = section.path_of("sources");
-  const std::string allowed = "a list of telemetry, rates, outputs (at least one)";
+  const std::string allowed =
+      "a list of " + joined_names(kDetectorSourcesNames) + " (at least one)";
   if (!node.IsSequence() || node.size() == 0) fail(path, describe(node), allowed);
   std::uint8_t sources = 0;
   for (std::size_t i = 0; i < node.size(); ++i) {
     const std::string item_path = path + "[" + std::to_string(i) + "]";
     if (!node[i].IsScalar()) fail(item_path, describe(node[i]), allowed);
     const std::string name = node[i].as<std::string>();
-    std::uint8_t b = 0;
-    if (name == "telemetry") b = bit(DetectorSources::kTelemetry);
-    if (name == "rates") b = bit(DetectorSources::kRates);
-    if (name == "outputs") b = bit(DetectorSources::kOutputs);
-    if (b == 0) fail(item_path, "'" + name + "'", "one of telemetry, rates, outputs");
-    sources |= b;
+    const std::optional<DetectorSources> source = parse_in(kDetectorSourcesNames, name);
+    if (!source) fail(item_path, "'" + name + "'", "one of " + joined_names(kDetectorSourcesNames));
+    sources |= bit(*source);
   }
   return sources;
 }

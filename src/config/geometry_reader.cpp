@@ -3,7 +3,7 @@
 
 #include "section_readers.hpp"
 
-#include "paparazzi_import.hpp"
+#include "interop/paparazzi_import.hpp"
 
 #include <motormix/presets.hpp>
 

@@ -116,7 +116,7 @@ void read_hardware(MapReader section, Config& config) {
   if (dshot) {
     for (const OutputChannel& ch : config.outputs) {
       if (ch.mode != OutputMode::kUnipolar) {
-        fail("output.mode", ch.mode == OutputMode::kCentered ? "centered" : "magnitude_direction",
+        fail("output.mode", to_string(ch.mode),
              "unipolar with hardware.protocol " + std::string(to_string(hw.protocol)) +
                  " (3D DShot is not supported)");
       }

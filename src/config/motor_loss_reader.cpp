@@ -3,6 +3,7 @@
 #include "motor_loss_reader.hpp"
 
 #include <motormix/angles.hpp>
+#include <motormix/enum_names.hpp>
 #include <motormix/two_rotor_descent.hpp>
 
 #include <algorithm>
@@ -112,8 +113,21 @@ void rederive_motor_loss(Config& config) {
   }
 }
 
+namespace {
+
+// motor_loss.mode: landing on what is left when it can (auto), required
+// (spin_landing: a configuration that cannot is refused), or never.
+enum class MotorLossMode : std::uint8_t { kAuto, kSpinLanding, kOff };
+constexpr EnumName<MotorLossMode> kMotorLossModeNames[] = {
+    {MotorLossMode::kAuto, "auto"},
+    {MotorLossMode::kSpinLanding, "spin_landing"},
+    {MotorLossMode::kOff, "off"},
+};
+
+}  // namespace
+
 void read_motor_loss(MapReader section, Config& config) {
-  const std::string mode = section.choice("mode", "auto", {"auto", "spin_landing", "off"});
+  const MotorLossMode mode = section.choice("mode", MotorLossMode::kAuto, kMotorLossModeNames);
   MotorLoss ml;
   SpinningDescentSettings& s = ml.settings;
   ml.gyro_range_rad_s = section.number("gyro_range_dps", 2000.0, 100.0, 10000.0) * kRadPerDeg;
@@ -132,14 +146,14 @@ void read_motor_loss(MapReader section, Config& config) {
   section.finish();
   config.motor_loss.reset();
   config.motor_loss_off = "";
-  if (mode == "off") {
+  if (mode == MotorLossMode::kOff) {
     config.motor_loss_off = "motor_loss.mode is off";
     return;
   }
   const std::string why = derive(config, ml);
   if (!why.empty()) {
-    if (mode == "spin_landing")
-      fail(section.path_of("mode"), "spin_landing", "auto or off: " + why);
+    if (mode == MotorLossMode::kSpinLanding)
+      fail(section.path_of("mode"), name_in(kMotorLossModeNames, mode), "auto or off: " + why);
     config.motor_loss_off = why;
     return;
   }

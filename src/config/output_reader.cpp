@@ -35,16 +35,19 @@ void read_range(MapReader& map, OutputChannel& ch) {
 
 void read_output(MapReader output, Config& config) {
   const bool wheels = config.thrust_range() == ThrustRange::kBipolar;
-  const std::string mode =
-      output.choice("mode", wheels ? "centered" : "unipolar",
-                    wheels ? std::vector<std::string>{"centered", "magnitude_direction"}
-                           : std::vector<std::string>{"unipolar"});
+  // Names through the table; which of them a vehicle takes follows its
+  // thrust (rotors push one way, wheels both).
+  const std::vector<std::string> allowed =
+      wheels ? std::vector<std::string>{to_string(OutputMode::kCentered),
+                                        to_string(OutputMode::kMagnitudeDirection)}
+             : std::vector<std::string>{to_string(OutputMode::kUnipolar)};
+  const OutputMode mode =
+      *parse_in(kOutputModeNames, output.choice("mode", allowed.front(), allowed));
   OutputChannel ch;
-  if (mode == "centered") {
-    ch.mode = OutputMode::kCentered;
+  ch.mode = mode;
+  if (mode == OutputMode::kCentered) {
     ch.disarmed = 1500.0;
-  } else if (mode == "magnitude_direction") {
-    ch.mode = OutputMode::kMagnitudeDirection;
+  } else if (mode == OutputMode::kMagnitudeDirection) {
     ch.min = 0.0;
     ch.max = 255.0;
     ch.disarmed = 0.0;
@@ -58,7 +61,7 @@ void read_output(MapReader output, Config& config) {
   } else {
     for (const char* key : {"idle", "thrust_model_factor"}) {
       if (output.has(key))
-        fail(output.path_of(key), "'" + std::string(key) + "' with mode " + mode,
+        fail(output.path_of(key), "'" + std::string(key) + "' with mode " + to_string(mode),
              "only with mode unipolar");
       output.raw(key);
     }

@@ -6,6 +6,7 @@
 #include <motormix/optimal_allocator.hpp>
 #include <motormix/prioritized_allocator.hpp>
 #include <motormix/shift_allocator.hpp>
+#include <motormix/yaw_yielding_allocator.hpp>
 
 #include <cstddef>
 #include <iterator>
@@ -15,6 +16,10 @@ namespace motormix::config {
 namespace {
 
 using Made = std::unique_ptr<const Allocator>;
+
+// `optimal` after a failure that leaves yaw one-sided (FailureMixing::
+// yaw_free): yaw's weight times this.
+constexpr double kFailedYawWeightShare = 0.01;
 
 // In kStrategyNames' order (checked below), so an entry is found by index.
 constexpr StrategyEntry kStrategies[] = {
@@ -38,10 +43,32 @@ constexpr StrategyEntry kStrategies[] = {
      [](const Config& c, const MixingBasis& b, const CommandRange& r) -> Made {
        return std::make_unique<PrioritizedAllocator>(b, r, c.airmode, c.yaw_headroom,
                                                      c.tie_tolerance);
+     },
+     // With yaw one-sided, yaw yields to roll and pitch on the side it
+     // cannot reach (yaw_yielding_allocator.hpp).
+     [](const Config& c, const FailureMixing& f, const MixingBasis& b,
+        const CommandRange& r) -> Made {
+       if (!f.yaw_free)
+         return std::make_unique<PrioritizedAllocator>(b, r, c.airmode, c.yaw_headroom,
+                                                       c.tie_tolerance);
+       return std::make_unique<YawYieldingAllocator>(b, *f.yaw_free, r, c.airmode, c.yaw_headroom,
+                                                     c.tie_tolerance);
      }},
     {Strategy::kOptimal, true,
      [](const Config& c, const MixingBasis& b, const CommandRange& r) -> Made {
        return std::make_unique<OptimalAllocator>(b, r, c.optimal);
+     },
+     // Yaw gives way as it does for `prioritized`: with these motors out,
+     // holding the demanded yaw at hover can leave no room for roll and
+     // pitch, and the controller's yaw demand grows while the vehicle turns;
+     // at the configured weight the trade kept roll and pitch 10-17 degrees
+     // off on a hexa with one motor out (yaw 0.2 of roll's). At a hundredth,
+     // yaw still decides between equally good answers.
+     [](const Config& c, const FailureMixing& f, const MixingBasis& b,
+        const CommandRange& r) -> Made {
+       OptimalSettings settings = c.optimal;
+       if (f.yaw_free) settings.weights[index(Axis::kYaw)] *= kFailedYawWeightShare;
+       return std::make_unique<OptimalAllocator>(b, r, settings);
      }},
 };
 

@@ -1,13 +1,14 @@
 #pragma once
 // The allocation strategies, one entry each: whether it reallocates (drives
-// motors that push both ways and redistributes after a motor failure) and
-// how it is built on a basis. The reader, the failure plan and the mixer all
-// ask this table; the names come from kStrategyNames (config.hpp). Private to
-// the config library.
+// motors that push both ways and redistributes after a motor failure), how
+// it is built on a basis, and how on a failure's basis. The reader, the failure plan and the mixer
+// all ask this table; the names come from kStrategyNames (config.hpp). Private to the config
+// library.
 
 #include <motormix/config/config.hpp>
 
 #include <motormix/allocation.hpp>
+#include <motormix/motor_failure.hpp>
 
 #include <memory>
 #include <string>
@@ -21,6 +22,12 @@ struct StrategyEntry {
   bool reallocates;
   std::unique_ptr<const Allocator> (*make)(const Config& config, const MixingBasis& basis,
                                            const CommandRange& range);
+  // On a failure's basis (reallocating strategies), when it differs from
+  // `make` there (a failure that leaves yaw one-sided); null: `make`.
+  std::unique_ptr<const Allocator> (*make_after_failure)(const Config& config,
+                                                         const FailureMixing& failure,
+                                                         const MixingBasis& basis,
+                                                         const CommandRange& range) = nullptr;
 };
 
 const StrategyEntry& strategy_entry(Strategy strategy);

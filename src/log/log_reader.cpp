@@ -118,18 +118,47 @@ bool LogReader::fill(LogEventView& ev) {
 }
 
 const LogEventView* LogReader::peek() {
-  if (!have_lookahead_) {
-    lookahead_end_ = !fill(lookahead_);
-    have_lookahead_ = true;
+  if (ahead_.empty() && !at_end_) {
+    LogEventView ev;
+    if (fill(ev)) {
+      ahead_.push_back(std::move(ev));
+    } else {
+      at_end_ = true;
+    }
   }
-  return lookahead_end_ ? nullptr : &lookahead_;
+  return ahead_.empty() ? nullptr : &ahead_.front();
 }
 
 const LogEventView* LogReader::next() {
   if (!peek()) return nullptr;
-  std::swap(current_, lookahead_);
-  have_lookahead_ = false;
+  current_ = std::move(ahead_.front());
+  ahead_.pop_front();
   return &current_;
+}
+
+bool LogReader::look_ahead_for(const std::string& channel, std::int64_t span_us,
+                               std::size_t max_events) {
+  if (!peek()) return false;
+  for (const LogEventView& ev : ahead_)
+    if (ev.channel == channel) return true;
+  const std::int64_t first = ahead_.front().timestamp;
+  // A damaged timestamp may be anywhere in int64: the span in unsigned.
+  const auto spanned = [&]() {
+    const std::int64_t last = ahead_.back().timestamp;
+    return last > first && static_cast<std::uint64_t>(last) - static_cast<std::uint64_t>(first) >=
+                               static_cast<std::uint64_t>(span_us);
+  };
+  while (!at_end_ && ahead_.size() < max_events && !spanned()) {
+    LogEventView ev;
+    if (!fill(ev)) {
+      at_end_ = true;
+      break;
+    }
+    const bool found = ev.channel == channel;
+    ahead_.push_back(std::move(ev));
+    if (found) return true;
+  }
+  return false;
 }
 
 }  // namespace motormix::lcmlog

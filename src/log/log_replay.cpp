@@ -2,10 +2,10 @@
 
 #include <motormix/config/build_mixer.hpp>
 #include "log/log_reader.hpp"
-#include "log/log_writer.hpp"
 #include "log/reference_comparison.hpp"
 #include "loop/control_loop.hpp"
 #include "messages/input_reader.hpp"
+#include "messages/log_writer.hpp"
 #include "messages/messages.hpp"
 
 #include <lcm/lcm-cpp.hpp>
@@ -130,20 +130,21 @@ bool replay_log(const config::Config& config, const std::string& in_path,
 
   // Another mixer's commands to compare with: when the log holds them, a
   // cycle follows every input so each of them has motormix's answer to the
-  // same inputs.
+  // same inputs. They are looked for in the log's first kReferenceLookAheadS
+  // (read once: the events read ahead are replayed from memory); one that
+  // comes later is compared only with --every-input (cycles on every input
+  // from the start), else named in a warning.
   std::optional<ReferenceComparer> reference;
-  if (!options.reference_channel.empty()) {
-    LogReader scan(in_path);
-    while (const LogEventView* ev = scan.next()) {
-      if (ev->channel == options.reference_channel) {
-        reference.emplace(options.reference_channel, config.motors());
-        break;
-      }
-    }
+  if (!options.reference_channel.empty() &&
+      in.look_ahead_for(options.reference_channel,
+                        static_cast<std::int64_t>(kReferenceLookAheadS * 1e6),
+                        kReferenceLookAheadEvents)) {
+    reference.emplace(options.reference_channel, config.motors());
   }
   const bool cycle_on_every_input = options.cycle_on_every_input || reference.has_value();
+  bool late_reference_named = false;
 
-  LogWriter out(out_path);
+  messages::LogWriter out(out_path);
   if (!out.good()) {
     log << "motormix replay: cannot write " << out_path << "\n";
     return false;
@@ -282,6 +283,19 @@ bool replay_log(const config::Config& config, const std::string& in_path,
                 .check(ev->channel, ev->data.data(), ev->data.size(), ev->timestamp);
         if (!verdict.accept) ++summary.unverified;
         payload = verdict.payload_size;
+      }
+      if (!reference && !options.reference_channel.empty() &&
+          ev->channel == options.reference_channel) {
+        if (cycle_on_every_input) {
+          reference.emplace(options.reference_channel, config.motors());
+        } else if (!late_reference_named) {
+          late_reference_named = true;
+          log << "motormix replay: warning: " << options.reference_channel << " first appears "
+              << static_cast<double>(ev->timestamp - first_time) / 1e6
+              << " s into the log, after the first " << kReferenceLookAheadS
+              << " s where it is looked for: not compared (replay with --every-input to compare "
+                 "it)\n";
+        }
       }
       if (reference && ev->channel == options.reference_channel) {
         reference->on_reference(ev->data.data(), static_cast<int>(payload),

@@ -1,7 +1,7 @@
 #include "log/log_signing.hpp"
 
 #include "bus/clock.hpp"
-#include "log/log_writer.hpp"
+#include "messages/log_writer.hpp"
 
 #include <motormix/signing.hpp>
 
@@ -32,7 +32,7 @@ bool sign_log(const config::Config& config, const std::string& in_path, const st
     log << "motormix sign-log: cannot read " << in_path << "\n";
     return false;
   }
-  LogWriter out(out_path);
+  messages::LogWriter out(out_path);
   if (!out.good()) {
     log << "motormix sign-log: cannot write " << out_path << "\n";
     return false;

@@ -9,7 +9,7 @@
 #include <motormix/motor_vector.hpp>
 #include <motormix/pid_t.hpp>
 #include <motormix/setpoint_t.hpp>
-#include "log/log_writer.hpp"
+#include "messages/log_writer.hpp"
 
 #include <algorithm>
 #include <array>
@@ -341,7 +341,7 @@ bool import_ulog(const std::string& ulog_path, const std::string& out_path,
     log << "motormix import ulog: " << e.what() << "\n";
     return false;
   }
-  LogWriter out(out_path);
+  messages::LogWriter out(out_path);
   if (!out.good()) {
     log << "motormix import ulog: cannot write " << out_path << "\n";
     return false;

@@ -1,14 +1,13 @@
 #include "messages/esc_telemetry.hpp"
 
+#include "bus/wire_shape.hpp"
+
 namespace motormix::messages {
 
 void start_esc_telemetry(esc_telemetry_t& msg, std::int64_t utime) {
   msg.utime = utime;
-  msg.count = 0;
-  msg.motor.clear();
-  for (auto* v : {&msg.rpm, &msg.erpm, &msg.current_a, &msg.voltage_v, &msg.temperature_c,
-                  &msg.consumption_mah})
-    v->clear();
+  // Its arrays as the wire's sizing names them (empty: readings follow).
+  bus::WireShape<esc_telemetry_t>::size(msg, 0);
 }
 
 void add_esc_reading(esc_telemetry_t& msg, const loop::EscReading& r) {

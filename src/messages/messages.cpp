@@ -3,16 +3,15 @@
 #include "messages/esc_telemetry.hpp"
 
 #include "bus/receive.hpp"
+#include "bus/wire_shape.hpp"
 
 #include <algorithm>
 
 namespace motormix::messages {
 
 void size_pwm_message(motor_pwm_t& msg, int motors) {
-  msg.num_motors = motors;
-  msg.command.assign(static_cast<std::size_t>(motors), 0.0F);
-  msg.pwm.assign(static_cast<std::size_t>(motors), 0.0F);
-  msg.direction.assign(static_cast<std::size_t>(motors), 0);
+  // The wire's own sizing: what the bus checks on receipt is what is built.
+  bus::WireShape<motor_pwm_t>::size(msg, motors);
 }
 
 void fill_pwm_message(motor_pwm_t& msg, const loop::CycleResult& r, std::int64_t utime) {

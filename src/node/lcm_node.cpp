@@ -11,11 +11,11 @@
 #include <motormix/config/matrix_export.hpp>
 #include <motormix/config/security.hpp>
 #include <motormix/signing_policy.hpp>
-#include "bus/realtime.hpp"
 #include "latency_histogram.hpp"
 #include "loop/control_loop.hpp"
 #include "messages/messages.hpp"
 #include "node/run_log.hpp"
+#include "realtime/realtime.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"
 
@@ -99,9 +99,9 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
         << "', at its time (no timer)" << std::endl;
   }
   // After every other thread has started: they keep the default scheduler,
-  // and move off the loop's CPUs (realtime.hpp).
-  const bus::RealtimeGranted granted = bus::apply_realtime(config.realtime, log);
-  log << "motormix: scheduling: " << bus::describe(granted) << std::endl;
+  // and move off the loop's CPUs (realtime/realtime.hpp).
+  const realtime::RealtimeGranted granted = realtime::apply_realtime(config.realtime, log);
+  log << "motormix: scheduling: " << realtime::describe(granted) << std::endl;
 
   const auto period_ns = static_cast<long long>(std::llround(1e9 / config.loop_rate_hz));
   itimerspec spec{};

@@ -7,7 +7,6 @@
 
 #include "bus/clock.hpp"
 #include "bus/process.hpp"
-#include "bus/realtime.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
 #include "latency_histogram.hpp"
@@ -15,6 +14,7 @@
 #include "messages/input_reader.hpp"
 #include "messages/messages.hpp"
 #include "node/run_log.hpp"
+#include "realtime/realtime.hpp"
 #include "socket_drops.hpp"
 #include "window_stats.hpp"
 
@@ -206,7 +206,7 @@ class Node {
   }
 
   // The whole run's loop timing as JSON (`motormix run --timing-report`).
-  void write_timing_report(std::ostream& out, const bus::RealtimeGranted& granted,
+  void write_timing_report(std::ostream& out, const realtime::RealtimeGranted& granted,
                            std::int64_t ticks) const {
     const auto section = [](const LatencyHistogram& h) {
       return nlohmann::json{{"count", h.count()},

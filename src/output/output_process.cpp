@@ -10,10 +10,10 @@
 #include "bus/clock.hpp"
 #include "bus/policy_or_error.hpp"
 #include "bus/process.hpp"
-#include "bus/realtime.hpp"
 #include "bus/receive.hpp"
 #include "bus/sealed_publisher.hpp"
 #include "bus/shutdown_signals.hpp"
+#include "realtime/realtime.hpp"
 
 #include <motormix/config/security.hpp>
 #include <motormix/esc_command_t.hpp>
@@ -384,8 +384,8 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   }
   // realtime: as `motormix run` takes it: requests, each refusal logged,
   // what was granted read back (after LCM's threads have started).
-  const bus::RealtimeGranted granted = bus::apply_realtime(config.realtime, log);
-  log << "motormix output: scheduling: " << bus::describe(granted) << std::endl;
+  const realtime::RealtimeGranted granted = realtime::apply_realtime(config.realtime, log);
+  log << "motormix output: scheduling: " << realtime::describe(granted) << std::endl;
   std::vector<pollfd> fds = {
       {lcm.getFileno(), POLLIN, 0}, {timer_fd, POLLIN, 0}, {signals.fd(), POLLIN, 0}};
   for (const TelemetryWire& w : wires) fds.push_back({w.fd, POLLIN, 0});

@@ -39,6 +39,7 @@ void DshotEsc::feed(const PinEdge& e) {
 void DshotEsc::finish() {
   DshotFrame f{};
   f.start_cycle = rises_.front();
+  f.bit_mean = static_cast<double>(rises_[15] - rises_[0]) / 15.0;
   f.bit_min = 1e9;
   double frame_bit = 0.0;  // the mean bit: the decision threshold is half of it
   for (std::size_t i = 1; i < kBits; ++i) {

@@ -20,6 +20,7 @@ struct DshotFrame {
   bool crc_ok;
   // Measured, in cycles of the 16 MHz chip.
   double bit_min, bit_max;              // rise to rise, bits 1..15
+  double bit_mean;                      // first rise to 16th over 15
   double zero_high_min, zero_high_max;  // high time of the 0 bits (0 if none)
   double one_high_min, one_high_max;    // of the 1 bits (0 if none)
 };

@@ -2,7 +2,7 @@
 // parameters, ArduPilot's AP_MotorsMatrix factors, and a Paparazzi round trip
 // of every preset.
 
-#include "config/paparazzi_import.hpp"
+#include "config/interop/paparazzi_import.hpp"
 
 #include <motormix/angles.hpp>
 #include "test_support.hpp"

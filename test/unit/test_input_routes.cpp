@@ -7,8 +7,8 @@
 #include "bus/receive.hpp"
 #include "log/log_reader.hpp"
 #include "log/log_replay.hpp"
-#include "log/log_writer.hpp"
 #include "loop/control_loop.hpp"
+#include "messages/log_writer.hpp"
 #include "messages/messages.hpp"
 #include "test_support.hpp"
 
@@ -79,7 +79,7 @@ TEST(InputRoutes, ASpinLandingReplayedWithoutTheDetectorKeepsItsAttitude) {
     // Hover commands at 200 Hz, a level attitude at 250 Hz, and motor m1
     // reported failed from 2 s on: the spin landing takes over when it has
     // a fresh attitude, and says "no attitude" when it has none.
-    lcmlog::LogWriter w(in);
+    messages::LogWriter w(in);
     ASSERT_TRUE(w.good());
     const std::int64_t t0 = 1'764'000'000'000'000;
     for (std::int64_t t = 0; t <= 4'000'000; t += 1000) {

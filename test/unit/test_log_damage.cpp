@@ -6,6 +6,8 @@
 #include "log/log_replay.hpp"
 #include "test_support.hpp"
 
+#include <motormix/motor_pwm_t.hpp>
+
 #include <lcm/lcm-cpp.hpp>
 
 #include <gtest/gtest.h>
@@ -90,6 +92,88 @@ TEST(LogReader, AgreesWithLcmOnAnIntactLog) {
   while (again.next()) {
   }
   EXPECT_TRUE(again.skipped().empty());
+}
+
+// Reading ahead (the replay's search for a reference channel) costs no
+// second read and changes nothing next() returns: every event, in order.
+TEST(LogReader, LookingAheadReturnsEveryEventOnceInOrder) {
+  const auto all = events_of(source_path(kFlight));
+  ASSERT_GT(all.size(), 100U);
+  const auto same_as_all = [&](LogReader& r) {
+    std::size_t n = 0;
+    while (const auto* ev = r.next()) {
+      EXPECT_EQ(ev->offset, all[n].offset);
+      EXPECT_EQ(ev->channel, all[n].channel);
+      ++n;
+    }
+    EXPECT_EQ(n, all.size());
+  };
+  LogReader absent(source_path(kFlight));
+  EXPECT_FALSE(absent.look_ahead_for("NOT_IN_THE_LOG", std::numeric_limits<std::int64_t>::max(),
+                                     all.size() + 1));
+  EXPECT_EQ(absent.peek()->offset, all[0].offset);
+  same_as_all(absent);
+  // Found late, after a peek: still every event from the first.
+  LogReader late(source_path(kFlight));
+  ASSERT_NE(late.peek(), nullptr);
+  EXPECT_TRUE(
+      late.look_ahead_for(all[90].channel == all[0].channel ? all[0].channel : all[90].channel,
+                          std::numeric_limits<std::int64_t>::max(), all.size()));
+  same_as_all(late);
+  // Bounded by count and by log time.
+  LogReader few(source_path(kFlight));
+  EXPECT_FALSE(few.look_ahead_for("NOT_IN_THE_LOG", std::numeric_limits<std::int64_t>::max(), 10));
+  same_as_all(few);
+  LogReader brief(source_path(kFlight));
+  EXPECT_FALSE(brief.look_ahead_for("NOT_IN_THE_LOG", 1, all.size()));
+  same_as_all(brief);
+}
+
+// A reference channel that first comes after the look-ahead: named in a
+// warning and not compared; with --every-input (cycles after every input
+// from the start) it is compared.
+TEST(LogReader, AReferenceAfterTheLookAheadIsNamedOrComparedWithEveryInput) {
+  const auto all = events_of(source_path(kFlight));
+  const std::int64_t first = all.front().timestamp;
+  const std::int64_t at =
+      first + static_cast<std::int64_t>((lcmlog::kReferenceLookAheadS + 1.0) * 1e6);
+  ASSERT_GT(all.back().timestamp, at) << "the flight is longer than the look-ahead";
+  const std::string path = ::testing::TempDir() + "/late_reference.lcmlog";
+  {
+    lcm::LogFile out(path, "w");
+    motormix::motor_pwm_t pwm{};
+    pwm.num_motors = 4;
+    pwm.command.assign(4, 0.5F);
+    pwm.pwm.assign(4, 1500.0F);
+    pwm.direction.assign(4, 0);
+    pwm.armed = true;
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(pwm.getEncodedSize()));
+    pwm.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    bool written = false;
+    for (const auto& ev : all) {
+      if (!written && ev.timestamp >= at) {
+        lcm::LogEvent e{0, at, "PX4_MOTORS", static_cast<int32_t>(bytes.size()), bytes.data()};
+        out.writeEvent(&e);
+        written = true;
+      }
+      lcm::LogEvent e{0, ev.timestamp, ev.channel, static_cast<int32_t>(ev.data.size()),
+                      const_cast<std::uint8_t*>(ev.data.data())};
+      out.writeEvent(&e);
+    }
+  }
+  const Replayed plain = replay(path);
+  ASSERT_TRUE(plain.ok);
+  EXPECT_FALSE(plain.summary.reference.present());
+  EXPECT_NE(plain.log.find("PX4_MOTORS first appears"), std::string::npos) << plain.log;
+  ReplayOptions every;
+  every.cycle_on_every_input = true;
+  ReplaySummary compared;
+  std::ostringstream log;
+  ASSERT_TRUE(
+      lcmlog::replay_log(team_quad_config(), path, path + ".out.lcmlog", every, compared, log));
+  ASSERT_TRUE(compared.reference.present());
+  EXPECT_EQ(compared.reference.references, 1);
+  std::remove(path.c_str());
 }
 
 // Three flipped bytes put one timestamp days ahead: that event is skipped,

@@ -12,8 +12,8 @@
 #include <motormix/setpoint_t.hpp>
 #include "log/log_reader.hpp"
 #include "log/log_replay.hpp"
-#include "log/log_writer.hpp"
 #include "log/ulog_import.hpp"
+#include "messages/log_writer.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -185,7 +185,7 @@ TEST(UlogImport, TheDetectorOverTheFlightDeclaresNothingAndFindsAStoppedMotor) {
   const std::string stopped = scratch("stopped3.lcmlog");
   {
     lcmlog::LogReader r(in);
-    lcmlog::LogWriter w(stopped);
+    messages::LogWriter w(stopped);
     std::int64_t first = -1;
     while (const lcmlog::LogEventView* ev = r.next()) {
       if (first < 0) first = ev->timestamp;

@@ -29,21 +29,8 @@ void fill_vehicle_state(vehicle_state_t& msg, const VehicleModel& vehicle, std::
 }
 
 SimLogWriter::SimLogWriter(const std::string& path, const config::Config& config)
-    : log_(std::make_unique<lcm::LogFile>(path, "w")), config_(config) {
+    : log_(path), config_(config) {
   messages::size_pwm_message(pwm_, config.motors());
-}
-
-template <typename Message>
-void SimLogWriter::event(const std::string& channel, std::int64_t utime, const Message& msg) {
-  buffer_.resize(static_cast<std::size_t>(msg.getEncodedSize()));
-  msg.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
-  lcm::LogEvent e;
-  e.eventnum = eventnum_++;
-  e.timestamp = utime;
-  e.channel = channel;
-  e.datalen = static_cast<std::int32_t>(buffer_.size());
-  e.data = buffer_.data();
-  log_->writeEvent(&e);
 }
 
 void SimLogWriter::write(const SimFrame& f, const loop::Counters& counters) {
@@ -53,37 +40,37 @@ void SimLogWriter::write(const SimFrame& f, const loop::Counters& counters) {
   sp.throttle = static_cast<float>(f.setpoint->throttle);
   sp.yaw = static_cast<float>(f.setpoint->yaw);
   sp.armed = f.setpoint->armed;
-  event(ch.setpoint, f.utime, sp);
+  log_.write(ch.setpoint, f.utime, sp);
   pid_t pid;
   pid.utime = f.pid->utime;
   pid.roll = static_cast<float>(f.pid->roll);
   pid.pitch = static_cast<float>(f.pid->pitch);
   pid.yaw = static_cast<float>(f.pid->yaw);
-  event(ch.pid, f.utime, pid);
+  log_.write(ch.pid, f.utime, pid);
   if (f.battery != nullptr) {
     battery_t b;
     b.utime = f.battery->utime;
     b.voltage = static_cast<float>(f.battery->voltage);
-    event(ch.battery, f.utime, b);
+    log_.write(ch.battery, f.utime, b);
   }
   if (f.motor_status != nullptr) {
     motor_status_t m;
     m.utime = f.motor_status->utime;
     m.num_motors = f.motor_status->num_motors;
     for (int i = 0; i < m.num_motors; ++i) m.failed.push_back((f.motor_status->failed >> i) & 1U);
-    event(ch.motor_status, f.utime, m);
+    log_.write(ch.motor_status, f.utime, m);
   }
   messages::fill_pwm_message(pwm_, *f.cycle, f.utime);
-  event(ch.motor_pwm, f.utime, pwm_);
+  log_.write(ch.motor_pwm, f.utime, pwm_);
   if (f.utime >= next_status_us_) {
     messages::fill_status_message(status_, *f.cycle, counters, messages::LoopTiming{}, config_.hash,
                                   config_.motors(), f.utime);
-    event(ch.status, f.utime, status_);
+    log_.write(ch.status, f.utime, status_);
     next_status_us_ =
         f.utime + static_cast<std::int64_t>(std::llround(1e6 / config_.status_rate_hz));
   }
   fill_vehicle_state(state_, *f.vehicle, f.utime);
-  event(kVehicleStateChannel, f.utime, state_);
+  log_.write(kVehicleStateChannel, f.utime, state_);
 }
 
 }  // namespace motormix::sim

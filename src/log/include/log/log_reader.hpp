@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,11 @@ class LogReader {
   const LogEventView* next();
   // The event next() will return, without consuming it.
   const LogEventView* peek();
+  // Reads ahead until an event on `channel` is among the events waiting,
+  // or they span `span_us` of log time from the first, or number
+  // `max_events`, or the file ends; next() still returns every one of them
+  // in order (the file is read once). Whether one on `channel` was found.
+  bool look_ahead_for(const std::string& channel, std::int64_t span_us, std::size_t max_events);
 
   const std::vector<SkippedRange>& skipped() const { return skipped_; }
   std::uint64_t skipped_bytes() const;
@@ -67,9 +73,8 @@ class LogReader {
   std::uint64_t stream_at_ = 0;
   std::uint64_t position_ = 0;  // where the next event is expected
   LogEventView current_;
-  LogEventView lookahead_;
-  bool have_lookahead_ = false;
-  bool lookahead_end_ = false;
+  std::deque<LogEventView> ahead_;  // read, not yet returned by next()
+  bool at_end_ = false;             // fill() found no more events
   std::vector<SkippedRange> skipped_;
 };
 

@@ -27,6 +27,7 @@
 #include "log/reference_comparison.hpp"
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <iosfwd>
 #include <string>
@@ -82,9 +83,17 @@ struct ReplayOptions {
   // security.mode says, and mix as under `require`.
   bool verify = false;
   // A channel of another mixer's motor_pwm_t to compare with (see
-  // ReferenceComparison); empty: none.
+  // ReferenceComparison); empty: none. Looked for in the log's first
+  // kReferenceLookAheadS.
   std::string reference_channel = "PX4_MOTORS";
 };
+
+// How far into a log the reference channel is looked for before the replay
+// starts: log time, and events at most (those read ahead wait in memory;
+// the log is read once). A PX4 import writes it from the flight's first
+// outputs.
+inline constexpr double kReferenceLookAheadS = 10.0;
+inline constexpr std::size_t kReferenceLookAheadEvents = 100000;
 
 // Returns false (with a message on `log`) if a log cannot be read or written.
 bool replay_log(const config::Config& config, const std::string& in_path,

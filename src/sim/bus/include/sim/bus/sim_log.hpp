@@ -6,14 +6,12 @@
 // as the event time. lcm-logplayer, `motormix replay` and the plot tool
 // read it.
 
+#include "messages/log_writer.hpp"
 #include "messages/messages.hpp"
 #include "sim/lockstep.hpp"
 
 #include <motormix/vehicle_state_t.hpp>
 
-#include <lcm/lcm-cpp.hpp>
-
-#include <memory>
 #include <string>
 
 namespace motormix::sim {
@@ -26,18 +24,15 @@ void fill_vehicle_state(vehicle_state_t& msg, const VehicleModel& vehicle, std::
 class SimLogWriter {
  public:
   SimLogWriter(const std::string& path, const config::Config& config);
-  bool good() const { return log_ && log_->good(); }
+  bool good() const { return log_.good(); }
   void write(const SimFrame& frame, const loop::Counters& counters);
+  // False if anything could not be written (disk full, I/O error).
+  bool close() { return log_.close(); }
 
  private:
-  template <typename Message>
-  void event(const std::string& channel, std::int64_t utime, const Message& msg);
-
-  std::unique_ptr<lcm::LogFile> log_;
+  messages::LogWriter log_;
   const config::Config& config_;
   std::int64_t next_status_us_ = 0;
-  std::int64_t eventnum_ = 0;
-  std::vector<std::uint8_t> buffer_;
   motor_pwm_t pwm_;
   mixer_status_t status_;
   vehicle_state_t state_;

@@ -1,4 +1,4 @@
-#include "bus/realtime.hpp"
+#include "realtime/realtime.hpp"
 
 #include <dirent.h>
 #include <sched.h>
@@ -11,7 +11,7 @@
 #include <ostream>
 #include <sstream>
 
-namespace motormix::bus {
+namespace motormix::realtime {
 
 namespace {
 
@@ -136,4 +136,4 @@ std::string describe(const RealtimeGranted& granted) {
   return s.str();
 }
 
-}  // namespace motormix::bus
+}  // namespace motormix::realtime

@@ -1,15 +1,16 @@
 #pragma once
-// Writes LCM event logs in LCM's own format (see log_reader.hpp), byte for
+// Writes LCM event logs in LCM's own format (log/log_reader.hpp), byte for
 // byte what lcm::LogFile writes, through one large buffer: an event costs a
-// few copies instead of several stdio calls. Used by the offline replay and
-// `motormix sign-log`.
+// few copies instead of several stdio calls. The one log writer: the
+// offline replay, `motormix sign-log`, the PX4 import and the simulator's
+// logs.
 
 #include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
 
-namespace motormix::lcmlog {
+namespace motormix::messages {
 
 class LogWriter {
  public:
@@ -60,4 +61,4 @@ class LogWriter {
   std::int64_t eventnum_ = 0;
 };
 
-}  // namespace motormix::lcmlog
+}  // namespace motormix::messages

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace motormix::bus {
+namespace motormix::realtime {
 
 struct RealtimeGranted {
   std::string policy;     // "SCHED_FIFO", "SCHED_OTHER", ... as the kernel reports it
@@ -37,4 +37,4 @@ RealtimeGranted apply_realtime(const config::Realtime& rt, std::ostream& log);
 // One line: "SCHED_FIFO 80, cpus 1, memory locked, stack prefaulted".
 std::string describe(const RealtimeGranted& granted);
 
-}  // namespace motormix::bus
+}  // namespace motormix::realtime
