@@ -4,11 +4,11 @@
 // outputs and says so); inputs out of range are clamped and flagged. Nothing
 // here allocates, logs or throws.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/motor_failure.hpp>
 #include <motormix/axes.hpp>
-#include <motormix/motor_failure.hpp>
 #include <motormix/motor_vector.hpp>
-#include <motormix/output_stage.hpp>
+#include <motormix/output/output_stage.hpp>
 
 #include <cstdint>
 #include <memory>

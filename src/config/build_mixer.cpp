@@ -2,7 +2,7 @@
 
 #include "strategies.hpp"
 
-#include <motormix/motor_failure.hpp>
+#include <motormix/allocation/motor_failure.hpp>
 
 #include <memory>
 

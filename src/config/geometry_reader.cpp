@@ -5,7 +5,7 @@
 
 #include "interop/paparazzi_import.hpp"
 
-#include <motormix/presets.hpp>
+#include <motormix/effectiveness/presets.hpp>
 
 #include <cmath>
 #include <sstream>

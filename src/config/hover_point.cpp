@@ -1,7 +1,7 @@
 #include <motormix/config/hover_point.hpp>
 
 #include <motormix/gravity.hpp>
-#include <motormix/output_stage.hpp>
+#include <motormix/output/output_stage.hpp>
 
 #include <algorithm>
 #include <cstddef>

@@ -4,7 +4,7 @@
 #include "section_readers.hpp"
 #include "strategies.hpp"
 
-#include <motormix/motor_failure.hpp>
+#include <motormix/allocation/motor_failure.hpp>
 
 #include <cmath>
 #include <sstream>

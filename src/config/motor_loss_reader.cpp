@@ -4,7 +4,7 @@
 
 #include <motormix/angles.hpp>
 #include <motormix/enum_names.hpp>
-#include <motormix/two_rotor_descent.hpp>
+#include <motormix/safety/two_rotor_descent.hpp>
 
 #include <algorithm>
 #include <cmath>

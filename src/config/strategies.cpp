@@ -1,12 +1,12 @@
 #include "strategies.hpp"
 
-#include <motormix/budget_allocator.hpp>
-#include <motormix/clip_allocator.hpp>
-#include <motormix/legacy_budget_allocator.hpp>
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/prioritized_allocator.hpp>
-#include <motormix/shift_allocator.hpp>
-#include <motormix/yaw_yielding_allocator.hpp>
+#include <motormix/allocation/budget_allocator.hpp>
+#include <motormix/allocation/clip_allocator.hpp>
+#include <motormix/allocation/legacy_budget_allocator.hpp>
+#include <motormix/allocation/optimal_allocator.hpp>
+#include <motormix/allocation/prioritized_allocator.hpp>
+#include <motormix/allocation/shift_allocator.hpp>
+#include <motormix/allocation/yaw_yielding_allocator.hpp>
 
 #include <cstddef>
 #include <iterator>

@@ -7,8 +7,8 @@
 
 #include <motormix/config/config.hpp>
 
-#include <motormix/allocation.hpp>
-#include <motormix/motor_failure.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/motor_failure.hpp>
 
 #include <memory>
 #include <string>

@@ -1,6 +1,6 @@
 #include "sim/result_json.hpp"
 
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 namespace motormix::sim {
 

@@ -23,8 +23,8 @@ for f in bin/motormix \
     include/motormix/mixer.hpp include/motormix/embedded_mixer.hpp include/motormix/version.hpp \
     include/motormix/config/config.hpp include/motormix/motor_pwm_t.hpp \
     include/motormix/setpoint_t.hpp include/motormix/pid_t.hpp include/motormix/mixer_status_t.hpp \
-    include/motormix/motor_status_t.hpp include/motormix/battery_t.hpp include/motormix/motor_failure.hpp \
-    include/motormix/battery_compensation.hpp include/motormix/yaw_yielding_allocator.hpp \
+    include/motormix/motor_status_t.hpp include/motormix/battery_t.hpp include/motormix/allocation/motor_failure.hpp \
+    include/motormix/output/battery_compensation.hpp include/motormix/allocation/yaw_yielding_allocator.hpp \
     "$libdir/cmake/motormix/motormixConfig.cmake" "$libdir/cmake/motormix/motormixConfigVersion.cmake" \
     "$libdir/cmake/motormix/motormixTargets.cmake" "$libdir/pkgconfig/motormix.pc" \
     lib/python3/dist-packages/motormix/__init__.py lib/python3/dist-packages/motormix/motor_pwm_t.py \

@@ -17,8 +17,8 @@
 
 #include "test_support.hpp"
 
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/prioritized_allocator.hpp>
+#include <motormix/allocation/optimal_allocator.hpp>
+#include <motormix/allocation/prioritized_allocator.hpp>
 
 #include <gtest/gtest.h>
 

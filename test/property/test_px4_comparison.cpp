@@ -16,7 +16,7 @@
 #include "reference/px4_sequential_desaturation.hpp"
 #include "test_support.hpp"
 
-#include <motormix/prioritized_allocator.hpp>
+#include <motormix/allocation/prioritized_allocator.hpp>
 
 #include <gtest/gtest.h>
 

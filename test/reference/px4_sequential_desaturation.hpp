@@ -20,7 +20,7 @@
 // desaturation gains"); the older multirotor mixer skipped only entries
 // below FLT_EPSILON.
 
-#include <motormix/mixing_matrix.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 
 #include <algorithm>
 #include <array>

@@ -18,9 +18,9 @@
 #include "sim/lockstep.hpp"
 #include "sim/result_json.hpp"
 
+#include <motormix/allocation/motor_failure.hpp>
 #include <motormix/config/build_mixer.hpp>
 #include <motormix/config/load_config.hpp>
-#include <motormix/motor_failure.hpp>
 
 #include <nlohmann/json.hpp>
 

@@ -15,7 +15,7 @@
 #include "sim/sensors.hpp"
 #include "test_support.hpp"
 
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 
 #include "test_support.hpp"
 
-#include <motormix/battery_compensation.hpp>
+#include <motormix/output/battery_compensation.hpp>
 
 #include <gtest/gtest.h>
 

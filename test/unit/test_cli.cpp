@@ -10,7 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <motormix/presets.hpp>
+#include <motormix/effectiveness/presets.hpp>
 
 #include <array>
 #include <cstdio>

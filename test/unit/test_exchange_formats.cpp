@@ -8,7 +8,7 @@
 #include "test_support.hpp"
 
 #include <motormix/config/matrix_export.hpp>
-#include <motormix/presets.hpp>
+#include <motormix/effectiveness/presets.hpp>
 
 #include <gtest/gtest.h>
 

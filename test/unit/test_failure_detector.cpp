@@ -3,7 +3,7 @@
 // fires on one bad sample, a sagging battery, a gust, a stale stream or
 // while detection is not allowed.
 
-#include <motormix/failure_detector.hpp>
+#include <motormix/safety/failure_detector.hpp>
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 // seeded; both airmodes (thrust may rise or not); 4, 6, 8 motors at fixed
 // size and 5, 12, 16 at dynamic size.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 #include "fitting_scale.hpp"
 #include "shift_kernel.hpp"

@@ -5,9 +5,9 @@
 #include <motormix/config/matrix_export.hpp>
 #include "test_support.hpp"
 
-#include <motormix/effectiveness.hpp>
-#include <motormix/mixing_matrix.hpp>
-#include <motormix/presets.hpp>
+#include <motormix/effectiveness/effectiveness.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
+#include <motormix/effectiveness/presets.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -3,7 +3,7 @@
 
 #include "test_support.hpp"
 
-#include <motormix/mixing_matrix.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 
 #include <gtest/gtest.h>
 

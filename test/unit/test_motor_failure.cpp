@@ -3,7 +3,7 @@
 
 #include "test_support.hpp"
 
-#include <motormix/motor_failure.hpp>
+#include <motormix/allocation/motor_failure.hpp>
 
 #include <gtest/gtest.h>
 

@@ -8,18 +8,18 @@
 // counted. Each forwards to glibc's own entry point (__libc_malloc, ...).
 // Without glibc, a counting global operator new is the net instead.
 
-#include <motormix/budget_allocator.hpp>
-#include <motormix/clip_allocator.hpp>
-#include <motormix/failure_detector.hpp>
-#include <motormix/legacy_budget_allocator.hpp>
+#include <motormix/allocation/budget_allocator.hpp>
+#include <motormix/allocation/clip_allocator.hpp>
+#include <motormix/allocation/legacy_budget_allocator.hpp>
+#include <motormix/allocation/motor_failure.hpp>
+#include <motormix/allocation/optimal_allocator.hpp>
+#include <motormix/allocation/prioritized_allocator.hpp>
+#include <motormix/allocation/shift_allocator.hpp>
+#include <motormix/allocation/yaw_yielding_allocator.hpp>
+#include <motormix/effectiveness/presets.hpp>
 #include <motormix/mixer.hpp>
-#include <motormix/motor_failure.hpp>
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/presets.hpp>
-#include <motormix/prioritized_allocator.hpp>
-#include <motormix/shift_allocator.hpp>
-#include <motormix/spinning_descent.hpp>
-#include <motormix/yaw_yielding_allocator.hpp>
+#include <motormix/safety/failure_detector.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <gtest/gtest.h>
 

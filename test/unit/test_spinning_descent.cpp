@@ -9,7 +9,7 @@
 #include "test_support.hpp"
 
 #include <motormix/angles.hpp>
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <gtest/gtest.h>
 

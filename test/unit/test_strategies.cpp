@@ -4,9 +4,9 @@
 
 #include "test_support.hpp"
 
-#include <motormix/clip_allocator.hpp>
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/shift_allocator.hpp>
+#include <motormix/allocation/clip_allocator.hpp>
+#include <motormix/allocation/optimal_allocator.hpp>
+#include <motormix/allocation/shift_allocator.hpp>
 
 #include <gtest/gtest.h>
 

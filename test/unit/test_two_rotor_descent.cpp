@@ -7,7 +7,7 @@
 #include "loop/control_loop.hpp"
 #include "test_support.hpp"
 
-#include <motormix/two_rotor_descent.hpp>
+#include <motormix/safety/two_rotor_descent.hpp>
 
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>

@@ -3,20 +3,20 @@
 // which strategy, which output ranges, which channels and rates. Built once
 // at start-up by load_config(); nothing downstream re-validates it.
 
-#include <motormix/allocation_settings.hpp>
-#include <motormix/battery_compensation.hpp>
+#include <motormix/allocation/allocation_settings.hpp>
 #include <motormix/config/config_error.hpp>
 #include <motormix/config/failure_detection.hpp>
 #include <motormix/config/hardware.hpp>
 #include <motormix/config/motor_loss.hpp>
 #include <motormix/config/security.hpp>
 #include <motormix/config/vehicle_physics.hpp>
+#include <motormix/effectiveness/geometry.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
+#include <motormix/effectiveness/vehicle.hpp>
 #include <motormix/enum_names.hpp>
-#include <motormix/geometry.hpp>
-#include <motormix/mixing_matrix.hpp>
 #include <motormix/motor_vector.hpp>
-#include <motormix/output_stage.hpp>
-#include <motormix/vehicle.hpp>
+#include <motormix/output/battery_compensation.hpp>
+#include <motormix/output/output_stage.hpp>
 
 #include <cstdint>
 #include <optional>

@@ -4,7 +4,7 @@
 // must be. Absent (or enabled: false): no detection, and the ESC telemetry
 // and attitude channels are not read for it. See docs/motor-failures.md.
 
-#include <motormix/failure_detector.hpp>
+#include <motormix/safety/failure_detector.hpp>
 
 namespace motormix::config {
 

@@ -8,7 +8,7 @@
 // `vehicle:` section has a relaxed hover for every motor, and off otherwise.
 // See docs/motor-loss-landing.md.
 
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <string>
 

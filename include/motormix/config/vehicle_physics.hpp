@@ -9,8 +9,8 @@
 // Units are SI throughout; frames are the geometry's (body FRD).
 
 #include <motormix/angles.hpp>
+#include <motormix/effectiveness/geometry.hpp>
 #include <motormix/enum_names.hpp>
-#include <motormix/geometry.hpp>
 
 #include <Eigen/Geometry>  // cross products
 

@@ -5,7 +5,7 @@
 // and the value.
 
 #include <motormix/config/config.hpp>
-#include <motormix/mixing_matrix.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 
 #include <string>
 

@@ -1,4 +1,4 @@
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 #include "shift_kernel.hpp"
 

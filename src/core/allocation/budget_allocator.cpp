@@ -1,4 +1,4 @@
-#include <motormix/budget_allocator.hpp>
+#include <motormix/allocation/budget_allocator.hpp>
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include <motormix/clip_allocator.hpp>
+#include <motormix/allocation/clip_allocator.hpp>
 
 #include "fixed_size.hpp"
 #include "report_kernel.hpp"

@@ -20,7 +20,7 @@
 // rounding, and gives the scale up (-1, a safe answer) if ever reached.
 // Motors that thrust does not move constrain s on their own, linearly.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 #include "fixed_size.hpp"
 

@@ -8,7 +8,7 @@
 // motors; any other count runs the same code at dynamic size.
 
 #include <motormix/axes.hpp>
-#include <motormix/effectiveness.hpp>
+#include <motormix/effectiveness/effectiveness.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <Eigen/Core>

@@ -1,4 +1,4 @@
-#include <motormix/legacy_budget_allocator.hpp>
+#include <motormix/allocation/legacy_budget_allocator.hpp>
 
 #include <algorithm>
 

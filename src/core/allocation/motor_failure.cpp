@@ -1,4 +1,4 @@
-#include <motormix/motor_failure.hpp>
+#include <motormix/allocation/motor_failure.hpp>
 
 #include <Eigen/QR>
 

@@ -1,4 +1,4 @@
-#include <motormix/optimal_allocator.hpp>
+#include <motormix/allocation/optimal_allocator.hpp>
 
 #include "fixed_size.hpp"
 #include "report_kernel.hpp"

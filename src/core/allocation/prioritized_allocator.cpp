@@ -1,4 +1,4 @@
-#include <motormix/prioritized_allocator.hpp>
+#include <motormix/allocation/prioritized_allocator.hpp>
 
 #include "fitting_scale.hpp"
 #include "fixed_size.hpp"

@@ -3,7 +3,7 @@
 // delivered), as a kernel at a motor count fixed at compile time. Shared by
 // the strategies' own fixed-size paths.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 #include "fixed_size.hpp"
 

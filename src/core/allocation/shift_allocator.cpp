@@ -1,4 +1,4 @@
-#include <motormix/shift_allocator.hpp>
+#include <motormix/allocation/shift_allocator.hpp>
 
 #include "fitting_scale.hpp"
 #include "fixed_size.hpp"

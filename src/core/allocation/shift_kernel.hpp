@@ -3,7 +3,7 @@
 // move all motors together) that keep every motor in range, at a motor count
 // fixed at compile time. Shared by `shift` and `prioritized`'s repair.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 #include "fixed_size.hpp"
 

@@ -1,4 +1,4 @@
-#include <motormix/yaw_yielding_allocator.hpp>
+#include <motormix/allocation/yaw_yielding_allocator.hpp>
 
 #include "shift_kernel.hpp"
 

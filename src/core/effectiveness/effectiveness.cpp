@@ -1,4 +1,4 @@
-#include <motormix/effectiveness.hpp>
+#include <motormix/effectiveness/effectiveness.hpp>
 
 #include <Eigen/Geometry>
 

@@ -2,7 +2,7 @@
 // basis derives the effectiveness (a pseudo-inverse) and the axes from the
 // matrix, and the kernel tests built for newer CPUs (test/CMakeLists.txt)
 // compile allocation.cpp without that part of the core.
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 namespace motormix {
 

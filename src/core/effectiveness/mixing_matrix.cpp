@@ -1,4 +1,4 @@
-#include <motormix/mixing_matrix.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>

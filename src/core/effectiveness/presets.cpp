@@ -1,4 +1,4 @@
-#include <motormix/presets.hpp>
+#include <motormix/effectiveness/presets.hpp>
 
 #include <motormix/angles.hpp>
 

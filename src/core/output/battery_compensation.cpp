@@ -1,4 +1,4 @@
-#include <motormix/battery_compensation.hpp>
+#include <motormix/output/battery_compensation.hpp>
 
 #include <motormix/angles.hpp>
 

@@ -1,4 +1,4 @@
-#include <motormix/output_stage.hpp>
+#include <motormix/output/output_stage.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 // should point (up, tilted against the drift). Internal to the core.
 
 #include <motormix/angles.hpp>
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include <motormix/failure_detector.hpp>
+#include <motormix/safety/failure_detector.hpp>
 
 #include <motormix/angles.hpp>
 

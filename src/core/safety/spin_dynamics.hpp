@@ -5,7 +5,7 @@
 // the rotor plane, the degree. Internal to the core.
 
 #include <motormix/angles.hpp>
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <Eigen/Core>
 

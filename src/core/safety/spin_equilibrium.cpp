@@ -3,7 +3,7 @@
 // the gyroscopic and drag torques, solved by Newton's method at start-up
 // (see spinning_descent.hpp).
 
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include "spin_dynamics.hpp"
 

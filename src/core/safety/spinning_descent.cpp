@@ -1,4 +1,4 @@
-#include <motormix/spinning_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
 
 #include <motormix/angles.hpp>
 

@@ -1,4 +1,4 @@
-#include <motormix/two_rotor_descent.hpp>
+#include <motormix/safety/two_rotor_descent.hpp>
 
 #include "descent_collective.hpp"
 #include "spin_dynamics.hpp"

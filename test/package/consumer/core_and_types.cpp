@@ -1,10 +1,10 @@
 // An outside program using an installed motormix: the pure core (a preset,
 // its mixing matrix, the prioritized strategy, the output stage) and the
 // generated message types. Exits non-zero if anything is off.
+#include <motormix/allocation/prioritized_allocator.hpp>
+#include <motormix/effectiveness/presets.hpp>
 #include <motormix/mixer.hpp>
 #include <motormix/motor_pwm_t.hpp>
-#include <motormix/presets.hpp>
-#include <motormix/prioritized_allocator.hpp>
 #include <motormix/version.hpp>
 
 #include <cmath>

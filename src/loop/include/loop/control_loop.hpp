@@ -55,7 +55,7 @@
 
 #include <motormix/mixer.hpp>
 
-#include <motormix/battery_compensation.hpp>
+#include <motormix/output/battery_compensation.hpp>
 
 #include <array>
 #include <cstdint>

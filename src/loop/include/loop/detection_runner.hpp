@@ -11,7 +11,7 @@
 #include "loop/latest_input.hpp"
 
 #include <motormix/config/config.hpp>
-#include <motormix/failure_detector.hpp>
+#include <motormix/safety/failure_detector.hpp>
 
 #include <array>
 #include <cstdint>

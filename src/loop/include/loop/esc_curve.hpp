@@ -6,7 +6,7 @@
 // commands). One curve for both, so they cannot disagree.
 
 #include <motormix/config/config.hpp>
-#include <motormix/output_stage.hpp>
+#include <motormix/output/output_stage.hpp>
 
 #include <algorithm>
 #include <cstddef>

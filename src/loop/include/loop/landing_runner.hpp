@@ -18,8 +18,8 @@
 
 #include <motormix/config/config.hpp>
 #include <motormix/mixer.hpp>
-#include <motormix/spinning_descent.hpp>
-#include <motormix/two_rotor_descent.hpp>
+#include <motormix/safety/spinning_descent.hpp>
+#include <motormix/safety/two_rotor_descent.hpp>
 
 #include <cstdint>
 #include <vector>

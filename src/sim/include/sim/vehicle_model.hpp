@@ -25,7 +25,7 @@
 
 #include <motormix/config/config.hpp>
 #include <motormix/gravity.hpp>
-#include <motormix/output_stage.hpp>
+#include <motormix/output/output_stage.hpp>
 
 #include <string>
 #include <vector>

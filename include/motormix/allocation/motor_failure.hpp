@@ -12,11 +12,11 @@
 // Everything here runs at set-up: a switch of failure set in flight only
 // selects a matrix computed before.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 #include <motormix/axes.hpp>
-#include <motormix/effectiveness.hpp>
+#include <motormix/effectiveness/effectiveness.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 #include <motormix/enum_names.hpp>
-#include <motormix/mixing_matrix.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <cstdint>

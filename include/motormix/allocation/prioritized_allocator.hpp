@@ -6,8 +6,8 @@
 // sequence's plain clip. What each step does and why, and what
 // `tie_tolerance` means: docs/strategies.md, "prioritized, step by step".
 
-#include <motormix/allocation.hpp>
-#include <motormix/allocation_settings.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/allocation_settings.hpp>
 
 #include <array>
 

@@ -4,8 +4,8 @@
 // pure function of the geometry; the mixing matrix is derived from it.
 
 #include <motormix/axes.hpp>
+#include <motormix/effectiveness/geometry.hpp>
 #include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
-#include <motormix/geometry.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <vector>

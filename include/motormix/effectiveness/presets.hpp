@@ -4,7 +4,7 @@
 // bases. A preset is a Vehicle; everything downstream treats it like one
 // described by hand.
 
-#include <motormix/vehicle.hpp>
+#include <motormix/effectiveness/vehicle.hpp>
 
 #include <optional>
 #include <string>

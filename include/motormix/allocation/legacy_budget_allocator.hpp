@@ -10,8 +10,8 @@
 // is the original rule, kept bit for bit, even though it can shrink the larger
 // of the two.
 
-#include <motormix/allocation.hpp>
-#include <motormix/allocation_settings.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/allocation_settings.hpp>
 
 namespace motormix {
 

@@ -4,7 +4,7 @@
 // integrators winding up against saturated motors.
 
 #include <motormix/axes.hpp>
-#include <motormix/mixing_matrix.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 #include <motormix/motor_vector.hpp>
 
 #include <cstdint>

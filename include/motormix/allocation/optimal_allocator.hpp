@@ -10,8 +10,8 @@
 // at the iteration cap still returns a feasible answer, never a worse one
 // than where it started. No heap: all matrices have fixed capacity.
 
-#include <motormix/allocation.hpp>
-#include <motormix/allocation_settings.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/allocation_settings.hpp>
 
 namespace motormix {
 

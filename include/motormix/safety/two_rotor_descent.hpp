@@ -30,8 +30,8 @@
 //   * landing: still after the descent was flown, or the spin lost while
 //     still (the ground took it).
 
-#include <motormix/spinning_descent.hpp>
-#include <motormix/touchdown.hpp>
+#include <motormix/safety/spinning_descent.hpp>
+#include <motormix/safety/touchdown.hpp>
 
 #include <Eigen/Core>
 

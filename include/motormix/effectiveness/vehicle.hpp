@@ -4,9 +4,9 @@
 // mixing table taken as it is; plus which axes it is commanded in.
 
 #include <motormix/axes.hpp>
-#include <motormix/effectiveness.hpp>
-#include <motormix/geometry.hpp>
-#include <motormix/mixing_matrix.hpp>
+#include <motormix/effectiveness/effectiveness.hpp>
+#include <motormix/effectiveness/geometry.hpp>
+#include <motormix/effectiveness/mixing_matrix.hpp>
 
 #include <optional>
 #include <string>

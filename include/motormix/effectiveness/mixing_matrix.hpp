@@ -7,7 +7,7 @@
 // every strategy reports what it could not deliver.
 
 #include <motormix/axes.hpp>
-#include <motormix/effectiveness.hpp>
+#include <motormix/effectiveness/effectiveness.hpp>
 #include <motormix/eigen_layout.hpp>  // Eigen, at the libraries' alignment
 #include <motormix/enum_names.hpp>
 #include <motormix/motor_vector.hpp>

@@ -45,7 +45,7 @@
 #include <motormix/enum_names.hpp>
 #include <motormix/gravity.hpp>
 #include <motormix/motor_vector.hpp>
-#include <motormix/touchdown.hpp>
+#include <motormix/safety/touchdown.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -3,7 +3,7 @@
 // every other strategy is compared with: whatever saturates is simply lost,
 // and the attitude error lands wherever the clipping puts it.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 namespace motormix {
 

@@ -17,9 +17,9 @@
 // answer delivers the demand better in priority order: roll and pitch, then
 // thrust, then yaw.
 
-#include <motormix/allocation.hpp>
-#include <motormix/optimal_allocator.hpp>
-#include <motormix/prioritized_allocator.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/optimal_allocator.hpp>
+#include <motormix/allocation/prioritized_allocator.hpp>
 
 #include <memory>
 

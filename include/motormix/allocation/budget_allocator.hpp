@@ -6,8 +6,8 @@
 // roll and pitch together exceed their share, both are scaled down in
 // proportion (the direction of the tilt is kept).
 
-#include <motormix/allocation.hpp>
-#include <motormix/legacy_budget_allocator.hpp>
+#include <motormix/allocation/allocation.hpp>
+#include <motormix/allocation/legacy_budget_allocator.hpp>
 
 namespace motormix {
 

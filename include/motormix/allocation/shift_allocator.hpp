@@ -9,7 +9,7 @@
 // down along its own direction by the least amount after which one does,
 // and the report says which axes lost.
 
-#include <motormix/allocation.hpp>
+#include <motormix/allocation/allocation.hpp>
 
 namespace motormix {
 
