@@ -56,6 +56,7 @@ wait:
   sts OCR1BL, r20
   sbrs r22, MM_EDGE_NEXT_POLLED
   rjmp not_polled
+load_next:
   ld r18, Z+
   ld r19, Z+
   ld r20, Z+
@@ -108,12 +109,7 @@ full:
   inc r24
   sts mm_serial_rx_lost, r24
 taken:
-  ld r18, Z+
-  ld r19, Z+
-  ld r20, Z+
-  ld r21, Z+
-  ld r22, Z+
-  rjmp wait
+  rjmp load_next
 rise:
   call mm_isr_period_start
 done:
