@@ -213,10 +213,9 @@ def main():
     tmp = tempfile.TemporaryDirectory()
     config = args.config
     if not config:
+        # The spin rate: motormix's own choice at load (the default, or the
+        # middle of the rates where every motor's loss has a relaxed hover).
         text = rotorpy_config.write(args.vehicle, params)
-        rate, ok = rotorpy_config.pick_spin_rate(args.motormix, text)
-        if rate is not None:
-            text = rotorpy_config.write(args.vehicle, params, rate, f"relaxed hovers at {ok[0]:g}..{ok[-1]:g}")
         config = os.path.join(tmp.name, f"{args.vehicle}.yaml")
         with open(config, "w") as f:
             f.write(text)

@@ -37,6 +37,7 @@ import argparse
 import importlib
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -80,41 +81,21 @@ def fmt(x):
     return f"{x:.6g}"
 
 
-def accepted_spin_rates(motormix, text, rates):
-    """The spin rates at which `motormix run --check` finds a relaxed hover
-    for every motor lost (its `motor loss: spin landing (...)` line)."""
-    ok = []
+def spin_rate_chosen(motormix, text):
+    """The spin rate motormix flies this vehicle's spin landing at, as its
+    `run --check` says (`motor loss: spin landing (R rad/s ...`): the default
+    when the vehicle has an equilibrium there, else the middle of the widest
+    run of rates that have one (motormix chooses it at load); None when no
+    rate has one (the line then says why)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "vehicle.yaml")
         with open(path, "w") as f:
             f.write(text)
-        for rate in rates:
-            out = subprocess.run([motormix, "run", "--check", "--config", path, "--set",
-                                  f"motor_loss.spin_rate_rad_s={rate:g}"],
-                                 capture_output=True, text=True, check=False).stdout
-            if "motor loss: spin landing (" in out:
-                ok.append(rate)
-    return ok
-
-
-def pick_spin_rate(motormix, text):
-    """The middle of the widest run of accepted rates, 1 rad/s apart from 3 to
-    the gyro's bound: away from both edges (too slow for the rotors' yaw
-    torque, too fast for the motor opposite the lost one)."""
-    rates = [float(r) for r in range(3, 25)]
-    ok = accepted_spin_rates(motormix, text, rates)
-    if not ok:
-        return None, ok
-    runs, run = [], [ok[0]]
-    for r in ok[1:]:
-        if r - run[-1] <= 1.0:
-            run.append(r)
-        else:
-            runs.append(run)
-            run = [r]
-    runs.append(run)
-    widest = max(runs, key=len)
-    return (widest[0] + widest[-1]) / 2.0, ok
+        out = subprocess.run([motormix, "run", "--check", "--config", path],
+                             capture_output=True, text=True, check=False).stdout
+    m = re.search(r"motor loss: spin landing \(([0-9.]+) rad/s", out)
+    line = next((l for l in out.splitlines() if l.startswith("motor loss:")), "")
+    return (float(m.group(1)) if m else None), line
 
 
 def write(name, p, spin_rate=None, spin_note=""):
@@ -180,8 +161,9 @@ def main():
     ap.add_argument("vehicle", nargs="?", help=", ".join(VEHICLES))
     ap.add_argument("--list", action="store_true", help="list the vehicles")
     ap.add_argument("--out", help="file to write (default: standard output)")
-    ap.add_argument("--motormix", help="a motormix binary: choose motor_loss.spin_rate_rad_s with its "
-                    "`run --check` (the middle of the rates where every motor's loss has a relaxed hover)")
+    ap.add_argument("--motormix", help="a motormix binary: write the motor_loss.spin_rate_rad_s its "
+                    "`run --check` chooses (the default, or the middle of the rates where every motor's "
+                    "loss has a relaxed hover)")
     args = ap.parse_args()
     if args.list or not args.vehicle:
         for name, module in VEHICLES.items():
@@ -190,15 +172,13 @@ def main():
     params = load_params(args.vehicle)
     text = write(args.vehicle, params)
     if args.motormix:
-        rate, ok = pick_spin_rate(args.motormix, text)
+        rate, line = spin_rate_chosen(args.motormix, text)
         if rate is None:
-            note = ("no spin rate from 3 to 24 rad/s has a relaxed hover for this vehicle "
-                    "(`run --check` says why): the spin landing stays off")
-            print(f"rotorpy_config: {args.vehicle}: {note}", file=sys.stderr)
+            note = "no spin rate has a relaxed hover for this vehicle: the spin landing stays off"
+            print(f"rotorpy_config: {args.vehicle}: {line}", file=sys.stderr)
             text = write(args.vehicle, params, None, note)
         else:
-            note = (f"chosen by `run --check`: relaxed hovers at {ok[0]:g}..{ok[-1]:g} rad/s")
-            text = write(args.vehicle, params, rate, note)
+            text = write(args.vehicle, params, rate, "as motormix's `run --check` chose it")
     if args.out:
         with open(args.out, "w") as f:
             f.write(text)

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 namespace motormix::config {
 
@@ -17,6 +18,9 @@ namespace {
 // The equilibrium spin may use at most this share of the gyro's range: the
 // transient after the failure and gusts swing the rates above it.
 constexpr double kSpinShareOfGyroRange = 0.7;
+// The spin rate when the configuration names none and the vehicle has an
+// equilibrium there.
+constexpr double kDefaultSpinRate = 20.0;
 
 // Why the vehicle cannot land spinning, or "" when it can.
 std::string unsupported(const Config& config) {
@@ -75,6 +79,57 @@ std::string derive(const Config& config, MotorLoss& ml) {
   return why;
 }
 
+// The spin rates (whole rad/s from kSpinRateMin up to the gyro's share)
+// at which every motor of the vehicle has an equilibrium, in order.
+constexpr double kSpinRateMin = 3.0;
+constexpr double kSpinRateMax = 100.0;
+std::vector<double> working_spin_rates(const Config& config, const MotorLoss& base) {
+  std::vector<double> rates;
+  const double top = std::min(kSpinRateMax, kSpinShareOfGyroRange * base.gyro_range_rad_s);
+  for (double w = kSpinRateMin; w <= top + 1e-9; w += 1.0) {
+    MotorLoss trial = base;
+    trial.settings.spin_rate_rad_s = w;
+    if (derive(config, trial).empty()) rates.push_back(w);
+  }
+  return rates;
+}
+
+// The middle of the widest run of working rates (ties: the run nearest
+// `wanted`): away from both edges, where the rotors' yaw torque is too weak
+// to hold the spin (slow) or the motor across from the lost one leaves its
+// range (fast).
+double middle_of_widest_run(const std::vector<double>& rates, double wanted) {
+  double best = rates.front(), best_width = -1.0;
+  for (std::size_t i = 0; i < rates.size();) {
+    std::size_t j = i;
+    while (j + 1 < rates.size() && rates[j + 1] - rates[j] < 1.5) ++j;
+    const double width = rates[j] - rates[i];
+    const double middle = 0.5 * (rates[i] + rates[j]);
+    if (width > best_width ||
+        (width == best_width && std::abs(middle - wanted) < std::abs(best - wanted))) {
+      best = middle;
+      best_width = width;
+    }
+    i = j + 1;
+  }
+  return best;
+}
+
+// "13-18 rad/s" (or "13-15 and 20-22 rad/s"): the rates found, in order.
+std::string describe_rates(const std::vector<double>& rates) {
+  std::ostringstream s;
+  for (std::size_t i = 0; i < rates.size();) {
+    std::size_t j = i;
+    while (j + 1 < rates.size() && rates[j + 1] - rates[j] < 1.5) ++j;
+    if (i > 0) s << (j + 1 == rates.size() ? " and " : ", ");
+    s << rates[i];
+    if (j > i) s << "-" << rates[j];
+    i = j + 1;
+  }
+  s << " rad/s";
+  return s.str();
+}
+
 // What `run --check` says of two motors lost: the pairs the two-rotor
 // landing covers, or why none.
 std::string two_rotor_summary(const SpinningDescentModel& model) {
@@ -131,7 +186,9 @@ void read_motor_loss(MapReader section, Config& config) {
   MotorLoss ml;
   SpinningDescentSettings& s = ml.settings;
   ml.gyro_range_rad_s = section.number("gyro_range_dps", 2000.0, 100.0, 10000.0) * kRadPerDeg;
-  s.spin_rate_rad_s = section.number("spin_rate_rad_s", 20.0, 3.0, 100.0);
+  const bool rate_named = section.has("spin_rate_rad_s");
+  s.spin_rate_rad_s =
+      section.number("spin_rate_rad_s", kDefaultSpinRate, kSpinRateMin, kSpinRateMax);
   s.descent_rate_mps = section.number("descent_rate_mps", 1.0, 0.2, 3.0);
   s.max_tilt_deg = section.number("max_tilt_deg", 8.0, 0.0, 20.0);
   s.spin_up_raise = section.boolean("spin_up_raise", true);
@@ -150,7 +207,36 @@ void read_motor_loss(MapReader section, Config& config) {
     config.motor_loss_off = "motor_loss.mode is off";
     return;
   }
-  const std::string why = derive(config, ml);
+  std::string why = derive(config, ml);
+  if (!why.empty() && unsupported(config).empty()) {
+    // This vehicle has no equilibrium at this rate: the rates it has one
+    // at. Unnamed, the default gives way to the middle of the widest run
+    // of them; named, the configuration's rate stands and the message says
+    // which would do.
+    const std::vector<double> rates = working_spin_rates(config, ml);
+    if (!rates.empty() && !rate_named) {
+      const double rate = middle_of_widest_run(rates, kDefaultSpinRate);
+      std::ostringstream chosen;
+      chosen << "spin_rate_rad_s " << rate << " chosen: the default " << kDefaultSpinRate
+             << " has no equilibrium for this vehicle (" << why << "); it has one at "
+             << describe_rates(rates);
+      ml.settings.spin_rate_rad_s = rate;
+      why = derive(config, ml);
+      ml.spin_rate_chosen = chosen.str();
+    } else if (!rates.empty()) {
+      std::ostringstream more;
+      more << why << " at spin_rate_rad_s " << s.spin_rate_rad_s << "; this vehicle has one at "
+           << describe_rates(rates);
+      why = more.str();
+    } else {
+      std::ostringstream none;
+      none.precision(3);
+      none << why << "; none at any spin rate from " << kSpinRateMin << " to "
+           << std::min(kSpinRateMax, kSpinShareOfGyroRange * ml.gyro_range_rad_s)
+           << " rad/s either (" << kSpinShareOfGyroRange * 100 << " % of the gyro's range)";
+      why = none.str();
+    }
+  }
   if (!why.empty()) {
     if (mode == MotorLossMode::kSpinLanding)
       fail(section.path_of("mode"), name_in(kMotorLossModeNames, mode), "auto or off: " + why);
@@ -166,6 +252,7 @@ std::string Config::motor_loss_summary() const {
     s << "motor loss: spin landing (" << motor_loss->settings.spin_rate_rad_s << " rad/s, down at "
       << motor_loss->settings.descent_rate_mps << " m/s); needs attitude_t on " << channels.attitude
       << " (with velocity, or it follows the throttle); without a fresh one it mixes as before";
+    if (!motor_loss->spin_rate_chosen.empty()) s << "; " << motor_loss->spin_rate_chosen;
     s << two_rotor_summary(motor_loss->model);
     return s.str();
   }

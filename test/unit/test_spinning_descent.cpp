@@ -126,6 +126,41 @@ TEST(SpinEquilibrium, AgreesWithTheReducedSolutionOfThePlusQuad) {
   EXPECT_NEAR(std::abs(eq.rates.z()), r, kAgreementTolerance);
 }
 
+// A vehicle with no relaxed hover at the default spin rate: unnamed, the
+// rate is chosen for it (the middle of the whole rates that have one, each
+// of them checked here); named, it stands, the mode is off and the message
+// names the rates that would do.
+TEST(SpinEquilibrium, TheSpinRateIsChosenForAVehicleTheDefaultDoesNotFit) {
+  const std::string drag = "vehicle.drag.rotational=0.01";
+  const config::Config chosen = spin_quad("quad_x", {drag});
+  ASSERT_TRUE(chosen.motor_loss.has_value()) << chosen.motor_loss_summary();
+  const double rate = chosen.motor_loss->settings.spin_rate_rad_s;
+  EXPECT_NE(rate, 20.0);
+  EXPECT_NE(chosen.motor_loss->spin_rate_chosen.find("chosen"), std::string::npos);
+  EXPECT_NE(chosen.motor_loss_summary().find(chosen.motor_loss->spin_rate_chosen),
+            std::string::npos);
+  for (const SpinEquilibrium& eq : chosen.motor_loss->equilibria) EXPECT_TRUE(eq.found);
+  // Every whole rate within a rad/s of it has an equilibrium too (it is
+  // away from the edges of the run), and the default has none.
+  const SpinningDescentModel& m = chosen.motor_loss->model;
+  for (double w : {std::floor(rate - 0.5), std::ceil(rate + 0.5)}) {
+    for (int motor = 0; motor < 4; ++motor)
+      EXPECT_TRUE(solve_spin_equilibrium(m, motor, w).found) << w << " rad/s, motor " << motor + 1;
+  }
+  bool all_at_default = true;
+  for (int motor = 0; motor < 4; ++motor)
+    all_at_default = all_at_default && solve_spin_equilibrium(m, motor, 20.0).found;
+  EXPECT_FALSE(all_at_default);
+
+  const config::Config named = spin_quad("quad_x", {drag, "motor_loss.spin_rate_rad_s=20"});
+  EXPECT_FALSE(named.motor_loss.has_value());
+  EXPECT_NE(named.motor_loss_summary().find("this vehicle has one at"), std::string::npos)
+      << named.motor_loss_summary();
+  // The bundled vehicles keep the default.
+  EXPECT_EQ(spin_quad("quad_x").motor_loss->settings.spin_rate_rad_s, 20.0);
+  EXPECT_TRUE(spin_quad("quad_x").motor_loss->spin_rate_chosen.empty());
+}
+
 TEST(SpinEquilibrium, SaysWhyWhenTheVehicleCannotHover) {
   // Thrust to weight 1.2: three motors cannot carry it; `auto` turns the
   // mode off and says why.

@@ -24,6 +24,10 @@ struct MotorLoss {
   // it would without the mode.
   double attitude_timeout_s = 0.05;
   double gyro_range_rad_s = 0.0;  // the spin rate must stay well inside it
+  // How settings.spin_rate_rad_s was chosen when the configuration did not
+  // name one and the default has no equilibrium for this vehicle ("" when
+  // it is the default or the configuration's).
+  std::string spin_rate_chosen;
 };
 
 }  // namespace motormix::config
