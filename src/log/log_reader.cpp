@@ -119,7 +119,9 @@ bool LogReader::fill(LogEventView& ev) {
 
 const LogEventView* LogReader::peek() {
   if (ahead_.empty() && !at_end_) {
-    LogEventView ev;
+    // The buffers of the event next() returned before last: no allocation
+    // per event in the replay's loop.
+    LogEventView ev = std::move(spare_);
     if (fill(ev)) {
       ahead_.push_back(std::move(ev));
     } else {
@@ -131,7 +133,8 @@ const LogEventView* LogReader::peek() {
 
 const LogEventView* LogReader::next() {
   if (!peek()) return nullptr;
-  current_ = std::move(ahead_.front());
+  std::swap(current_, ahead_.front());
+  spare_ = std::move(ahead_.front());
   ahead_.pop_front();
   return &current_;
 }

@@ -74,6 +74,7 @@ class LogReader {
   std::uint64_t position_ = 0;  // where the next event is expected
   LogEventView current_;
   std::deque<LogEventView> ahead_;  // read, not yet returned by next()
+  LogEventView spare_;              // buffers to read the next event into
   bool at_end_ = false;             // fill() found no more events
   std::vector<SkippedRange> skipped_;
 };
