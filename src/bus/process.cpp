@@ -3,6 +3,9 @@
 #include <poll.h>
 
 #include <cerrno>
+#include <ctime>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace motormix::bus {
@@ -34,20 +37,33 @@ Process::Process(std::string who, const std::string& url, std::ostream& log)
   lcm_ = open_bus(who_, url, log);
 }
 
-Woke Process::wait(int timeout_ms, int own0, int own1) {
-  pollfd fds[4] = {{lcm_->getFileno(), POLLIN, 0},
-                   {signals_.fd(), POLLIN, 0},
-                   {own0, POLLIN, 0},
-                   {own1, POLLIN, 0}};
+std::size_t Process::watch(int fd) {
+  if (watched_ >= kMaxWatched)
+    throw std::length_error(who_ + ": more than " + std::to_string(kMaxWatched) +
+                            " descriptors to watch");
+  watched_fds_[watched_] = fd;
+  return watched_++;
+}
+
+Woke Process::wait_ns(std::int64_t timeout_ns) {
+  pollfd fds[2 + kMaxWatched];
+  const std::size_t n = 2 + watched_;
+  fds[0] = {lcm_->getFileno(), POLLIN, 0};
+  fds[1] = {signals_.fd(), POLLIN, 0};
+  for (std::size_t i = 0; i < watched_; ++i) fds[2 + i] = {watched_fds_[i], POLLIN, 0};
+  timespec wait{};
+  if (timeout_ns >= 0) {
+    wait.tv_sec = static_cast<time_t>(timeout_ns / 1'000'000'000);
+    wait.tv_nsec = static_cast<long>(timeout_ns % 1'000'000'000);
+  }
   Woke w;
-  if (poll(fds, 4, timeout_ms) < 0) {
+  if (ppoll(fds, n, timeout_ns >= 0 ? &wait : nullptr, nullptr) < 0) {
     if (errno != EINTR) w.error = errno;
     return w;
   }
   w.bus = (fds[0].revents & POLLIN) != 0;
   w.signal = (fds[1].revents & POLLIN) != 0 && signals_.take() != 0;
-  w.own[0] = (fds[2].revents & POLLIN) != 0;
-  w.own[1] = (fds[3].revents & POLLIN) != 0;
+  for (std::size_t i = 0; i < watched_; ++i) w.own[i] = (fds[2 + i].revents & POLLIN) != 0;
   return w;
 }
 

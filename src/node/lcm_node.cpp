@@ -119,7 +119,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
   }
 
   // In lockstep the timer is left out (a negative descriptor is skipped).
-  const int timer = options.lockstep ? -1 : timer_fd.get();
+  const std::size_t timer = process.watch(options.lockstep ? -1 : timer_fd.get());
   long long cycles = 0;
   std::int64_t ticks = 0;  // timer periods elapsed
   // Lockstep: when the last tick (or the start) came, and how long poll may
@@ -144,7 +144,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
     return code;
   };
   while (true) {
-    const bus::Woke woke = process.wait(poll_ms, timer);
+    const bus::Woke woke = process.wait(poll_ms);
     if (woke.error != 0) {
       log << "motormix: poll failed: " << std::strerror(woke.error) << std::endl;
       return finish(1);
@@ -174,7 +174,7 @@ int run_node(const config::Config& config, const RunOptions& options, std::ostre
           << " s: the simulator is gone; publishing disarmed outputs and exiting" << std::endl;
       return finish(kExitLockstepIdle);
     }
-    if (woke.own[0]) {
+    if (woke.own[timer]) {
       std::uint64_t expirations = 0;
       if (read(timer_fd.get(), &expirations, sizeof expirations) == sizeof expirations) {
         if (expirations > 1) node.add_overruns(expirations - 1);

@@ -23,14 +23,12 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <poll.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -386,9 +384,9 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
   // what was granted read back (after LCM's threads have started).
   const realtime::RealtimeGranted granted = realtime::apply_realtime(config.realtime, log);
   log << "motormix output: scheduling: " << realtime::describe(granted) << std::endl;
-  std::vector<pollfd> fds = {
-      {lcm.getFileno(), POLLIN, 0}, {timer_fd, POLLIN, 0}, {signals.fd(), POLLIN, 0}};
-  for (const TelemetryWire& w : wires) fds.push_back({w.fd, POLLIN, 0});
+  const std::size_t tick = process.watch(timer_fd);
+  std::vector<std::size_t> wire_index;
+  for (const TelemetryWire& w : wires) wire_index.push_back(process.watch(w.fd));
   const double start = monotonic_s();
   double next_reopen = start;
   int reopen_failures = 0;
@@ -402,29 +400,27 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
     // pacing), not only by the bus, the tick or a signal.
     const double wake_s =
         driver != nullptr ? driver->waiting_until_s() : std::numeric_limits<double>::infinity();
-    timespec wait{};
-    if (std::isfinite(wake_s)) {
-      const double d = std::max(0.0, wake_s - monotonic_s());
-      wait.tv_sec = static_cast<time_t>(d);
-      wait.tv_nsec = static_cast<long>((d - static_cast<double>(wait.tv_sec)) * 1e9);
-    }
-    if (ppoll(fds.data(), fds.size(), std::isfinite(wake_s) ? &wait : nullptr, nullptr) < 0) {
-      if (errno == EINTR) continue;
-      log << "motormix output: poll failed: " << std::strerror(errno) << std::endl;
+    const std::int64_t timeout_ns =
+        std::isfinite(wake_s)
+            ? static_cast<std::int64_t>(std::max(0.0, wake_s - monotonic_s()) * 1e9)
+            : -1;
+    const bus::Woke woke = process.wait_ns(timeout_ns);
+    if (woke.error != 0) {
+      log << "motormix output: poll failed: " << std::strerror(woke.error) << std::endl;
       code = 1;
       break;
     }
-    if ((fds[2].revents & POLLIN) && signals.take() != 0) {
+    if (woke.signal) {
       log << "motormix output: signal " << signals.last_signal()
           << ", writing disarmed pulses and exiting" << std::endl;
       break;
     }
-    if (fds[0].revents & POLLIN) bus::drain(lcm);
+    if (woke.bus) bus::drain(lcm);
     const double now = monotonic_s();
     node.write_taken(now);
     if (driver != nullptr) driver->send_waiting();
     node.telemetry_turn();
-    if (fds[1].revents & POLLIN) {
+    if (woke.own[tick]) {
       std::uint64_t expirations = 0;
       [[maybe_unused]] const ssize_t got = read(timer_fd, &expirations, sizeof expirations);
       node.step(now, false);
@@ -458,7 +454,7 @@ int run_output(const config::Config& config, const OutputOptions& options, std::
       }
     }
     for (std::size_t i = 0; i < wires.size(); ++i) {
-      if (!(fds[3 + i].revents & POLLIN)) continue;
+      if (!woke.own[wire_index[i]]) continue;
       std::uint8_t buf[256];
       const ssize_t n = read(wires[i].fd, buf, sizeof buf);
       const auto t_us = static_cast<std::int64_t>(now * 1e6);

@@ -4,6 +4,7 @@
 // before any vector is sized, seeded random and mutated bytes never thrown
 // out, the signing policy first; the shutdown signals held and restored.
 
+#include "bus/process.hpp"
 #include "bus/receive.hpp"
 #include "bus/shutdown_signals.hpp"
 #include "integration/hostile_messages.hpp"
@@ -12,8 +13,13 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <chrono>
 #include <csignal>
 #include <random>
+#include <sstream>
+#include <stdexcept>
 
 namespace motormix {
 namespace {
@@ -205,6 +211,55 @@ TEST(ShutdownSignals, ASignalIsReadFromTheDescriptorAndTheMaskRestored) {
   sigset_t after;
   pthread_sigmask(SIG_SETMASK, nullptr, &after);
   EXPECT_FALSE(sigismember(&after, SIGHUP));
+}
+
+// The wait every process is built on: watched descriptors report by their
+// index, a negative one never, a signal wakes it, and a timeout finer than a
+// millisecond is kept (the serial driver's frame slots).
+TEST(BusProcess, WatchedDescriptorsWakeTheWaitByIndexAndTheTimeoutIsFine) {
+  std::ostringstream log;
+  bus::Process process("motormix test", "memq://", log);
+  ASSERT_TRUE(process.good()) << log.str();
+  int a[2];
+  int b[2];
+  ASSERT_EQ(pipe(a), 0);
+  ASSERT_EQ(pipe(b), 0);
+  const std::size_t never = process.watch(-1);
+  const std::size_t first = process.watch(a[0]);
+  const std::size_t second = process.watch(b[0]);
+  EXPECT_EQ(never, 0u);
+  EXPECT_EQ(first, 1u);
+  EXPECT_EQ(second, 2u);
+  ASSERT_EQ(write(b[1], "x", 1), 1);
+  bus::Woke woke = process.wait(1000);
+  EXPECT_EQ(woke.error, 0);
+  EXPECT_FALSE(woke.bus);
+  EXPECT_FALSE(woke.signal);
+  EXPECT_FALSE(woke.own[never]);
+  EXPECT_FALSE(woke.own[first]);
+  EXPECT_TRUE(woke.own[second]);
+  char c = 0;
+  ASSERT_EQ(read(b[0], &c, 1), 1);
+
+  // 200 us asked: back well before a millisecond-rounded wait would be.
+  constexpr std::int64_t kFineWaitNs = 200'000;
+  constexpr double kFineWaitBoundS = 0.05;  // generous: a loaded machine
+  const auto t0 = std::chrono::steady_clock::now();
+  woke = process.wait_ns(kFineWaitNs);
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_TRUE(woke.own.none());
+  EXPECT_GE(waited, 1e-9 * static_cast<double>(kFineWaitNs));
+  EXPECT_LT(waited, kFineWaitBoundS);
+
+  pthread_kill(pthread_self(), SIGTERM);  // blocked by the process: read in the wait
+  woke = process.wait(-1);
+  EXPECT_TRUE(woke.signal);
+  EXPECT_EQ(process.signals().last_signal(), SIGTERM);
+
+  for (std::size_t i = process.watch(a[1]) + 1; i < bus::kMaxWatched; ++i) process.watch(-1);
+  EXPECT_THROW(process.watch(a[0]), std::length_error);
+  for (int fd : {a[0], a[1], b[0], b[1]}) close(fd);
 }
 
 }  // namespace

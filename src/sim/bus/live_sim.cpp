@@ -27,7 +27,6 @@
 #include <cmath>
 #include <optional>
 #include <ostream>
-#include <thread>
 #include <vector>
 
 namespace motormix::sim {
@@ -181,17 +180,15 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
     }
     const auto due = start + std::chrono::duration_cast<Clock::duration>(
                                  std::chrono::duration<double>(static_cast<double>(k) * period));
-    // Serve the bus until this cycle is due (in lockstep: at once).
+    // Serve the bus until this cycle is due (in lockstep: at once); a
+    // shutdown signal wakes the wait; the flight ends at the next cycle.
     for (; !options.lockstep;) {
       const auto left = due - Clock::now();
       if (left <= Clock::duration::zero()) break;
-      const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(left).count();
-      if (ms >= 1) {
-        if (lcm.handleTimeout(static_cast<int>(ms)) < 0) break;
-      } else {
-        bus::drain(lcm);
-        std::this_thread::sleep_until(due);
-      }
+      const bus::Woke woke =
+          process.wait_ns(std::chrono::duration_cast<std::chrono::nanoseconds>(left).count());
+      if (woke.error != 0 || woke.signal) break;
+      if (woke.bus) bus::drain(lcm);
     }
     bus::drain(lcm);
     const double t = periods.start_of(k);
@@ -264,8 +261,12 @@ bool run_live(const config::Config& config_in, const Scenario& scenario, const L
           publish(config.channels.lockstep, tick);
           sent = Clock::now();
         }
-        if (lcm.handleTimeout(answered_once ? 100 : 20) < 0) break;
+        const bus::Woke woke = process.wait(answered_once ? 100 : 20);
+        if (woke.error != 0 || woke.signal) break;
+        if (woke.bus) bus::drain(lcm);
       }
+      // A shutdown signal ended the wait: the flight ends at the next cycle.
+      if (signals.requested()) continue;
       answered_once = answered_once || (mix.any && mix.utime == tick_us);
       if (!(mix.any && mix.utime == tick_us)) {
         err << "motormix sim: no motor_pwm_t for the tick at " << t << " s within "

@@ -10,7 +10,9 @@
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <array>
+#include <bitset>
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -35,12 +37,16 @@ std::unique_ptr<lcm::LCM> open_bus(const std::string& who, const std::string& ur
 // how many were handled.
 int drain(lcm::LCM& lcm, int max = kMaxMessagesPerDrain);
 
+// The process' own descriptors one wait can watch beside the bus and the
+// signals: a timer and a telemetry wire per motor fit with room to spare.
+inline constexpr std::size_t kMaxWatched = 32;
+
 // What one wait found ready.
 struct Woke {
-  bool bus = false;           // messages to drain
-  bool signal = false;        // a shutdown signal was taken (signals().last_signal())
-  std::array<bool, 2> own{};  // the process' own descriptors, in the order given
-  int error = 0;              // poll's errno, 0 when it did not fail
+  bool bus = false;              // messages to drain
+  bool signal = false;           // a shutdown signal was taken (signals().last_signal())
+  std::bitset<kMaxWatched> own;  // the process' own descriptors, by watch()'s index
+  int error = 0;                 // poll's errno, 0 when it did not fail
 };
 
 class Process {
@@ -57,15 +63,27 @@ class Process {
   lcm::LCM& lcm() { return *lcm_; }
   ShutdownSignals& signals() { return signals_; }
 
-  // Waits at most `timeout_ms` (-1: for ever) for the bus, a shutdown
-  // signal, or one of the process' own descriptors (-1: none). An
+  // Adds one of the process' own descriptors to every later wait and
+  // returns its index in Woke::own; a negative descriptor is never ready.
+  // Throws std::length_error beyond kMaxWatched (a start-up error).
+  std::size_t watch(int fd);
+
+  // Waits at most `timeout_ns` (negative: for ever) for the bus, a shutdown
+  // signal, or a watched descriptor. The wait is as fine as the kernel's
+  // (a serial driver waits for a frame's slot in tens of microseconds). An
   // interrupted wait comes back with nothing ready.
-  Woke wait(int timeout_ms, int own0 = -1, int own1 = -1);
+  Woke wait_ns(std::int64_t timeout_ns);
+  // The same in milliseconds (-1: for ever).
+  Woke wait(int timeout_ms) {
+    return wait_ns(timeout_ms < 0 ? -1 : static_cast<std::int64_t>(timeout_ms) * 1'000'000);
+  }
 
  private:
   std::string who_;
   ShutdownSignals signals_;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::size_t watched_ = 0;
+  int watched_fds_[kMaxWatched] = {};
 };
 
 }  // namespace motormix::bus
