@@ -50,13 +50,8 @@ int motor_test(const MotorTestCommand& cmd) {
     motors.push_back(m);
   }
   if (cmd.parse_only) return kExitOk;
-  bus::ShutdownSignals signals;
-  if (!signals.good()) {
-    std::cerr << "motormix motor-test: " << signals.error() << "\n";
-    return kExitRuntime;
-  }
   return exit_code(bringup::run_motor_test(*config, motors, cmd.throttle, cmd.seconds, cmd.wait_s,
-                                           cmd.lcm_url, signals, std::cout, std::cerr));
+                                           cmd.lcm_url, std::cout, std::cerr));
 }
 
 int esc_calibrate(const EscCalibrateCommand& cmd) {
@@ -71,16 +66,11 @@ int esc_calibrate(const EscCalibrateCommand& cmd) {
     std::cerr << "motormix esc-calibrate: refused: " << why << "\n";
     return kExitUsage;
   }
-  bus::ShutdownSignals signals;
-  if (!signals.good()) {
-    std::cerr << "motormix esc-calibrate: " << signals.error() << "\n";
-    return kExitRuntime;
-  }
   bringup::EscCalibrationTiming timing;
   timing.listen_s = cmd.listen_s;
   timing.timeout_s = cmd.timeout_s;
   timing.min_seconds = cmd.min_seconds;
-  return exit_code(bringup::run_esc_calibration(*config, timing, cmd.lcm_url, STDIN_FILENO, signals,
+  return exit_code(bringup::run_esc_calibration(*config, timing, cmd.lcm_url, STDIN_FILENO,
                                                 std::cout, std::cerr));
 }
 

@@ -25,7 +25,6 @@
 #include <chrono>
 #include <optional>
 #include <ostream>
-#include <thread>
 #include <vector>
 
 namespace motormix::bringup {
@@ -78,6 +77,13 @@ void send_test(bus::SealedPublisher& publisher, const std::string& channel, int 
   publisher.publish(channel, msg);
 }
 
+// Waits for the bus or a signal (at most `timeout_ns`) and hands what came
+// to the handlers: every client's pause between two looks.
+constexpr std::int64_t kLookEveryNs = 20'000'000;
+void wait_and_drain(bus::Process& process, std::int64_t timeout_ns = kLookEveryNs) {
+  if (process.wait_ns(timeout_ns).bus) bus::drain(process.lcm());
+}
+
 // Enter on `fd`, polled without blocking: 1 a line, -1 end of input, 0 nothing yet.
 int line_ready(int fd) {
   pollfd p{fd, POLLIN, 0};
@@ -111,13 +117,13 @@ std::string describe_motor(const config::Config& config, int motor) {
 
 ClientOutcome run_motor_test(const config::Config& config, const std::vector<int>& motors,
                              double throttle, double seconds, double wait_s,
-                             const std::string& lcm_url, bus::ShutdownSignals& signals,
-                             std::ostream& out, std::ostream& err) {
+                             const std::string& lcm_url, std::ostream& out, std::ostream& err) {
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "motor-test", err);
   if (!policy) return ClientOutcome::kBusError;
-  const std::unique_ptr<lcm::LCM> bus_open = bus::open_bus("motormix motor-test", lcm_url, err);
-  if (!bus_open) return ClientOutcome::kBusError;
-  lcm::LCM& lcm = *bus_open;
+  bus::Process process("motormix motor-test", lcm_url, err);
+  if (!process.good()) return ClientOutcome::kBusError;
+  lcm::LCM& lcm = process.lcm();
+  bus::ShutdownSignals& signals = process.signals();
   bus::SealedPublisher publisher(lcm, *policy);
   StatusWatch watch;
   watch.policy = &*policy;
@@ -146,7 +152,7 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
             << seconds << " s" << std::endl;
         break;
       case Kind::kWait:
-        lcm.handleTimeout(20);
+        wait_and_drain(process);
         break;
       case Kind::kDone:
         return ClientOutcome::kOk;
@@ -166,14 +172,14 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
 }
 
 ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibrationTiming& timing,
-                                  const std::string& lcm_url, int input_fd,
-                                  bus::ShutdownSignals& signals, std::ostream& out,
+                                  const std::string& lcm_url, int input_fd, std::ostream& out,
                                   std::ostream& err) {
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "esc-calibrate", err);
   if (!policy) return ClientOutcome::kBusError;
-  const std::unique_ptr<lcm::LCM> bus_open = bus::open_bus("motormix esc-calibrate", lcm_url, err);
-  if (!bus_open) return ClientOutcome::kBusError;
-  lcm::LCM& lcm = *bus_open;
+  bus::Process process("motormix esc-calibrate", lcm_url, err);
+  if (!process.good()) return ClientOutcome::kBusError;
+  lcm::LCM& lcm = process.lcm();
+  bus::ShutdownSignals& signals = process.signals();
   // Nothing else may drive the outputs: any status, or any motor_pwm_t
   // heard before this process publishes its own, is a mixer.
   // Any status at all means a mixer runs, signed or not: here every one
@@ -248,9 +254,14 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       bus::drain(lcm);
       foreign_pwm = 0;
       next += period;
-      std::this_thread::sleep_until(next);
+      // Until the next frame is due; a signal ends the wait early.
+      while (!signals.requested()) {
+        const auto left = next - Clock::now();
+        if (left <= Clock::duration::zero()) break;
+        wait_and_drain(process, std::chrono::duration_cast<std::chrono::nanoseconds>(left).count());
+      }
     } else {
-      lcm.handleTimeout(20);
+      wait_and_drain(process);
       next = Clock::now();
     }
   }
@@ -338,9 +349,14 @@ ClientOutcome run_esc_command(const config::Config& config, const EscCommand& co
                               const std::string& lcm_url, std::ostream& out, std::ostream& err) {
   std::optional<signing::Policy> policy = bus::policy_or_error(config, "esc-command", err);
   if (!policy) return ClientOutcome::kBusError;
-  const std::unique_ptr<lcm::LCM> bus_open = bus::open_bus("motormix esc-command", lcm_url, err);
-  if (!bus_open) return ClientOutcome::kBusError;
-  lcm::LCM& lcm = *bus_open;
+  bus::Process process("motormix esc-command", lcm_url, err);
+  if (!process.good()) return ClientOutcome::kBusError;
+  lcm::LCM& lcm = process.lcm();
+  const auto interrupted = [&] {
+    if (!process.signals().requested()) return false;
+    err << "motormix esc-command: interrupted\n";
+    return true;
+  };
   bus::SealedPublisher publisher(lcm, *policy);
   OutputStatusWatch watch;
   watch.policy = &*policy;
@@ -348,7 +364,8 @@ ClientOutcome run_esc_command(const config::Config& config, const EscCommand& co
   lcm.subscribe(config.channels.output_status, &OutputStatusWatch::on_status, &watch);
   // The output's counts before: what changes after the command is its answer.
   const auto start = Clock::now();
-  while (!watch.latest && seconds_since(start) < wait_s) lcm.handleTimeout(20);
+  while (!watch.latest && seconds_since(start) < wait_s && !interrupted()) wait_and_drain(process);
+  if (process.signals().requested()) return ClientOutcome::kInterrupted;
   if (!watch.latest) {
     err << "motormix esc-command: no motormix output on " << config.channels.output_status
         << " within " << wait_s << " s\n";
@@ -363,7 +380,8 @@ ClientOutcome run_esc_command(const config::Config& config, const EscCommand& co
   for (int m : motors) msg.motors |= static_cast<std::int32_t>(1U << m);
   publisher.publish(config.channels.esc_command, msg);
   while (seconds_since(start) < 2 * wait_s) {
-    lcm.handleTimeout(20);
+    if (interrupted()) return ClientOutcome::kInterrupted;
+    wait_and_drain(process);
     if (watch.latest->esc_commands_sent > sent_before) {
       out << "ESC command " << command.number << " sent to " << motors.size() << " motor"
           << (motors.size() == 1 ? "" : "s") << " in " << command.repeat << " frame"

@@ -12,10 +12,13 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <array>
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <thread>
@@ -339,6 +342,26 @@ TEST(EscCalibration, CtrlCAbortsToDisarmed) {
   std::this_thread::sleep_for(100ms);
   EXPECT_EQ(bus.last_pwm().pwm[0], kDisarmedUs);
   EXPECT_FALSE(bus.last_pwm().armed);
+}
+
+// A client waiting for an answer that does not come stops at Ctrl-C, not at
+// the end of its wait (the signal wakes its wait on the bus).
+TEST(EscCommand, CtrlCWhileWaitingForTheOutputEndsItAtOnce) {
+  constexpr auto kPromptly = 2s;  // against a 30 s wait
+  const std::string config = "/tmp/motormix-esc-command-" + std::to_string(::getpid()) + ".yaml";
+  std::ofstream(config) << "geometry: {preset: quad_x}\n"
+                           "output: {min: 1000, max: 2000, disarmed: 1000}\n"
+                           "hardware: {driver: serial, protocol: dshot600, serial: {device: "
+                           "/dev/null}}\n";
+  ChildProcess cli(
+      {motormix_binary(), "esc-command", "--config", config, "beep1", "--all", "--wait", "30"});
+  std::this_thread::sleep_for(500ms);
+  ASSERT_TRUE(cli.running());
+  cli.signal(SIGINT);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(cli.wait_for(kPromptly), 1);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, kPromptly);
+  std::remove(config.c_str());
 }
 
 }  // namespace

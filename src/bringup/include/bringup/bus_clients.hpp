@@ -7,7 +7,6 @@
 
 #include "bringup/esc_calibration.hpp"
 
-#include "bus/shutdown_signals.hpp"
 
 #include <motormix/config/config.hpp>
 
@@ -20,7 +19,7 @@ namespace motormix::bringup {
 
 enum class ClientOutcome {
   kOk = 0,
-  kBusError,     // the LCM bus could not be opened, or the key file (security:) read
+  kBusError,     // the LCM bus could not be opened, the signals held, or the key file read
   kNoAnswer,     // motor test: no mixer answered
   kRefused,      // the mixer refused the test, or calibration found a mixer running
   kAborted,      // calibration ended before the range was taught (outputs disarmed)
@@ -30,17 +29,18 @@ enum class ClientOutcome {
 // "motor 2 (front_left), front left, CW": where a motor is and how it spins.
 std::string describe_motor(const config::Config& config, int motor);
 
-// Spins each of `motors` (0-based) in turn. A signal on `signals` (held by
-// the caller from before the bus opens) stops the test and sends the stop.
+// Each client is a bus::Process of its own: its shutdown signals are held
+// from before the bus opens, and a signal ends it safely (the motor test
+// sends the stop, calibration disarms, a command stops waiting).
+
+// Spins each of `motors` (0-based) in turn.
 ClientOutcome run_motor_test(const config::Config& config, const std::vector<int>& motors,
                              double throttle, double seconds, double wait_s,
-                             const std::string& lcm_url, bus::ShutdownSignals& signals,
-                             std::ostream& out, std::ostream& err);
+                             const std::string& lcm_url, std::ostream& out, std::ostream& err);
 
 // The calibration sequence; the user's Enter is read from `input_fd`.
 ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibrationTiming& timing,
-                                  const std::string& lcm_url, int input_fd,
-                                  bus::ShutdownSignals& signals, std::ostream& out,
+                                  const std::string& lcm_url, int input_fd, std::ostream& out,
                                   std::ostream& err);
 
 // A DShot special command by name ("beep1".."beep5", "esc-info",
