@@ -27,6 +27,8 @@ thread_local KeyLog* t_key_log = nullptr;
 KeyLog::KeyLog() : previous_(t_key_log) { t_key_log = this; }
 KeyLog::~KeyLog() { t_key_log = previous_; }
 
+bool MapReader::recording() { return t_key_log != nullptr; }
+
 void MapReader::record(const std::string& key, const char* kind, std::string fallback,
                        std::string allowed, bool required) const {
   if (t_key_log == nullptr) return;
@@ -47,15 +49,19 @@ std::string describe(const YAML::Node& node) {
 }
 
 double to_number(const YAML::Node& node, const std::string& path, double lo, double hi) {
-  const std::string range = "a number from " + format_number(lo) + " to " + format_number(hi);
-  if (!node.IsScalar()) fail(path, describe(node), range);
+  // The range is spelled only for a refusal: a start-up reads hundreds of
+  // numbers that pass.
+  const auto refuse = [&] {
+    fail(path, describe(node), "a number from " + format_number(lo) + " to " + format_number(hi));
+  };
+  if (!node.IsScalar()) refuse();
   double value = 0.0;
   try {
     value = node.as<double>();
   } catch (const YAML::Exception&) {
-    fail(path, describe(node), range);
+    refuse();
   }
-  if (!std::isfinite(value) || value < lo || value > hi) fail(path, describe(node), range);
+  if (!std::isfinite(value) || value < lo || value > hi) refuse();
   return value;
 }
 
@@ -86,7 +92,8 @@ YAML::Node MapReader::raw(const std::string& key) {
 }
 
 double MapReader::number(const std::string& key, double fallback, double lo, double hi) {
-  record(key, "number", format_number(fallback), format_number(lo) + " to " + format_number(hi));
+  if (recording())
+    record(key, "number", format_number(fallback), format_number(lo) + " to " + format_number(hi));
   if (!has(key)) {
     read_.insert(key);
     return fallback;
@@ -95,7 +102,7 @@ double MapReader::number(const std::string& key, double fallback, double lo, dou
 }
 
 double MapReader::required_number(const std::string& key, double lo, double hi) {
-  record(key, "number", "", format_number(lo) + " to " + format_number(hi), true);
+  if (recording()) record(key, "number", "", format_number(lo) + " to " + format_number(hi), true);
   if (!has(key)) {
     fail(path_of(key), "nothing",
          "a number from " + format_number(lo) + " to " + format_number(hi) + " (required)");

@@ -76,6 +76,9 @@ class MapReader {
   YAML::Node get(const std::string& key);  // raw() without a record
   std::string text_as(const std::string& key, const std::string& fallback, const char* kind,
                       const std::string& allowed);
+  // Whether a KeyLog listens on this thread: the record's text is built
+  // only then.
+  static bool recording();
   void record(const std::string& key, const char* kind, std::string fallback, std::string allowed,
               bool required = false) const;
 
