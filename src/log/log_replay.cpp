@@ -20,19 +20,6 @@
 
 namespace motormix::lcmlog {
 
-// The node's routing and message conversions: a replay feeds the loop as the
-// node does.
-using messages::fill_pwm_message;
-using messages::fill_status_message;
-using messages::hand_over;
-using messages::InputAccounting;
-using messages::InputKind;
-using messages::InputReader;
-using messages::InputRoutes;
-using messages::InputSample;
-using messages::LoopTiming;
-using messages::size_pwm_message;
-
 namespace {
 
 // Year 5138: no log is from later than this, and sums of such times with any
@@ -81,7 +68,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   }
   // Which input, if any, a channel carries: the node's routing, for a loop
   // of this configuration (each segment's loop reads the same channels).
-  const InputRoutes routes(config);
+  const messages::InputRoutes routes(config);
   const auto input_kind = [&routes](const std::string& channel) { return routes.kind(channel); };
   // Signatures: one policy per channel (a verifier keeps timestamps for a
   // bounded number of channels; a log may hold more).
@@ -115,11 +102,11 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   };
   // Every input the node's way (bus::receive through its channel's policy),
   // refusals counted by reason.
-  InputReader reader;
-  InputSample sample;
+  messages::InputReader reader;
+  messages::InputSample sample;
   // What the mixer's status reports: the input channels' counts together.
   const auto input_accounting = [&]() {
-    InputAccounting sum;
+    messages::InputAccounting sum;
     sum.mode = mode;
     for (const auto& [channel, policy] : policies) {
       if (input_kind(channel)) sum.security += policy.counts();
@@ -151,7 +138,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   }
 
   motor_pwm_t pwm;
-  size_pwm_message(pwm, config.motors());
+  messages::size_pwm_message(pwm, config.motors());
   mixer_status_t status{};
   const auto period_us = static_cast<std::int64_t>(std::llround(1e6 / config.loop_rate_hz));
   const auto status_period_us =
@@ -182,7 +169,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
   MotorMask detected_before = 0;
   const auto cycle_at = [&](std::int64_t t) {
     const loop::CycleResult& r = loop->cycle(t);
-    fill_pwm_message(pwm, r, t);
+    messages::fill_pwm_message(pwm, r, t);
     out.write(config.channels.motor_pwm, t, pwm);
     if (reference) reference->on_output(pwm, r.mix.allocation.axis_limited, r.spooling_up);
     ++summary.outputs;
@@ -207,8 +194,9 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       }
     }
     if (t >= next_status) {
-      fill_status_message(status, r, add(totals, loop->counters()), LoopTiming{}, config.hash,
-                          config.motors(), t, input_accounting());
+      messages::fill_status_message(status, r, add(totals, loop->counters()),
+                                    messages::LoopTiming{}, config.hash, config.motors(), t,
+                                    input_accounting());
       out.write(config.channels.status, t, status);
       next_status = t + status_period_us;
     }
@@ -258,7 +246,7 @@ bool replay_log(const config::Config& config, const std::string& in_path,
     previous = ev->timestamp;
     run_ticks_until(ev->timestamp);
     out.raw(ev->channel, ev->timestamp, ev->data.data(), static_cast<int>(ev->data.size()));
-    const std::optional<InputKind> kind = input_kind(ev->channel);
+    const std::optional<messages::InputKind> kind = input_kind(ev->channel);
     if (kind) {
       ++summary.input_events;
       // The signing policy sees every input event at the time the log
@@ -266,9 +254,9 @@ bool replay_log(const config::Config& config, const std::string& in_path,
       const bus::Refusal r = reader.read(*kind, policy_of(ev->channel), ev->channel,
                                          ev->data.data(), ev->data.size(), ev->timestamp, sample);
       if (r == bus::Refusal::kSignature && options.verify) ++summary.unverified;
-      const bool accepted =
-          r == bus::Refusal::kNone && hand_over(*loop, sample, ev->timestamp, ev->timestamp);
-      if (cycle_on_every_input || (accepted && *kind == InputKind::kPid &&
+      const bool accepted = r == bus::Refusal::kNone &&
+                            messages::hand_over(*loop, sample, ev->timestamp, ev->timestamp);
+      if (cycle_on_every_input || (accepted && *kind == messages::InputKind::kPid &&
                                    config.publish == config::PublishMode::kOnInput)) {
         cycle_at(ev->timestamp);
       }

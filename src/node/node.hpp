@@ -38,19 +38,6 @@
 
 namespace motormix::node {
 
-// The messages library's conversions, routing and reader, by their names.
-using messages::fill_motor_status_message;
-using messages::fill_pwm_message;
-using messages::fill_status_message;
-using messages::hand_over;
-using messages::InputAccounting;
-using messages::InputKind;
-using messages::InputReader;
-using messages::InputRoutes;
-using messages::InputSample;
-using messages::LoopTiming;
-using messages::size_pwm_message;
-
 // The node's time: the machine's clocks, or in lockstep the simulator's
 // (both "monotonic" and "wall" are then the tick's utime).
 struct NodeClock {
@@ -77,9 +64,9 @@ class Node {
         wake_stats_(window_capacity(config)) {
     const int n = config.motors();
     // One buffer, with room for the largest message and a signature.
-    size_pwm_message(pwm_msg_, n);
+    messages::size_pwm_message(pwm_msg_, n);
     status_msg_.num_motors = n;
-    fill_motor_status_message(motor_status_msg_, 0, n, 0);
+    messages::fill_motor_status_message(motor_status_msg_, 0, n, 0);
     for (const int size : {pwm_msg_.getEncodedSize(), status_msg_.getEncodedSize(),
                            motor_status_msg_.getEncodedSize()})
       publisher_.reserve(static_cast<std::size_t>(size));
@@ -266,15 +253,15 @@ class Node {
     return now_us - waited;
   }
 
-  // No exception may leave an LCM callback: InputReader (bus::receive)
+  // No exception may leave an LCM callback: messages::InputReader (bus::receive)
   // reports a refusal as a value, counted by its reason, and nothing else
   // here throws. The signing policy comes first: a message it refuses
   // (unsigned under `require`, a bad signature, a replay) is never decoded.
   //
   // Every input channel's callback: routed by the one table the replay
-  // uses too (InputRoutes).
+  // uses too (messages::InputRoutes).
   void on_input(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const std::optional<InputKind> kind = routes_.kind(channel);
+    const std::optional<messages::InputKind> kind = routes_.kind(channel);
     if (!kind || rbuf == nullptr) return;
     const std::int64_t wall = clock_.wall();
     // A request refused on the bus (unsigned under `require`, malformed) is
@@ -293,11 +280,11 @@ class Node {
     const std::int64_t wrong_sizes = loop_.counters().rejected_size;
     const std::int64_t now =
         clock_.lockstep ? clock_.sim_us : received_us(rbuf, clock_.mono(), wall);
-    const bool taken = hand_over(loop_, sample_, now, wall);
+    const bool taken = messages::hand_over(loop_, sample_, now, wall);
     if (loop_.counters().rejected_size != wrong_sizes) last_wrong_size_channel_ = channel;
-    if (*kind == InputKind::kPid && taken) new_pid_ = true;
+    if (*kind == messages::InputKind::kPid && taken) new_pid_ = true;
     // Answered by the next status, whatever the status rate.
-    if (*kind == InputKind::kMotorTest) motor_test_answer_due_ = true;
+    if (*kind == messages::InputKind::kMotorTest) motor_test_answer_due_ = true;
   }
 
   // A tick: verified as any input, then taken only if later than the last
@@ -315,7 +302,7 @@ class Node {
 
   void publish_pwm(const loop::CycleResult& r) {
     // In lockstep its utime is the tick's: the simulator waits for it.
-    fill_pwm_message(pwm_msg_, r, clock_.wall());
+    messages::fill_pwm_message(pwm_msg_, r, clock_.wall());
     publisher_.publish(config_.channels.motor_pwm, pwm_msg_);
   }
 
@@ -325,22 +312,22 @@ class Node {
     std::int64_t utime = clock_.wall();
     if (utime <= last_own_status_utime_) utime = last_own_status_utime_ + 1;
     last_own_status_utime_ = utime;
-    fill_motor_status_message(motor_status_msg_, r.failed, config_.motors(), utime);
+    messages::fill_motor_status_message(motor_status_msg_, r.failed, config_.motors(), utime);
     own_status_utimes_[own_status_next_++ % own_status_utimes_.size()] = utime;
     publisher_.publish(config_.channels.motor_status, motor_status_msg_);
   }
 
   void publish_status(const loop::CycleResult& r) {
-    LoopTiming timing;
+    messages::LoopTiming timing;
     timing.period_us = period_stats_.take();
     timing.compute_us = compute_stats_.take();
     timing.wake_latency_us = wake_stats_.take();
     timing.overruns = overruns_;
     timing.kernel_drops = drops_.latest();
     timing.wall_minus_loop_clock_us = clock_.wall() - clock_.mono();
-    fill_status_message(status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(),
-                        clock_.wall(),
-                        InputAccounting{policy_.mode(), policy_.counts(), reader_.refusals()});
+    messages::fill_status_message(
+        status_msg_, r, loop_.counters(), timing, config_.hash, config_.motors(), clock_.wall(),
+        messages::InputAccounting{policy_.mode(), policy_.counts(), reader_.refusals()});
     publisher_.publish(config_.channels.status, status_msg_);
   }
 
@@ -351,9 +338,9 @@ class Node {
   bus::SealedPublisher publisher_;  // signs with policy_ when it signs
   std::ostream& log_;
   loop::ControlLoop loop_;
-  const InputRoutes routes_;  // which input each subscribed channel carries
-  InputReader reader_;        // every input through bus::receive, refusals by reason
-  InputSample sample_;        // the latest input read (kept: no allocation per message)
+  const messages::InputRoutes routes_;  // which input each subscribed channel carries
+  messages::InputReader reader_;        // every input through bus::receive, refusals by reason
+  messages::InputSample sample_;        // the latest input read (kept: no allocation per message)
   lockstep_t tick_{};
   bus::Refusals lockstep_refusals_;
   std::string last_wrong_size_channel_;  // named in the rejection warning

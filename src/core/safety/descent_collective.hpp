@@ -9,6 +9,7 @@
 #include <motormix/safety/spinning_descent.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace motormix::detail {
@@ -66,6 +67,27 @@ inline Eigen::Vector3d wanted_up_body(const SpinningDescentSettings& s, const De
     thrust_world.head<2>() = brake;
   }
   return body_to_world.transpose() * thrust_world.normalized();
+}
+
+// The working motors' thrusts as the descent commands them (N, in place):
+// none once landed or when not finite, else within what each motor gives;
+// each one's share of its maximum goes to `fraction` (the others' stay as
+// they are). Then the lag: `lagged` is what the motors give next cycle.
+// Returns the lag's step (the share of the way `lagged` moved), for what
+// else follows the motors.
+template <int N>
+double command_working(const SpinningDescentModel& m, const std::array<int, N>& working,
+                       bool landed, double dt, Eigen::Matrix<double, N, 1>& f,
+                       MotorVector& fraction, Eigen::Matrix<double, N, 1>& lagged) {
+  for (Eigen::Index j = 0; j < N; ++j) {
+    const auto k = static_cast<std::size_t>(working[static_cast<std::size_t>(j)]);
+    f[j] = landed || !std::isfinite(f[j]) ? 0.0
+                                          : std::clamp(f[j], m.min_thrust_n[k], m.max_thrust_n[k]);
+    fraction[static_cast<Eigen::Index>(k)] = f[j] / m.max_thrust_n[k];
+  }
+  const double alpha = 1.0 - std::exp(-dt / std::max(m.time_constant_s, 1e-3));
+  lagged += alpha * (f - lagged);
+  return alpha;
 }
 
 }  // namespace motormix::detail

@@ -296,17 +296,9 @@ const DescentCommand& SpinningDescent::update(const DescentInput& in, std::int64
     }
   }
   cmd_.thrust_fraction.setZero(4);
-  for (Eigen::Index j = 0; j < 3; ++j) {
-    const auto k = static_cast<std::size_t>(eq.working[static_cast<std::size_t>(j)]);
-    f[j] = cmd_.phase == DescentPhase::kLanded || !std::isfinite(f[j])
-               ? 0.0
-               : std::clamp(f[j], m_.min_thrust_n[k], m_.max_thrust_n[k]);
-    cmd_.thrust_fraction[static_cast<Eigen::Index>(k)] = f[j] / m_.max_thrust_n[k];
-  }
+  detail::command_working<3>(m_, eq.working, cmd_.phase == DescentPhase::kLanded, dt, f,
+                             cmd_.thrust_fraction, lagged_n_);
   cmd_.thrust_n = f;
-  // The motors follow with their lag: what they give next cycle.
-  const double alpha = 1.0 - std::exp(-dt / std::max(m_.time_constant_s, 1e-3));
-  lagged_n_ += alpha * (f - lagged_n_);
   return cmd_;
 }
 

@@ -351,18 +351,10 @@ const DescentCommand& TwoRotorDescent::update(const DescentInput& in, std::int64
     if (touchdown_.landed(s_.landed_after_s, spin_lost)) cmd_.phase = DescentPhase::kLanded;
   }
   cmd_.thrust_fraction.setZero(4);
+  const double alpha = detail::command_working<2>(
+      m_, p.working, cmd_.phase == DescentPhase::kLanded, dt, f, cmd_.thrust_fraction, lagged_n_);
   cmd_.thrust_n.setZero();
-  for (Eigen::Index j = 0; j < 2; ++j) {
-    const auto k = static_cast<std::size_t>(p.working[static_cast<std::size_t>(j)]);
-    f[j] = cmd_.phase == DescentPhase::kLanded || !std::isfinite(f[j])
-               ? 0.0
-               : std::clamp(f[j], m_.min_thrust_n[k], m_.max_thrust_n[k]);
-    cmd_.thrust_fraction[static_cast<Eigen::Index>(k)] = f[j] / m_.max_thrust_n[k];
-    cmd_.thrust_n[j] = f[j];
-  }
-  // The motors follow with their lag: what they give next cycle.
-  const double alpha = 1.0 - std::exp(-dt / std::max(m_.time_constant_s, 1e-3));
-  lagged_n_ += alpha * (f - lagged_n_);
+  cmd_.thrust_n.head<2>() = f;
   const double applied = f[0] - f[1] - (p.share[0] - p.share[1]) * (f[0] + f[1]);
   lagged_differential_ += alpha * (applied - lagged_differential_);
   return cmd_;
