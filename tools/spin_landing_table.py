@@ -10,7 +10,8 @@ motormix's detector; "detected prop_lost" and "detected prop_damaged": a
 thrown prop or a broken tip instead of a stop, found by the detector) and what of the real world the simulator plays
 (docs/simulation.md: "realism on" is the default; a model error flies a
 vehicle other than the configured one); every motor stopping at 8 s at 10 m
-on N seeds from S (by default 11 on: seeds the tests do not use). Columns:
+on N seeds from S (by default drawn fresh, printed on standard error for a
+replay with --first-seed). Columns:
 flights landed (not crashed, touched down no faster than 2 m/s), the worst
 touchdown speed, tilt of the flights that landed and of all, spin and drift,
 and the spin and opposite/neighbour thrusts settled before touchdown next to
@@ -23,7 +24,9 @@ reached 10 m first, and touched down no faster than 3 m/s.
 
 import argparse
 import json
+import random
 import subprocess
+import sys
 from concurrent.futures import ThreadPoolExecutor
 
 ON = ("realism on", [])
@@ -103,9 +106,14 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--motormix", required=True)
     p.add_argument("--seeds", type=int, default=10)
-    p.add_argument("--first-seed", type=int, default=11)
+    p.add_argument("--first-seed", type=int, default=None,
+                   help="first seed (default: drawn fresh and printed)")
     p.add_argument("--jobs", type=int, default=2)
     a = p.parse_args()
+    if a.first_seed is None:
+        a.first_seed = random.SystemRandom().randrange(1_000_000, 1_000_000_000)
+    print(f"spin_landing_table: seeds {a.first_seed}..{a.first_seed + a.seeds - 1} "
+          f"(replay with --first-seed {a.first_seed})", file=sys.stderr)
     jobs = []
     for row in ROWS:
         for motor in range(4):
@@ -128,6 +136,9 @@ def main():
         results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), jobs))
         robust_results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), robust))
         two_results = list(pool.map(lambda j: fly(a.motormix, *j[0], j[1], j[2]), two))
+    print(f"Seeds {a.first_seed} to {a.first_seed + a.seeds - 1} for every motor (replay: "
+          f"--first-seed {a.first_seed} --seeds {a.seeds}).")
+    print()
     print("| vehicle | scenario | failure | world | landed | touchdown max (m/s) "
           "| tilt max, landed / all (deg) | spin max (rad/s) | drift max (m) "
           "| settled spin / equilibrium (rad/s) "
