@@ -149,12 +149,18 @@ class Node {
         log_ << "motormix: motor test ended" << std::endl;
       }
     }
-    publish_pwm(r);
-    compute_stats_.add(static_cast<double>(bus::monotonic_us() - woke_us));
     const bool answer = motor_test_answer_due_ || r.motor_test_changed;
     motor_test_answer_due_ = false;
-    if (status_every_cycle_ || now_us >= next_status_us_ || answer) {
-      publish_status(r);
+    const bool status_due = status_every_cycle_ || now_us >= next_status_us_ || answer;
+    // On the timer the outputs go first (the status can wait a few
+    // microseconds, the motors not). In lockstep motor_pwm_t is the
+    // cycle's last message: a simulator that has it has everything of the
+    // tick (one sender's messages arrive in order), whenever it looks.
+    if (clock_.lockstep && status_due) publish_status(r);
+    publish_pwm(r);
+    compute_stats_.add(static_cast<double>(bus::monotonic_us() - woke_us));
+    if (!clock_.lockstep && status_due) publish_status(r);
+    if (status_due) {
       next_status_us_ = now_us + static_cast<std::int64_t>(1e6 / config_.status_rate_hz);
       warn_about_rejections(now_us);
     }
