@@ -97,7 +97,20 @@ void read_mixer(MapReader mixer, Config& config) {
   budgets.finish();
 
   MapReader prioritized = mixer.map("prioritized");
-  config.airmode = prioritized.choice("airmode", Airmode::kOff, kAirmodeNames);
+  // A named mode, or the continuous limits (its corners are the names).
+  config.airmode = limits_of(prioritized.choice("airmode", Airmode::kOff, kAirmodeNames));
+  MapReader limits = prioritized.map("airmode_limits");
+  const AirmodeLimits asked{limits.number("roll_pitch", 0.0, 0.0, 1.0),
+                            limits.number("yaw", 0.0, 0.0, 1.0)};
+  limits.finish();
+  if (prioritized.has("airmode_limits")) {
+    if (prioritized.has("airmode")) {
+      fail(prioritized.path_of("airmode_limits"), "both airmode and airmode_limits",
+           "one of the two: a named mode, or the limits (off is {roll_pitch: 0, yaw: 0}, "
+           "roll_pitch {1, 0}, roll_pitch_yaw {1, 1})");
+    }
+    config.airmode = asked;
+  }
   config.yaw_headroom = prioritized.number("yaw_headroom", 0.15, 0.0, 1.0);
   config.tie_tolerance = prioritized.number("tie_tolerance", config.tie_tolerance, 0.0, 0.1);
   prioritized.finish();

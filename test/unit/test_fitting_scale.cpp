@@ -3,7 +3,7 @@
 // the way it is derived on paper. The reference is O(n^2) and divides; the
 // kernels step along the pieces of a convex excess. Random bases, parts and
 // thrust columns (with motors the shift cannot move, and with equal lift),
-// seeded; both airmodes (thrust may rise or not); 4, 6, 8 motors at fixed
+// seeded; thrust that may not rise, rise by a quarter, or rise freely; 4, 6, 8 motors at fixed
 // size and 5, 12, 16 at dynamic size.
 
 #include <motormix/allocation/allocation.hpp>
@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace motormix {
@@ -22,11 +23,15 @@ namespace {
 // Scales agree to this (they are tops of intervals bounded by ratios of
 // numbers of order one).
 constexpr double kScaleTolerance = 1e-9;
+// How far the shift may rise: not at all (airmode off), by a quarter (a
+// limited airmode), freely (airmode on).
+constexpr double kNoCap = std::numeric_limits<double>::infinity();
+constexpr double kRises[] = {0.0, 0.25, kNoCap};
 
-// Largest s in [0, 1] for which some shift k (k <= 0 unless may_raise)
+// Largest s in [0, 1] for which some shift k (k <= rise)
 // puts every motor of base + s part + k thrust in range; -1 if none.
 double pairwise_reference(const MotorVector& base, const MotorVector& part,
-                          const MotorVector& thrust, CommandRange r, bool may_raise) {
+                          const MotorVector& thrust, CommandRange r, double rise) {
   double lo = 0.0;
   double hi = 1.0;
   const auto keep = [&](double a, double c) {  // a s <= c
@@ -47,7 +52,7 @@ double pairwise_reference(const MotorVector& base, const MotorVector& part,
     }
     const double rate_i = part[i] / thrust[i];
     const double low_i = (r.lower - base[i]) / thrust[i];
-    if (!may_raise) keep(-rate_i, -low_i);
+    if (rise < kNoCap) keep(-rate_i, rise - low_i);
     for (Eigen::Index j = 0; j < n; ++j) {
       if (thrust[j] <= 0.0) continue;
       keep(part[j] / thrust[j] - rate_i, (r.upper - base[j]) / thrust[j] - low_i);
@@ -58,25 +63,25 @@ double pairwise_reference(const MotorVector& base, const MotorVector& part,
 
 template <int N>
 double kernel(const MotorVector& base, const MotorVector& part, const MotorVector& thrust,
-              CommandRange r, bool may_raise) {
+              CommandRange r, double rise) {
   const Eigen::Index n = base.size();
   const detail::LocalMotors<N> b = base;
   const detail::LocalMotors<N> p = part;
   const MotorVector lift = detail::positive_inverse(thrust);
   const detail::ConstMotorsView<N> view(lift.data(), n);
-  return detail::largest_fitting_scale<N>(b, p, view, thrust.minCoeff() > 0.0, n, r, may_raise);
+  return detail::largest_fitting_scale<N>(b, p, view, thrust.minCoeff() > 0.0, n, r, rise);
 }
 
 // Equal lift through the general kernel, as the repair calls it: the
 // shared thrust offset folded into the base, a lift of 1 on every motor.
 template <int N>
 double equal_lift_kernel(double offset, const MotorVector& rest, const MotorVector& part,
-                         CommandRange r, bool may_raise) {
+                         CommandRange r, double rise) {
   const Eigen::Index n = rest.size();
   const detail::LocalMotors<N> b = (rest.array() + offset).matrix();
   const detail::LocalMotors<N> p = part;
   const detail::LocalMotors<N> lift = MotorVector::Ones(n);
-  return detail::largest_fitting_scale<N>(b, p, lift, true, n, r, may_raise);
+  return detail::largest_fitting_scale<N>(b, p, lift, true, n, r, rise);
 }
 
 struct Case {
@@ -97,15 +102,15 @@ Case random_case(std::mt19937_64& rng, int n, bool equal_lift, bool some_fixed) 
   return c;
 }
 
-// Whether a shift (only downward unless may_raise) puts every motor of
+// Whether a shift (rising by `rise` at most) puts every motor of
 // base + s part in range, within the rounding the repair allows.
-bool shift_fits_at(const Case& c, double s, CommandRange r, bool may_raise) {
+bool shift_fits_at(const Case& c, double s, CommandRange r, double rise) {
   const MotorVector u = c.base + s * c.part;
   const MotorVector lift = detail::positive_inverse(c.thrust);
   ShiftInterval shift = detail::with_motor_count(u.size(), [&](auto size) {
     return detail::shifts_that_fit<decltype(size)::value>(u, lift, u.size(), r);
   });
-  if (!may_raise) shift.hi = std::min(shift.hi, 0.0);
+  shift.hi = std::min(shift.hi, rise);
   constexpr double kRounding = 1e-12;  // as the repair allows
   return shift.hi - shift.lo >= -kRounding;
 }
@@ -121,14 +126,14 @@ void agree_on_random_cases(int n) {
     const bool equal_lift = k % 3 == 0;
     const bool some_fixed = !equal_lift && k % 3 == 1;
     const Case c = random_case(rng, n, equal_lift, some_fixed);
-    for (const bool may_raise : {false, true}) {
-      const double expected = pairwise_reference(c.base, c.part, c.thrust, r, may_raise);
-      const double got = kernel<N>(c.base, c.part, c.thrust, r, may_raise);
+    for (const double rise : kRises) {
+      const double expected = pairwise_reference(c.base, c.part, c.thrust, r, rise);
+      const double got = kernel<N>(c.base, c.part, c.thrust, r, rise);
       if (expected < 0.0) {
         // No scale fits, or only a single point that the reference's
         // rounding loses: the kernel gives up too, or finds that point.
         if (got >= 0.0) {
-          ASSERT_TRUE(shift_fits_at(c, got, r, may_raise)) << "n " << n << " case " << k;
+          ASSERT_TRUE(shift_fits_at(c, got, r, rise)) << "n " << n << " case " << k;
           ++points;
         }
         ++refused;
@@ -136,7 +141,7 @@ void agree_on_random_cases(int n) {
       }
       ++found;
       ASSERT_NEAR(got, expected, kScaleTolerance)
-          << "n " << n << " case " << k << " raise " << may_raise;
+          << "n " << n << " case " << k << " raise " << rise;
     }
   }
   // Both outcomes are exercised (more motors fit less often).
@@ -163,10 +168,10 @@ TEST(FittingScale, AShiftFitsAtTheScaleFound) {
   int checked = 0;
   for (int k = 0; k < 20000; ++k) {
     const Case c = random_case(rng, 8, k % 2 == 0, k % 4 == 1);
-    for (const bool may_raise : {false, true}) {
-      const double s = kernel<8>(c.base, c.part, c.thrust, r, may_raise);
+    for (const double rise : kRises) {
+      const double s = kernel<8>(c.base, c.part, c.thrust, r, rise);
       if (s < 0.0) continue;
-      ASSERT_TRUE(shift_fits_at(c, s, r, may_raise)) << "case " << k << " s " << s;
+      ASSERT_TRUE(shift_fits_at(c, s, r, rise)) << "case " << k << " s " << s;
       ++checked;
     }
   }
@@ -183,10 +188,10 @@ TEST(FittingScale, UniformBaseClosedFormMatchesTheReference) {
     MotorVector part(6);
     for (int i = 0; i < 6; ++i) part[i] = unit(rng);
     const MotorVector lift = MotorVector::Ones(6);
-    for (const bool may_raise : {false, true}) {
-      const double expected = pairwise_reference(base, part, lift, r, may_raise);
+    for (const double rise : kRises) {
+      const double expected = pairwise_reference(base, part, lift, r, rise);
       const double got = detail::largest_fitting_scale_uniform_base(thrust, part.minCoeff(),
-                                                                    part.maxCoeff(), r, may_raise);
+                                                                    part.maxCoeff(), r, rise);
       ASSERT_NEAR(got, expected, kScaleTolerance) << "case " << k;
     }
   }
@@ -231,13 +236,13 @@ TEST(FittingScale, TwoGroupClosedFormMatchesTheReference) {
     }
     const MotorVector base = (rest.array() + offset).matrix();
     const MotorVector lift = MotorVector::Ones(n);
-    for (const bool may_raise : {false, true}) {
-      const double expected = pairwise_reference(base, part, lift, r, may_raise);
+    for (const double rise : kRises) {
+      const double expected = pairwise_reference(base, part, lift, r, rise);
       const double got =
-          detail::largest_fitting_scale_two_groups(offset, e, part_a, part_b, r, may_raise);
+          detail::largest_fitting_scale_two_groups(offset, e, part_a, part_b, r, rise);
       // The stepping kernel on the same motors finds the same scale, single
       // points included (the repair uses either, by geometry).
-      const double stepped = equal_lift_kernel<Eigen::Dynamic>(offset, rest, part, r, may_raise);
+      const double stepped = equal_lift_kernel<Eigen::Dynamic>(offset, rest, part, r, rise);
       ASSERT_EQ(got >= 0.0, stepped >= 0.0)
           << "case " << k << " two groups " << got << " stepped " << stepped;
       if (got >= 0.0) {
@@ -246,12 +251,12 @@ TEST(FittingScale, TwoGroupClosedFormMatchesTheReference) {
       if (expected < 0.0 && got >= 0.0) {
         // A single fitting point the reference's rounding loses.
         Case c{base, part, lift};
-        ASSERT_TRUE(shift_fits_at(c, got, r, may_raise)) << "case " << k;
+        ASSERT_TRUE(shift_fits_at(c, got, r, rise)) << "case " << k;
         continue;
       }
       ASSERT_NEAR(got, expected, kScaleTolerance)
-          << "case " << k << " raise " << may_raise << " offset " << offset << " parts " << part_a
-          << " " << part_b << " rest " << rest.transpose();
+          << "case " << k << " raise " << rise << " offset " << offset << " parts " << part_a << " "
+          << part_b << " rest " << rest.transpose();
       found += expected >= 0.0;
     }
   }
@@ -279,7 +284,7 @@ TEST(FittingScale, SinglePointScalesAreFound) {
     part << alpha, -alpha, alpha, -alpha;
     const detail::GroupExtremes e{high_a, low_a, low_b, low_b};
     const double closed =
-        detail::largest_fitting_scale_two_groups(offset, e, alpha, -alpha, r, false);
+        detail::largest_fitting_scale_two_groups(offset, e, alpha, -alpha, r, 0.0);
     const double stepped = equal_lift_kernel<4>(offset, rest, part, r, false);
     ASSERT_NEAR(closed, point, kScaleTolerance) << "case " << k;
     ASSERT_NEAR(stepped, point, kScaleTolerance) << "case " << k;

@@ -106,7 +106,8 @@ std::vector<std::unique_ptr<Mixer>> mixers_for(const MixingMatrix& m, bool wheel
   // Each strategy with every failure set prepared, as the config layer
   // builds it, so the failure paths are counted too.
   using Make = std::function<std::unique_ptr<const Allocator>(const MixingBasis&)>;
-  const auto add_reallocating = [&](const Make& make, std::optional<Airmode> yaw_yielding = {}) {
+  const auto add_reallocating = [&](const Make& make,
+                                    std::optional<AirmodeLimits> yaw_yielding = {}) {
     FailurePlan plan = prepare_failures(
         m, range, wheels ? 0.0 : 0.5,
         [&](const FailureMixing& f, const MixingBasis& basis) -> std::unique_ptr<const Allocator> {
@@ -125,7 +126,9 @@ std::vector<std::unique_ptr<Mixer>> mixers_for(const MixingMatrix& m, bool wheel
   add_reallocating([&](const MixingBasis& b) { return std::make_unique<ClipAllocator>(b, range); });
   add_reallocating(
       [&](const MixingBasis& b) { return std::make_unique<ShiftAllocator>(b, range); });
-  for (Airmode am : {Airmode::kOff, Airmode::kRollPitch, Airmode::kRollPitchYaw}) {
+  // The named modes and a limited airmode between them.
+  for (AirmodeLimits am : {limits_of(Airmode::kOff), limits_of(Airmode::kRollPitch),
+                           limits_of(Airmode::kRollPitchYaw), AirmodeLimits{0.3, 0.2}}) {
     add_reallocating(
         [&](const MixingBasis& b) {
           return std::make_unique<PrioritizedAllocator>(b, range, am, 0.15);

@@ -64,7 +64,7 @@ TEST(Px4Import, TheSharedFlightLogsAirframe) {
                      std::abs(c.geometry.rotors[0].position.y())),
             0.05);
   EXPECT_EQ(c.strategy, config::Strategy::kPrioritized);
-  EXPECT_EQ(c.airmode, Airmode::kOff);  // MC_AIRMODE 0
+  EXPECT_EQ(named_airmode(c.airmode), Airmode::kOff);  // MC_AIRMODE 0
   EXPECT_NE(imported.yaml.find("normalization: px4"), std::string::npos) << imported.yaml;
 }
 
@@ -121,7 +121,7 @@ TEST(Px4Import, AParamsFileWithMotorsOnOtherOutputs) {
   EXPECT_NEAR(c.geometry.rotors[0].position.y(), 0.25, kCopiedExactly);
   EXPECT_NEAR(c.geometry.rotors[5].thrust_coefficient, 6.0, kCopiedExactly);
   EXPECT_NEAR(c.geometry.rotors[4].thrust_coefficient, 6.5, kCopiedExactly);  // PX4's default
-  EXPECT_EQ(c.airmode, Airmode::kRollPitch);                                  // MC_AIRMODE 1
+  EXPECT_EQ(named_airmode(c.airmode), Airmode::kRollPitch);                   // MC_AIRMODE 1
   // Motor 1 is on output 2 (FUNC2 = 101), motor 2 on output 1.
   EXPECT_EQ(c.outputs[0].min, 1050.0);
   EXPECT_EQ(c.outputs[0].max, 1950.0);
@@ -205,7 +205,7 @@ TEST(Px4Import, ABeforeControlAllocationAirframeIsAPreset) {
   const config::Px4Import imported = config::import_px4(p, "test");
   const config::Config c = config::load_config_text(imported.yaml, "imported");
   EXPECT_EQ(c.motors(), 6);
-  EXPECT_EQ(c.airmode, Airmode::kRollPitchYaw);
+  EXPECT_EQ(named_airmode(c.airmode), Airmode::kRollPitchYaw);
   EXPECT_TRUE(lists(imported.notes, "preset hexa_x"));
   p.values = {{"SYS_AUTOSTART", 10016}};  // a quad wide frame: no preset
   EXPECT_THROW(config::import_px4(p, "test"), std::runtime_error);

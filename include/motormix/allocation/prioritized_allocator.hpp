@@ -10,6 +10,7 @@
 #include <motormix/allocation/allocation_settings.hpp>
 
 #include <array>
+#include <cstdint>
 
 namespace motormix {
 
@@ -21,8 +22,12 @@ class PrioritizedAllocator final : public MatrixAllocator {
   static constexpr double kDefaultTieTolerance = motormix::kDefaultTieTolerance;
   static constexpr double kGainThatCounts = 1e-5;
 
-  PrioritizedAllocator(const MixingBasis& basis, CommandRange range, Airmode airmode,
+  PrioritizedAllocator(const MixingBasis& basis, CommandRange range, AirmodeLimits airmode,
                        double yaw_headroom, double tie_tolerance = kDefaultTieTolerance);
+  // A named mode: its corner of the limits.
+  PrioritizedAllocator(const MixingBasis& basis, CommandRange range, Airmode airmode,
+                       double yaw_headroom, double tie_tolerance = kDefaultTieTolerance)
+      : PrioritizedAllocator(basis, range, limits_of(airmode), yaw_headroom, tie_tolerance) {}
   std::string_view name() const override { return "prioritized"; }
   AllocationResult allocate(const AxisVector& demand, MotorVector& commands) const override;
 
@@ -49,7 +54,21 @@ class PrioritizedAllocator final : public MatrixAllocator {
   };
   static InRangeGains in_range_gains(const MotorVector& column, CommandRange range);
 
-  Airmode airmode_;
+  // The sequence flown: a named mode's own, or the limited one (any
+  // limits off the corners; at a corner it would do the same steps).
+  enum class Sequence : std::uint8_t { kOff, kRollPitch, kRollPitchYaw, kLimited };
+  Sequence sequence_;
+  // How far the thrust may rise (a gain along its column): for roll and
+  // pitch, in the sequence and the repair (0 with airmode off, +inf with
+  // it), and for yaw in the limited sequence.
+  double rp_rise_cap_;
+  double yaw_rise_cap_;
+  // The same for roll and pitch in command units, where every motor has the
+  // same share of thrust (the repair's closed forms).
+  double rp_rise_command_;
+  // The sequence leaves roll and pitch as demanded (it never scales them):
+  // roll_pitch, roll_pitch_yaw, and limits whose roll/pitch share is 1.
+  bool keeps_roll_pitch_;
   double yaw_headroom_;
   double tie_tolerance_;
   double gain_that_counts_;                   // min(tie_tolerance_, kGainThatCounts)

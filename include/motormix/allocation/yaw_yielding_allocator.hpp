@@ -30,7 +30,7 @@ class YawYieldingAllocator final : public Allocator {
   // `reduced`: the failure's mixing basis; `yaw_free`: the same failure's
   // yaw-free mixing (FailureMixing::yaw_free).
   YawYieldingAllocator(const MixingBasis& reduced, const MixingMatrix& yaw_free, CommandRange range,
-                       Airmode airmode, double yaw_headroom,
+                       AirmodeLimits airmode, double yaw_headroom,
                        double tie_tolerance = PrioritizedAllocator::kDefaultTieTolerance);
   std::string_view name() const override { return "prioritized"; }
   int motors() const override { return full_.motors(); }

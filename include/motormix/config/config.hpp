@@ -100,7 +100,7 @@ struct Config {
 
   Strategy strategy = Strategy::kLegacyBudget;
   LegacyBudgets legacy_budgets;                 // legacy_budget and budget
-  Airmode airmode = Airmode::kOff;              // prioritized
+  AirmodeLimits airmode;                        // prioritized: off unless set
   double yaw_headroom = 0.15;                   // prioritized
   double tie_tolerance = kDefaultTieTolerance;  // prioritized
   OptimalSettings optimal;                      // optimal

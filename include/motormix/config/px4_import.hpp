@@ -7,7 +7,9 @@
 //   - CA_ROTOR_COUNT and CA_ROTORi_PX/PY/PZ/KM/CT/AX/AY/AZ: the rotors
 //     (geometry.rotors, KM's sign the spin: positive counter-clockwise),
 //     with `normalization: px4`;
-//   - MC_AIRMODE: the prioritized strategy's airmode;
+//   - MC_AIRMODE, or MC_AIRMODE_LIM and MC_AIRMODE_YLIM (PX4's limited airmode,
+//     the same shares of the range as mixer.prioritized.airmode_limits): the
+//     prioritized strategy's airmode;
 //   - THR_MDL_FAC: output.thrust_model_factor;
 //   - MINi/MAXi/DISi of the outputs the PWM_MAIN_FUNCi and PWM_AUX_FUNCi
 //     parameters give to the motors (101 is motor 1), or of MAIN 1..n

@@ -272,17 +272,41 @@ Px4Import import_px4(const Px4Parameters& params, const std::string& source_name
 
   // The strategy: PX4's sequential desaturation, or its plain clipping.
   const double method = r.get("CA_METHOD", 2.0);
-  const double airmode = r.get("MC_AIRMODE", 0.0);
-  const char* airmode_name = airmode >= 2.0   ? "roll_pitch_yaw"
-                             : airmode >= 1.0 ? "roll_pitch"
-                                              : "off";
+  // Airmode: the continuous limits where the airframe has them (PX4's
+  // limited airmode, MC_AIRMODE_LIM for roll/pitch and MC_AIRMODE_YLIM for
+  // yaw, each a share of the range in [0, 1]: the same quantity as
+  // motormix's airmode_limits), else the named MC_AIRMODE.
+  const std::optional<double> lim = r.get("MC_AIRMODE_LIM");
+  const std::optional<double> ylim = r.get("MC_AIRMODE_YLIM");
+  std::ostringstream prioritized;
+  if (lim || ylim) {
+    const auto share = [&](const char* name, const std::optional<double>& v) {
+      const double x = v.value_or(0.0);
+      const double clamped = std::isfinite(x) ? std::clamp(x, 0.0, 1.0) : 0.0;
+      if (clamped != x)
+        out.notes.push_back(std::string(name) + " = " + number(x) + " clamped into 0..1");
+      return clamped;
+    };
+    const double rp = share("MC_AIRMODE_LIM", lim);
+    const double yaw = share("MC_AIRMODE_YLIM", ylim);
+    prioritized << "{airmode_limits: {roll_pitch: " << number(rp) << ", yaw: " << number(yaw)
+                << "}}  # MC_AIRMODE_LIM " << number(lim.value_or(0.0)) << ", MC_AIRMODE_YLIM "
+                << number(ylim.value_or(0.0));
+    r.get("MC_AIRMODE");  // superseded by the limits: taken, not listed as left out
+  } else {
+    const double airmode = r.get("MC_AIRMODE", 0.0);
+    prioritized << "{airmode: "
+                << (airmode >= 2.0   ? "roll_pitch_yaw"
+                    : airmode >= 1.0 ? "roll_pitch"
+                                     : "off")
+                << "}  # MC_AIRMODE " << number(airmode);
+  }
   y << "mixer:\n";
   if (method == 0.0) {
     y << "  strategy: clip  # CA_METHOD 0: pseudo-inverse with output clipping\n";
   } else {
     y << "  strategy: prioritized  # CA_METHOD " << number(method)
-      << ": sequential desaturation\n  prioritized: {airmode: " << airmode_name
-      << "}  # MC_AIRMODE " << number(airmode) << "\n";
+      << ": sequential desaturation\n  prioritized: " << prioritized.str() << "\n";
   }
 
   // Outputs: the channels each group's FUNCi parameters give to motors.

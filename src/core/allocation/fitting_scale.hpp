@@ -3,13 +3,14 @@
 // that gives way: the largest share s in [0, 1] of a part (yaw, or roll and
 // pitch) that still fits into the command range on top of a base, once all
 // motors are shifted together along the thrust column by the best amount
-// (only downward when thrust may not rise). At a motor count fixed at
+// (rising by a cap at most: 0 when thrust may not rise, +inf when it may
+// rise freely, between for limited airmode). At a motor count fixed at
 // compile time, on local values.
 //
 // Motor i allows the shifts k (in thrust units, divided by thrust_i) in
 //   L_i(s) = (lower - base_i - s part_i) / thrust_i <= k <= U_i(s) = (upper - ...) / thrust_i,
 // so a shift exists iff the excess G(s) = max_i L_i(s) - min_j U_j(s) is
-// <= 0, and also max_i L_i(s) <= 0 when thrust may not rise. G is a maximum
+// <= 0, and also max_i L_i(s) <= cap when thrust may rise by cap at most. G is a maximum
 // of lines minus a minimum of lines: convex and piecewise linear, so the
 // scales that fit form an interval and the answer is its top.
 //
@@ -31,6 +32,10 @@ namespace motormix::detail {
 
 // An excess within rounding of a motor sitting on its limit counts as a fit.
 inline constexpr double kFitTolerance = 1e-13;
+
+// `x` with a rise's room added: x itself for no room (bit for bit, -0.0
+// kept: the corners reproduce the named modes exactly).
+inline double with_room(double x, double room) { return room == 0.0 ? x : x + room; }
 
 // What one step needs of G at s: its value and the slope of the piece just
 // below s.
@@ -60,7 +65,7 @@ double top_of_fitting_scales(double bottom, double top, Eigen::Index motors,
 // (0 marks a motor the shift does not move); `all_lift` says there is none.
 template <int N, typename Motors, typename Lift>
 double largest_fitting_scale(const Motors& base, const Motors& part, const Lift& lift,
-                             bool all_lift, Eigen::Index n, CommandRange range, bool may_raise) {
+                             bool all_lift, Eigen::Index n, CommandRange range, double rise_cap) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double bottom = 0.0;
   double top = 1.0;
@@ -105,22 +110,29 @@ double largest_fitting_scale(const Motors& base, const Motors& part, const Lift&
       rate_up = sets_up ? rate[i] : rate_up;
     }
     ExcessAt g{highest_low - lowest_up, rate_up - rate_low};
-    if (!may_raise && highest_low > g.excess) g = {highest_low, -rate_low};
+    // The shift may rise by rise_cap at most: max L_i(s) - rise_cap <= 0.
+    if (rise_cap < kInf) {
+      const double over = highest_low - rise_cap;  // exact for a cap of 0
+      if (over > g.excess) g = {over, -rate_low};
+    }
     return g;
   });
 }
 
 // Equal lift and a base the same for every motor (thrust alone): G is
-// linear in s, so the answer is closed form. `part` spans [low, high].
+// linear in s, so the answer is closed form. `part` spans [low, high];
+// `rise` is the rise cap in command units.
 inline double largest_fitting_scale_uniform_base(double base, double part_low, double part_high,
-                                                 CommandRange range, bool may_raise) {
+                                                 CommandRange range, double rise) {
   double top = 1.0;
   const double spread = part_high - part_low;
   if (spread > 0.0) top = std::min(top, (range.upper - range.lower) / spread);
-  if (!may_raise) {
-    // The lowest motor must not need a shift up: base + s part_low >= lower.
-    if (base < range.lower - kFitTolerance) return -1.0;
-    if (part_low < 0.0) top = std::min(top, (base - range.lower) / -part_low);
+  if (rise < std::numeric_limits<double>::infinity()) {
+    // The lowest motor must not need a shift up beyond the cap:
+    // base + rise + s part_low >= lower.
+    const double lifted = with_room(base, rise);
+    if (lifted < range.lower - kFitTolerance) return -1.0;
+    if (part_low < 0.0) top = std::min(top, (lifted - range.lower) / -part_low);
   }
   return top;
 }
@@ -134,11 +146,11 @@ struct GroupExtremes {
 // `part_b` on the other (yaw on a multirotor whose rotors spin two ways):
 // the spread of offset + base + s part is the largest of the spreads within
 // each group (s drops out) and of the two cross terms, which are linear in
-// s; the bottom, when thrust may not rise, is linear in s per group too. So
+// s; the bottom, when thrust's rise is capped, is linear in s per group too. So
 // the scales that fit are an intersection of half-lines: closed form.
 inline double largest_fitting_scale_two_groups(double offset, const GroupExtremes& base,
                                                double part_a, double part_b, CommandRange range,
-                                               bool may_raise) {
+                                               double rise) {
   const double room = range.upper - range.lower;
   double lo = 0.0;
   double hi = 1.0;
@@ -162,10 +174,10 @@ inline double largest_fitting_scale_two_groups(double offset, const GroupExtreme
   if (base.high_b - base.low_b > room + kFitTolerance) return -1.0;
   keep(part_a - part_b, room - (base.high_a - base.low_b));  // a's top over b's bottom
   keep(part_b - part_a, room - (base.high_b - base.low_a));  // b's top over a's bottom
-  if (!may_raise) {
-    // offset + low + s part >= lower for both groups' lowest motors.
-    keep(-part_a, offset + base.low_a - range.lower);
-    keep(-part_b, offset + base.low_b - range.lower);
+  if (rise < std::numeric_limits<double>::infinity()) {
+    // offset + rise + low + s part >= lower for both groups' lowest motors.
+    keep(-part_a, with_room(offset + base.low_a - range.lower, rise));
+    keep(-part_b, with_room(offset + base.low_b - range.lower, rise));
   }
   return !none && lo <= hi ? hi : -1.0;
 }

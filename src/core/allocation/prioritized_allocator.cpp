@@ -95,10 +95,9 @@ PrioritizedAllocator::InRangeGains PrioritizedAllocator::in_range_gains(const Mo
 }
 
 PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRange range,
-                                           Airmode airmode, double yaw_headroom,
+                                           AirmodeLimits airmode, double yaw_headroom,
                                            double tie_tolerance)
     : MatrixAllocator(basis, range),
-      airmode_(airmode),
       yaw_headroom_(yaw_headroom),
       // NaN or negative would make every comparison a loss for the repair
       // or none a tie: neither is a tolerance.
@@ -139,6 +138,29 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
   }
   // Equal within rounding: the repair's shift still uses the column itself.
   equal_lift_ = equal_thrust_shares();
+
+  // Out of [0, 1] (or NaN) is no limit a configuration passes: the nearest
+  // end, NaN as none.
+  const auto share = [](double x) { return x >= 0.0 ? std::min(x, 1.0) : 0.0; };
+  airmode.roll_pitch = share(airmode.roll_pitch);
+  airmode.yaw = share(airmode.yaw);
+  const std::optional<Airmode> named = named_airmode(airmode);
+  sequence_ = !named                          ? Sequence::kLimited
+              : *named == Airmode::kOff       ? Sequence::kOff
+              : *named == Airmode::kRollPitch ? Sequence::kRollPitch
+                                              : Sequence::kRollPitchYaw;
+  // A share of the range, as a gain along the thrust column: no motor
+  // rises by more than that share of its range. 1 is no cap at all.
+  const double top_share = thrust.size() > 0 ? thrust.cwiseAbs().maxCoeff() : 0.0;
+  const double room = range_.upper - range_.lower;
+  const auto cap = [&](double limit) {
+    if (limit >= 1.0) return kInf;
+    return limit > 0.0 && top_share > 0.0 ? limit * room / top_share : 0.0;
+  };
+  rp_rise_cap_ = cap(airmode.roll_pitch);
+  yaw_rise_cap_ = cap(airmode.yaw);
+  rp_rise_command_ = airmode.roll_pitch >= 1.0 ? kInf : airmode.roll_pitch * room;
+  keeps_roll_pitch_ = airmode.roll_pitch >= 1.0;
 }
 
 // One allocation at N motors, every per-motor vector a local of fixed size.
@@ -161,20 +183,31 @@ class PrioritizedAllocator::Kernel {
     const double yaw = demand[index(Axis::kYaw)];
     AxisVector effective = demand;
     effective[index(Axis::kYaw)] = 0.0;
-    switch (a_.airmode_) {
-      case Airmode::kOff:
+    switch (a_.sequence_) {
+      case Sequence::kOff:
         u -= yaw * column(Axis::kYaw);  // the mix without yaw
-        desaturate(u, effective, Axis::kThrust, kDecreaseOnly);
+        desaturate(u, effective, Axis::kThrust, kNoRise);
         desaturate(u, effective, Axis::kRoll);
         desaturate(u, effective, Axis::kPitch);
         mix_yaw(yaw, u, effective);
         break;
-      case Airmode::kRollPitch:
+      case Sequence::kRollPitch:
         u -= yaw * column(Axis::kYaw);  // the mix without yaw
         desaturate(u, effective, Axis::kThrust);
         mix_yaw(yaw, u, effective);
         break;
-      case Airmode::kRollPitchYaw:
+      case Sequence::kLimited:
+        // off and roll_pitch with the thrust's rise capped: what the rise
+        // cannot fix comes from roll and pitch (under a whole share).
+        u -= yaw * column(Axis::kYaw);
+        desaturate(u, effective, Axis::kThrust, a_.rp_rise_cap_);
+        if (!a_.keeps_roll_pitch_) {
+          desaturate(u, effective, Axis::kRoll);
+          desaturate(u, effective, Axis::kPitch);
+        }
+        mix_yaw(yaw, u, effective, a_.yaw_rise_cap_);
+        break;
+      case Sequence::kRollPitchYaw:
         effective = demand;  // u is already the mix of the whole demand
         if (a_.equal_lift_) {
           // Thrust moves every motor alike: the extremes just taken give
@@ -189,7 +222,7 @@ class PrioritizedAllocator::Kernel {
           // line (hexa, octo) a call passed the motors through memory both
           // ways (a fifth of the octo's time).
           const Needs needs = needs_along(u, a_.gains_[index(Axis::kYaw)]);
-          step(u, effective, Axis::kYaw, needs.up, needs.down, false);
+          step(u, effective, Axis::kYaw, needs.up, needs.down, kInf);
         }
         break;
     }
@@ -207,7 +240,7 @@ class PrioritizedAllocator::Kernel {
     // any key (prefer_repair). The demand's roll/pitch error is needed only by the shortcut below
     // with airmode, and from the demand alone: taken before the clip and the scales, its root is
     // ready when they are.
-    const double demanded = a_.effectiveness_inverts_mixing_ && a_.airmode_ != Airmode::kOff
+    const double demanded = a_.effectiveness_inverts_mixing_ && a_.keeps_roll_pitch_
                                 ? demanded_roll_pitch(demand)
                                 : 0.0;
     Motors clipped = u;
@@ -247,7 +280,8 @@ class PrioritizedAllocator::Kernel {
   }
 
  private:
-  static constexpr bool kDecreaseOnly = true;
+  // A step along thrust that may only lower it.
+  static constexpr double kNoRise = 0.0;
 
   detail::ConstMixingColumnsView<N> mixing() const {
     return detail::ConstMixingColumnsView<N>(a_.mixing_by_column_.data(), n_, kNumAxes);
@@ -286,13 +320,13 @@ class PrioritizedAllocator::Kernel {
   // min(b_i, 0) downward, so the step is max(0, max a) + min(0, min b). A
   // step g moves every interval by -g, so the second step comes from the
   // same two extremes: one pass over the motors for both steps.
-  void desaturate(Motors& u, AxisVector& effective, Axis axis, bool decrease_only = false) const {
-    desaturate_along(u, effective, axis, a_.gains_[index(axis)], decrease_only);
+  void desaturate(Motors& u, AxisVector& effective, Axis axis, double rise_cap = kInf) const {
+    desaturate_along(u, effective, axis, a_.gains_[index(axis)], rise_cap);
   }
   void desaturate_along(Motors& u, AxisVector& effective, Axis axis, const InRangeGains& g,
-                        bool decrease_only) const {
+                        double rise_cap) const {
     const Needs needs = needs_along(u, g);
-    step(u, effective, axis, needs.up, needs.down, decrease_only);
+    step(u, effective, axis, needs.up, needs.down, rise_cap);
   }
   struct Needs {
     double up;    // max a_i
@@ -310,36 +344,57 @@ class PrioritizedAllocator::Kernel {
                              double highest) const {
     const InRangeGains& g = a_.gains_[index(Axis::kThrust)];
     step(u, effective, Axis::kThrust, g.lowest[0] - lowest * g.inverse[0],
-         g.highest[0] - highest * g.inverse[0], false);
+         g.highest[0] - highest * g.inverse[0], kInf);
   }
+  // A step may rise by `rise_cap` at most (a gain): one that would rise
+  // further rises by the cap alone, without the balancing half step (with
+  // a cap of 0, not at all). The half step never rises above the first.
   void step(Motors& u, AxisVector& effective, Axis axis, double need_up, double need_down,
-            bool decrease_only) const {
+            double rise_cap) const {
     double gain = std::max(0.0, need_up) + std::min(0.0, need_down);
-    if (decrease_only && gain > 0.0) return;
+    if (gain > rise_cap) {
+      if (rise_cap > 0.0) {
+        u += rise_cap * column(axis);
+        effective[index(axis)] += rise_cap;
+      }
+      return;
+    }
     gain += 0.5 * (std::max(0.0, need_up - gain) + std::min(0.0, need_down - gain));
     u += gain * column(axis);
     effective[index(axis)] += gain;
   }
 
-  void mix_yaw(double yaw, Motors& u, AxisVector& effective) const {
+  void mix_yaw(double yaw, Motors& u, AxisVector& effective, double yaw_rise_cap = 0.0) const {
     u += yaw * column(Axis::kYaw);
     effective[index(Axis::kYaw)] = yaw;
+    // Limited airmode for yaw: first the thrust rises (only rises, by at
+    // most its cap, and only into room the top motors have) to lift the
+    // motors yaw pushed under the bottom.
+    if (yaw_rise_cap > 0.0) {
+      const Needs needs = needs_along(u, a_.gains_[index(Axis::kThrust)]);
+      const double rise =
+          std::min({std::max(0.0, needs.up), std::max(0.0, needs.down), yaw_rise_cap});
+      if (rise > 0.0) {
+        u += rise * column(Axis::kThrust);
+        effective[index(Axis::kThrust)] += rise;
+      }
+    }
     // Yaw gives way on its own axis (roll and pitch untouched), with some
     // room above the top so that full thrust still leaves yaw authority...
-    desaturate_along(u, effective, Axis::kYaw, a_.yaw_gains_with_headroom_, false);
+    desaturate_along(u, effective, Axis::kYaw, a_.yaw_gains_with_headroom_, kInf);
     // ...which thrust then pays for, only downward.
-    desaturate(u, effective, Axis::kThrust, kDecreaseOnly);
+    desaturate(u, effective, Axis::kThrust, kNoRise);
   }
 
   // Largest s in [0, 1] for which base + s * part fits after a thrust shift
-  // (only downward unless may_raise); -1 when none (fitting_scale.hpp).
-  double largest_fitting_scale(const Motors& base, const Motors& part, bool may_raise) const {
+  // (rising by rp_rise_cap_ at most); -1 when none (fitting_scale.hpp).
+  double largest_fitting_scale(const Motors& base, const Motors& part) const {
     return detail::largest_fitting_scale<N>(base, part, View(a_.lift_inverse_.data(), n_),
-                                            a_.all_motors_lift_, n_, range_, may_raise);
+                                            a_.all_motors_lift_, n_, range_, a_.rp_rise_cap_);
   }
 
   // The repair keeps the promise of the priorities exactly: thrust moves
-  // first (only downward without airmode), then yaw is scaled down, and
+  // first (rising within the roll/pitch limit), then yaw is scaled down, and
   // roll and pitch only when yaw alone cannot make room. First the scales...
   struct Repair {
     Motors rp_part;
@@ -347,7 +402,6 @@ class PrioritizedAllocator::Kernel {
     double rp_scale = 1.0;
   };
   Repair repair_scales(const AxisVector& effective) const {
-    const bool may_raise = a_.airmode_ != Airmode::kOff;
     Repair r{column(Axis::kRoll) * effective[index(Axis::kRoll)] +
              column(Axis::kPitch) * effective[index(Axis::kPitch)]};
     // Yaw gives way first: the largest share of it that fits with all of
@@ -369,29 +423,29 @@ class PrioritizedAllocator::Kernel {
             (r.rp_part - pad_b).maxCoeff(), (r.rp_part + pad_b).minCoeff()};
         const double yaw = effective[index(Axis::kYaw)];
         r.yaw_scale = detail::largest_fitting_scale_two_groups(
-            offset, e, yaw * a_.yaw_value_a_, yaw * a_.yaw_value_b_, range_, may_raise);
+            offset, e, yaw * a_.yaw_value_a_, yaw * a_.yaw_value_b_, range_, a_.rp_rise_command_);
         rp_low = std::min(e.low_a, e.low_b);
         rp_high = std::max(e.high_a, e.high_b);
       } else {
         const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
         const Motors base = (r.rp_part.array() + offset).matrix();
-        r.yaw_scale = largest_fitting_scale(base, yaw_part, may_raise);
+        r.yaw_scale = largest_fitting_scale(base, yaw_part);
         rp_low = r.rp_part.minCoeff();
         rp_high = r.rp_part.maxCoeff();
       }
       if (r.yaw_scale < 0.0) {
         r.yaw_scale = 0.0;
         r.rp_scale = std::max(0.0, detail::largest_fitting_scale_uniform_base(
-                                       offset, rp_low, rp_high, range_, may_raise));
+                                       offset, rp_low, rp_high, range_, a_.rp_rise_command_));
       }
       return r;
     }
     const Motors thrust_part = column(Axis::kThrust) * thrust;
     const Motors yaw_part = column(Axis::kYaw) * effective[index(Axis::kYaw)];
-    r.yaw_scale = largest_fitting_scale(thrust_part + r.rp_part, yaw_part, may_raise);
+    r.yaw_scale = largest_fitting_scale(thrust_part + r.rp_part, yaw_part);
     if (r.yaw_scale < 0.0) {
       r.yaw_scale = 0.0;
-      r.rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, r.rp_part, may_raise));
+      r.rp_scale = std::max(0.0, largest_fitting_scale(thrust_part, r.rp_part));
     }
     return r;
   }
@@ -400,13 +454,12 @@ class PrioritizedAllocator::Kernel {
   // false when no shift brings them into range (rounding aside, the
   // scales rule that out).
   bool apply(const Repair& r, AxisVector& effective, Motors& u) const {
-    const bool may_raise = a_.airmode_ != Airmode::kOff;
     const View thrust = column(Axis::kThrust);
     u = thrust * effective[index(Axis::kThrust)] +
         (r.yaw_scale * effective[index(Axis::kYaw)]) * column(Axis::kYaw) + r.rp_scale * r.rp_part;
     ShiftInterval k = detail::shifts_that_fit<N>(u, View(a_.lift_inverse_.data(), n_), n_, range_,
                                                  a_.all_motors_lift_);
-    if (!may_raise) k.hi = std::min(k.hi, 0.0);
+    if (a_.rp_rise_cap_ < kInf) k.hi = std::min(k.hi, a_.rp_rise_cap_);
     // At the largest scale some motor sits exactly on its limit: rounding
     // may leave the interval a few ulps wide of empty.
     constexpr double kRounding = 1e-12;
@@ -431,7 +484,7 @@ class PrioritizedAllocator::Kernel {
   // whose root (`demanded`) waits on nothing.
   double repair_roll_pitch_error(const AxisVector& demand, const AxisVector& effective,
                                  const Repair& r, double demanded) const {
-    if (a_.airmode_ != Airmode::kOff) return (1.0 - r.rp_scale) * demanded;
+    if (a_.keeps_roll_pitch_) return (1.0 - r.rp_scale) * demanded;
     // Scalar on purpose: `effective` was just written element by element,
     // and a packet load of it would stall on store forwarding.
     const auto left = [&](Axis axis) {

@@ -128,8 +128,8 @@ ShiftAllocator::allocate_along_thrust(const AxisVector& demand, double* out, Eig
         base_per_thrust_ > 0.0 ? base_per_thrust_ * demand[index(Axis::kThrust)] : u.mean();
     const detail::LocalMotors<N> base = d * along;
     const detail::LocalMotors<N> part = u - base;
-    const double scale =
-        detail::largest_fitting_scale<N>(base, part, inverse, every_motor_moves_, n, range, true);
+    const double scale = detail::largest_fitting_scale<N>(
+        base, part, inverse, every_motor_moves_, n, range, std::numeric_limits<double>::infinity());
     // None at all (a motor the shift cannot move is out of range on its
     // own): the torques go, and the clamp takes what is left.
     u = base + std::max(scale, 0.0) * part;

@@ -32,8 +32,8 @@ bool holds_roll_pitch_thrust(const AxisVector& unallocated) {
 }  // namespace
 
 YawYieldingAllocator::YawYieldingAllocator(const MixingBasis& reduced, const MixingMatrix& yaw_free,
-                                           CommandRange range, Airmode airmode, double yaw_headroom,
-                                           double tie_tolerance)
+                                           CommandRange range, AirmodeLimits airmode,
+                                           double yaw_headroom, double tie_tolerance)
     : full_(reduced, range, airmode, yaw_headroom, tie_tolerance),
       yaw_free_(MixingBasis(yaw_free, reduced.effectiveness, reduced.controlled), range, airmode,
                 yaw_headroom, tie_tolerance),
