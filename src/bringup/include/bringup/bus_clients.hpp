@@ -7,7 +7,6 @@
 
 #include "bringup/esc_calibration.hpp"
 
-
 #include <motormix/config/config.hpp>
 
 #include <iosfwd>
