@@ -346,20 +346,16 @@ class PrioritizedAllocator::Kernel {
     step(u, effective, Axis::kThrust, g.lowest[0] - lowest * g.inverse[0],
          g.highest[0] - highest * g.inverse[0], kInf);
   }
-  // A step may rise by `rise_cap` at most (a gain): one that would rise
-  // further rises by the cap alone, without the balancing half step (with
-  // a cap of 0, not at all). The half step never rises above the first.
+  // A step rises by `rise_cap` at most (a gain): the whole step (with its
+  // balancing half) is taken, then cut to the cap, so a capped step never
+  // rises further than the uncapped one. A first step up never ends at or
+  // below zero, so with a cap of 0 it is not taken at all (airmode off).
   void step(Motors& u, AxisVector& effective, Axis axis, double need_up, double need_down,
             double rise_cap) const {
     double gain = std::max(0.0, need_up) + std::min(0.0, need_down);
-    if (gain > rise_cap) {
-      if (rise_cap > 0.0) {
-        u += rise_cap * column(axis);
-        effective[index(axis)] += rise_cap;
-      }
-      return;
-    }
+    if (rise_cap <= 0.0 && gain > 0.0) return;
     gain += 0.5 * (std::max(0.0, need_up - gain) + std::min(0.0, need_down - gain));
+    if (gain > rise_cap) gain = rise_cap;
     u += gain * column(axis);
     effective[index(axis)] += gain;
   }
