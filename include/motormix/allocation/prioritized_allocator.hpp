@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 namespace motormix {
 
@@ -66,9 +67,10 @@ class PrioritizedAllocator final : public MatrixAllocator {
   // The same for roll and pitch in command units, where every motor has the
   // same share of thrust (the repair's closed forms).
   double rp_rise_command_;
-  // The sequence leaves roll and pitch as demanded (it never scales them):
-  // roll_pitch, roll_pitch_yaw, and limits whose roll/pitch share is 1.
-  bool keeps_roll_pitch_;
+  // The sequence leaves roll and pitch as demanded (it never scales them)
+  // where their rise is not capped: roll_pitch, roll_pitch_yaw, and limits
+  // whose roll/pitch share is 1.
+  bool keeps_roll_pitch() const { return rp_rise_cap_ == std::numeric_limits<double>::infinity(); }
   double yaw_headroom_;
   double tie_tolerance_;
   double gain_that_counts_;                   // min(tie_tolerance_, kGainThatCounts)

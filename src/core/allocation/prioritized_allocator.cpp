@@ -2,6 +2,7 @@
 
 #include "fitting_scale.hpp"
 #include "fixed_size.hpp"
+#include "priority_order.hpp"
 #include "report_kernel.hpp"
 #include "shift_kernel.hpp"
 
@@ -18,58 +19,12 @@ namespace {
 constexpr double kNegligibleEntry = std::numeric_limits<float>::epsilon();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The roll/pitch part of an error, squared...
-double roll_pitch_square(const AxisVector& e) {
-  return e[index(Axis::kRoll)] * e[index(Axis::kRoll)] +
-         e[index(Axis::kPitch)] * e[index(Axis::kPitch)];
-}
-// ...and Euclidean. Errors are at most a few units: a plain root is exact
-// enough and much cheaper than hypot's overflow guards.
-double roll_pitch_norm(const AxisVector& e) { return std::sqrt(roll_pitch_square(e)); }
-
-// Which of the clip and the repair wins on roll and pitch, from the clip's
-// squared error and the repair's error as its scales predict it, where the
-// prediction alone decides it (prefer_repair below): the clip when it is
-// closer by more than the gain that counts, the repair when it is closer by
-// more than the tie tolerance. Both margins carry twice the delivered
-// tolerance, so that the prediction's rounding (E M = I within 1e-9) cannot
-// turn them. Squares compare as their roots do, so no root waits on the way.
-enum class RollPitchVerdict { kUndecided, kClipCloser, kRepairCloser };
-RollPitchVerdict roll_pitch_verdict(double clip_square, double repair_error, double counts,
-                                    double tie) {
-  constexpr double kMargin = 2.0 * kDeliveredTolerance;
-  const double below = repair_error - counts - kMargin;
-  if (below > 0.0 && clip_square < below * below) return RollPitchVerdict::kClipCloser;
-  const double above = repair_error + tie + kMargin;
-  if (clip_square > above * above) return RollPitchVerdict::kRepairCloser;
-  return RollPitchVerdict::kUndecided;
-}
-
-// closer_in_priority_order() itself, inlined into the kernel (a call on
-// most saturating demands): the first key that differs by more than the
-// tolerance decides.
-MOTORMIX_ALWAYS_INLINE bool closer_in_order(const AxisVector& a, const AxisVector& b,
-                                            double tolerance) {
-  const double rp_a = roll_pitch_norm(a);
-  const double rp_b = roll_pitch_norm(b);
-  if (rp_a < rp_b - tolerance) return true;
-  if (rp_a > rp_b + tolerance) return false;
-  const double thrust_a = std::abs(a[index(Axis::kThrust)]);
-  const double thrust_b = std::abs(b[index(Axis::kThrust)]);
-  if (thrust_a < thrust_b - tolerance) return true;
-  if (thrust_a > thrust_b + tolerance) return false;
-  return std::abs(a[index(Axis::kYaw)]) < std::abs(b[index(Axis::kYaw)]) - tolerance;
-}
-
-// Whether the repair replaces the clip (the sequence's result clipped, what
-// PX4 delivers): only when it is no worse in priority order with ties within
-// `tie`, and better with ties within `counts` only. A higher priority
-// within `tie` of the clip's does not buy itself a hair more at the cost of
-// a lower one; where every key ties, a gain larger than `counts` still wins.
-MOTORMIX_ALWAYS_INLINE bool prefer_repair(const AxisVector& repair, const AxisVector& clip,
-                                          double counts, double tie) {
-  return !closer_in_order(clip, repair, tie) && closer_in_order(repair, clip, counts);
-}
+using detail::closer_in_order;
+using detail::prefer_repair;
+using detail::roll_pitch_norm;
+using detail::roll_pitch_square;
+using detail::roll_pitch_verdict;
+using detail::RollPitchVerdict;
 
 }  // namespace
 
@@ -160,7 +115,6 @@ PrioritizedAllocator::PrioritizedAllocator(const MixingBasis& basis, CommandRang
   rp_rise_cap_ = cap(airmode.roll_pitch);
   yaw_rise_cap_ = cap(airmode.yaw);
   rp_rise_command_ = airmode.roll_pitch >= 1.0 ? kInf : airmode.roll_pitch * room;
-  keeps_roll_pitch_ = airmode.roll_pitch >= 1.0;
 }
 
 // One allocation at N motors, every per-motor vector a local of fixed size.
@@ -201,7 +155,7 @@ class PrioritizedAllocator::Kernel {
         // cannot fix comes from roll and pitch (under a whole share).
         u -= yaw * column(Axis::kYaw);
         desaturate(u, effective, Axis::kThrust, a_.rp_rise_cap_);
-        if (!a_.keeps_roll_pitch_) {
+        if (!a_.keeps_roll_pitch()) {
           desaturate(u, effective, Axis::kRoll);
           desaturate(u, effective, Axis::kPitch);
         }
@@ -240,7 +194,7 @@ class PrioritizedAllocator::Kernel {
     // any key (prefer_repair). The demand's roll/pitch error is needed only by the shortcut below
     // with airmode, and from the demand alone: taken before the clip and the scales, its root is
     // ready when they are.
-    const double demanded = a_.effectiveness_inverts_mixing_ && a_.keeps_roll_pitch_
+    const double demanded = a_.effectiveness_inverts_mixing_ && a_.keeps_roll_pitch()
                                 ? demanded_roll_pitch(demand)
                                 : 0.0;
     Motors clipped = u;
@@ -480,7 +434,7 @@ class PrioritizedAllocator::Kernel {
   // whose root (`demanded`) waits on nothing.
   double repair_roll_pitch_error(const AxisVector& demand, const AxisVector& effective,
                                  const Repair& r, double demanded) const {
-    if (a_.keeps_roll_pitch_) return (1.0 - r.rp_scale) * demanded;
+    if (a_.keeps_roll_pitch()) return (1.0 - r.rp_scale) * demanded;
     // Scalar on purpose: `effective` was just written element by element,
     // and a packet load of it would stall on store forwarding.
     const auto left = [&](Axis axis) {
