@@ -77,12 +77,8 @@ void send_test(bus::SealedPublisher& publisher, const std::string& channel, int 
   publisher.publish(channel, msg);
 }
 
-// Waits for the bus or a signal (at most `timeout_ns`) and hands what came
-// to the handlers: every client's pause between two looks.
+// How often a client looks again while it waits for an answer.
 constexpr std::int64_t kLookEveryNs = 20'000'000;
-void wait_and_drain(bus::Process& process, std::int64_t timeout_ns = kLookEveryNs) {
-  if (process.wait_ns(timeout_ns).bus) bus::drain(process.lcm());
-}
 
 // Enter on `fd`, polled without blocking: 1 a line, -1 end of input, 0 nothing yet.
 int line_ready(int fd) {
@@ -152,7 +148,7 @@ ClientOutcome run_motor_test(const config::Config& config, const std::vector<int
             << seconds << " s" << std::endl;
         break;
       case Kind::kWait:
-        wait_and_drain(process);
+        process.wait_and_drain_ns(kLookEveryNs);
         break;
       case Kind::kDone:
         return ClientOutcome::kOk;
@@ -258,10 +254,11 @@ ClientOutcome run_esc_calibration(const config::Config& config, const EscCalibra
       while (!signals.requested()) {
         const auto left = next - Clock::now();
         if (left <= Clock::duration::zero()) break;
-        wait_and_drain(process, std::chrono::duration_cast<std::chrono::nanoseconds>(left).count());
+        process.wait_and_drain_ns(
+            std::chrono::duration_cast<std::chrono::nanoseconds>(left).count());
       }
     } else {
-      wait_and_drain(process);
+      process.wait_and_drain_ns(kLookEveryNs);
       next = Clock::now();
     }
   }
@@ -364,7 +361,8 @@ ClientOutcome run_esc_command(const config::Config& config, const EscCommand& co
   lcm.subscribe(config.channels.output_status, &OutputStatusWatch::on_status, &watch);
   // The output's counts before: what changes after the command is its answer.
   const auto start = Clock::now();
-  while (!watch.latest && seconds_since(start) < wait_s && !interrupted()) wait_and_drain(process);
+  while (!watch.latest && seconds_since(start) < wait_s && !interrupted())
+    process.wait_and_drain_ns(kLookEveryNs);
   if (process.signals().requested()) return ClientOutcome::kInterrupted;
   if (!watch.latest) {
     err << "motormix esc-command: no motormix output on " << config.channels.output_status
@@ -381,7 +379,7 @@ ClientOutcome run_esc_command(const config::Config& config, const EscCommand& co
   publisher.publish(config.channels.esc_command, msg);
   while (seconds_since(start) < 2 * wait_s) {
     if (interrupted()) return ClientOutcome::kInterrupted;
-    wait_and_drain(process);
+    process.wait_and_drain_ns(kLookEveryNs);
     if (watch.latest->esc_commands_sent > sent_before) {
       out << "ESC command " << command.number << " sent to " << motors.size() << " motor"
           << (motors.size() == 1 ? "" : "s") << " in " << command.repeat << " frame"

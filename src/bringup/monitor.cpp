@@ -441,9 +441,8 @@ int run_monitor(const MonitorOptions& o, std::ostream& out, std::ostream& log) {
       next_draw = now + std::chrono::duration_cast<Clock::duration>(refresh);
     }
     if (!o.once && o.duration_s > 0.0 && elapsed >= o.duration_s) break;
-    const bus::Woke woke = process.wait(20);
-    if (woke.bus) bus::drain(lcm);
-    if (woke.signal) break;
+    constexpr std::int64_t kRedrawLookNs = 20'000'000;
+    if (process.wait_and_drain_ns(kRedrawLookNs).signal) break;
   }
   return rc;
 }

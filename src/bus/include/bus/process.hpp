@@ -77,6 +77,13 @@ class Process {
   Woke wait(int timeout_ms) {
     return wait_ns(timeout_ms < 0 ? -1 : static_cast<std::int64_t>(timeout_ms) * 1'000'000);
   }
+  // wait_ns(), then what came on the bus handed to its handlers (drain()):
+  // a client's pause between two looks.
+  Woke wait_and_drain_ns(std::int64_t timeout_ns) {
+    const Woke woke = wait_ns(timeout_ns);
+    if (woke.bus) drain(*lcm_);
+    return woke;
+  }
 
  private:
   std::string who_;
